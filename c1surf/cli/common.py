@@ -1,0 +1,95 @@
+"""What every c1surf command shares: one-line errors, progress on a terminal."""
+from __future__ import annotations
+
+import functools
+import sys
+import time
+import traceback
+from pathlib import Path
+
+import click
+
+from ..core.errors import TopologyError
+from ..io.errors import C1SurfFileError
+
+
+class Failure(click.ClickException):
+    """A user-facing failure: printed as ``c1surf: error: ...``, exit status 1."""
+
+    exit_code = 1
+
+    def show(self, file=None):
+        click.echo(f"c1surf: error: {self.message}", err=True)
+
+
+def topology_failure(error: TopologyError, mesh_file) -> Failure:
+    """Turn a core TopologyError into ``FILE:LINE: message`` using the file's face lines."""
+    obj = str(mesh_file.path).lower().endswith(".obj")
+    message = error.describe(vertex_base=1 if obj else 0)
+    if obj and error.vertices:
+        message += " (vertex numbers as in the OBJ file, from 1)"
+    lines = []
+    if mesh_file.face_lines is not None and error.faces.size:
+        lines = sorted({int(mesh_file.face_lines[f]) for f in error.faces if 0 <= f < mesh_file.n_faces})
+    where = f"{mesh_file.path}:{lines[0]}" if lines else f"{mesh_file.path}"
+    if len(lines) > 1:
+        shown = ", ".join(str(x) for x in lines[:8]) + (", ..." if len(lines) > 8 else "")
+        message += f"; faces on lines {shown}"
+    elif error.faces.size and not lines:
+        message += f"; faces {', '.join(str(int(f)) for f in error.faces[:8])} (0-based)"
+    return Failure(f"{where}: {message}")
+
+
+def friendly_errors(command):
+    """Decorator: known failures become one line and exit 1; --debug shows the traceback."""
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        ctx = click.get_current_context()
+        debug = bool((ctx.obj or {}).get("debug"))
+        try:
+            return command(*args, **kwargs)
+        except (click.ClickException, click.exceptions.Exit, click.exceptions.Abort):
+            raise
+        except C1SurfFileError as e:
+            if debug:
+                traceback.print_exc()
+            raise Failure(str(e)) from None
+        except MemoryError:
+            if debug:
+                traceback.print_exc()
+            raise Failure("out of memory: lower --resolution or convert a smaller mesh") from None
+        except KeyboardInterrupt:
+            raise Failure("interrupted; no output was written") from None
+
+    return wrapper
+
+
+class Progress:
+    """Phase messages on stderr, only when it is a terminal and not ``--quiet``."""
+
+    def __init__(self, quiet: bool = False):
+        self.enabled = not quiet and sys.stderr.isatty()
+        self.start = time.perf_counter()
+        self.last = None
+
+    def phase(self, name: str) -> None:
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if self.last is not None:
+            click.echo(f" {now - self.last:.2f}s", err=True)
+        click.echo(f"c1surf: {name}...", err=True, nl=False)
+        self.last = now
+
+    def done(self) -> None:
+        if self.enabled and self.last is not None:
+            click.echo(f" {time.perf_counter() - self.last:.2f}s (total {time.perf_counter() - self.start:.2f}s)", err=True)
+
+
+def output_suffix(path, allowed: dict, what: str) -> str:
+    """Lower-case suffix of ``path``; a usage error unless it is in ``allowed``."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in allowed:
+        raise click.BadParameter(f"{what} must end in one of {', '.join(sorted(allowed))} (got {Path(path).name!r})")
+    return suffix

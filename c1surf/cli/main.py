@@ -1,0 +1,31 @@
+"""The ``c1surf`` command: a click group; each subcommand lives in its own module."""
+from __future__ import annotations
+
+import click
+
+from .. import __version__
+from .check import check
+from .convert import convert
+
+
+@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+@click.version_option(__version__, prog_name="c1surf")
+@click.option("--debug", is_flag=True, help="Show a Python traceback for errors (for bug reports).")
+@click.pass_context
+def main(ctx, debug):
+    """Smooth G1 surfaces of low-degree Bezier patches from polygon meshes.
+
+    c1surf follows J. Peters, "Constructing C^1 surfaces of arbitrary topology
+    using biquadratic and bicubic splines": two Doo-Sabin refinements, one
+    biquadratic patch per regular refined vertex and n bicubic patches over
+    each n-sided cell. Errors print one line and exit 1 (2 for bad usage).
+    """
+    ctx.ensure_object(dict)
+    ctx.obj["debug"] = debug
+
+
+main.add_command(convert)
+main.add_command(check)
+
+if __name__ == "__main__":  # pragma: no cover
+    main()

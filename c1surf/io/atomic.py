@@ -1,0 +1,141 @@
+"""Write output files atomically, and never over an input file."""
+
+from __future__ import annotations
+
+import contextlib
+import os
+import secrets
+import stat
+from pathlib import Path
+
+from .errors import OutputError
+
+__all__ = ["atomic_output"]
+
+_PREFIX = ".tmp-c1surf-"
+
+
+@contextlib.contextmanager
+def atomic_output(path, inputs=()):
+    """Give a temporary path to write; move it onto ``path`` on success.
+
+    The temporary file lives in the same directory as ``path`` (so the
+    final rename is atomic) and ends with ``path``'s name, suffix
+    included, so writers that pick a format from the suffix still work:
+    ``out/mesh.ply`` is written as ``out/.tmp-c1surf-1a2b3c4d.mesh.ply``.
+    If the block raises (KeyboardInterrupt included) the temporary file
+    is deleted and ``path`` is left as it was.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The final output file.
+    inputs : iterable of str or os.PathLike
+        Files being read; refusing to overwrite any of them (also through
+        symlinks or hard links).
+
+    Yields
+    ------
+    str
+        The temporary path to write to (already created, empty).
+
+    Raises
+    ------
+    OutputError
+        ``path`` is one of ``inputs``, is a directory, or its directory
+        does not exist or is not writable; or the block did not leave a
+        file at the temporary path.
+    """
+    target = Path(os.fspath(path))
+    path_str = str(target)
+    _check_target(target, path_str, inputs)
+    directory = target.parent
+
+    tmp = None
+    for _ in range(100):  # name clashes are astronomically unlikely
+        name = f"{_PREFIX}{secrets.token_hex(4)}.{target.name}"
+        candidate = directory / name
+        try:
+            # 0o666 & ~umask, like any newly written file (mkstemp would
+            # give 0o600).
+            fd = os.open(candidate, os.O_WRONLY | os.O_CREAT | os.O_EXCL,
+                         0o666)
+        except FileExistsError:
+            continue
+        except OSError as exc:
+            raise OutputError(
+                path_str, f"cannot create a file in {str(directory)!r} "
+                f"({exc.strerror or exc}): choose another output folder"
+                ) from None
+        os.close(fd)
+        tmp = str(candidate)
+        break
+    if tmp is None:
+        raise OutputError(path_str, "cannot pick a temporary file name: "
+                          f"clean up {_PREFIX}* files in the output folder")
+
+    try:
+        yield tmp
+        if not os.path.isfile(tmp):
+            raise OutputError(
+                path_str, "the writer did not produce the temporary file: "
+                "this is a bug in c1surf; please report it")
+        if target.exists():
+            # Keep the permissions of the file being replaced.
+            os.chmod(tmp, stat.S_IMODE(os.stat(target).st_mode))
+        _fsync(tmp)
+        try:
+            os.replace(tmp, target)
+        except OSError as exc:
+            raise OutputError(
+                path_str, f"cannot move the finished file into place "
+                f"({exc.strerror or exc}): check the output path") from None
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
+
+
+def _check_target(target: Path, path_str: str, inputs) -> None:
+    """Refuse outputs that would clobber an input or cannot be written."""
+    resolved = target.resolve()
+    for inp in inputs:
+        inp_path = Path(os.fspath(inp))
+        same = inp_path.resolve() == resolved
+        if not same and target.exists() and inp_path.exists():
+            with contextlib.suppress(OSError):
+                same = os.path.samefile(inp_path, target)  # hard links
+        if same:
+            raise OutputError(
+                path_str, f"the output would overwrite the input "
+                f"{os.fspath(inp)!r}: choose a different output path")
+    directory = target.parent
+    if not directory.exists():
+        raise OutputError(
+            path_str, f"the output folder {str(directory)!r} does not "
+            "exist: create it first or choose another output path")
+    if not directory.is_dir():
+        raise OutputError(
+            path_str, f"{str(directory)!r} is not a folder: choose another "
+            "output path")
+    if target.is_dir():
+        raise OutputError(
+            path_str, "is a directory: give an output file name")
+    if not os.access(directory, os.W_OK | os.X_OK):
+        raise OutputError(
+            path_str, f"the output folder {str(directory)!r} is not "
+            "writable: choose another output path")
+
+
+def _fsync(path: str) -> None:
+    """Flush the file to disk so the rename never exposes a partial file."""
+    try:
+        fd = os.open(path, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)

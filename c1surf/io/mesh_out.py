@@ -1,0 +1,42 @@
+"""Writing tessellated triangle meshes (trimesh does the formats)."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import trimesh
+
+# suffix -> trimesh file type and export keyword arguments
+MESH_FORMATS = {
+    ".obj": ("obj", {"include_normals": True, "digits": 10}),
+    ".ply": ("ply", {"encoding": "binary"}),
+    ".stl": ("stl", {}),
+    ".glb": ("glb", {}),
+    ".off": ("off", {}),
+}
+
+
+def mesh_format(path) -> str:
+    """Check ``path``'s suffix names a supported mesh format; return the suffix."""
+    suffix = Path(path).suffix.lower()
+    if suffix not in MESH_FORMATS:
+        raise ValueError(f"unknown mesh format {suffix!r}; use one of {', '.join(sorted(MESH_FORMATS))}")
+    return suffix
+
+
+def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None, suffix: str | None = None) -> None:
+    """Write a triangle mesh; the format comes from ``suffix`` (default: the path's).
+
+    Parameters
+    ----------
+    points : (V, 3) float
+    triangles : (T, 3) int
+    normals : (V, 3) float or None, per-vertex unit normals
+    """
+    suffix = suffix or mesh_format(path)
+    file_type, kwargs = MESH_FORMATS[suffix]
+    mesh = trimesh.Trimesh(vertices=points[:, :3], faces=triangles, vertex_normals=normals, process=False, validate=False)
+    data = mesh.export(file_type=file_type, **kwargs)
+    mode = "w" if isinstance(data, str) else "wb"
+    with open(path, mode) as f:
+        f.write(data)

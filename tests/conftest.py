@@ -1,0 +1,90 @@
+"""Shared fixtures: where the meshes are, and building surfaces from files."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from c1surf.core.surface import Surface, SurfaceOptions
+from c1surf.io.obj import read_obj
+
+ROOT = Path(__file__).resolve().parents[1]
+SAMPLES = ROOT / "sample_meshes"
+SHARED_MESHES = ROOT.parent / "shared" / "meshes"
+
+CLOSED_SAMPLES = sorted(p.name for p in SAMPLES.glob("*.obj"))
+
+# Closed, orientable, manifold meshes of ../shared/meshes with no valence-2
+# vertex and no degenerate face (MANIFEST notes without open / non-manifold /
+# valence-2 / degenerate / pinch / inconsistent / unused).
+CLOSED_SHARED = [
+    "odedstein-meshes/fish_control_mesh.obj",
+    "odedstein-meshes/penguin_control_mesh.obj",
+    "odedstein-meshes/sword-quad-dominant.obj",
+    "opensubdiv/bilinear_cube.obj",
+    "opensubdiv/catmark_chaikin0.obj",
+    "opensubdiv/catmark_chaikin1.obj",
+    "opensubdiv/catmark_cube.obj",
+    "opensubdiv/catmark_cube_corner0.obj",
+    "opensubdiv/catmark_cube_corner1.obj",
+    "opensubdiv/catmark_cube_corner2.obj",
+    "opensubdiv/catmark_cube_corner3.obj",
+    "opensubdiv/catmark_cube_corner4.obj",
+    "opensubdiv/catmark_cube_creases0.obj",
+    "opensubdiv/catmark_cube_creases1.obj",
+    "opensubdiv/catmark_cube_creases2.obj",
+    "opensubdiv/catmark_cubes_infsharp.obj",
+    "opensubdiv/catmark_cubes_semisharp.obj",
+    "opensubdiv/catmark_hole_test1.obj",
+    "opensubdiv/catmark_lefthanded.obj",
+    "opensubdiv/catmark_pyramid.obj",
+    "opensubdiv/catmark_pyramid_creases0.obj",
+    "opensubdiv/catmark_pyramid_creases1.obj",
+    "opensubdiv/catmark_pyramid_creases2.obj",
+    "opensubdiv/catmark_righthanded.obj",
+    "opensubdiv/catmark_smoothtris0.obj",
+    "opensubdiv/catmark_smoothtris1.obj",
+    "opensubdiv/catmark_toroidal_tet.obj",
+    "opensubdiv/catmark_torus.obj",
+    "opensubdiv/catmark_torus_creases0.obj",
+    "opensubdiv/catmark_torus_creases1.obj",
+    "pmp-library/chamfer-cube.obj",
+    "pmp-library/fandisk_quads.obj",
+    "polyhedra-viewer/bilunabirotunda.obj",
+    "polyhedra-viewer/decagonal-antiprism.obj",
+    "polyhedra-viewer/dodecahedron.obj",
+    "polyhedra-viewer/elongated-pentagonal-gyrocupolarotunda.obj",
+    "polyhedra-viewer/gyrobifastigium.obj",
+    "polyhedra-viewer/metabidiminished-rhombicosidodecahedron.obj",
+    "polyhedra-viewer/octagonal-prism.obj",
+    "polyhedra-viewer/pentagonal-rotunda.obj",
+    "polyhedra-viewer/snub-cube.obj",
+    "polyhedra-viewer/snub-dodecahedron.obj",
+    "polyhedra-viewer/triangular-hebesphenorotunda.obj",
+    "polyhedra-viewer/truncated-cuboctahedron.obj",
+    "polyhedra-viewer/truncated-dodecahedron.obj",
+    "polyhedra-viewer/truncated-icosahedron.obj",
+    "polyhedra-viewer/truncated-icosidodecahedron.obj",
+    "spot/spot_control_mesh.obj",
+    "spot/spot_quadrangulated.obj",
+]
+
+
+def shared_mesh(relative: str) -> Path:
+    """Path of a ../shared/meshes file; skips the test where shared/ is absent."""
+    path = SHARED_MESHES / relative
+    if not path.exists():
+        pytest.skip(f"{path} not available")
+    return path
+
+
+def surface_of(path, **options) -> Surface:
+    """Build the surface of an OBJ file with SurfaceOptions(**options)."""
+    mesh = read_obj(path)
+    return Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(**options))
+
+
+def polygon_mesh(faces, points):
+    """(face_sizes, face_vertices, points) from a list of faces."""
+    return np.array([len(f) for f in faces]), np.concatenate([np.asarray(f) for f in faces]), np.asarray(points, float)

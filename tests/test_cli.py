@@ -1,0 +1,136 @@
+"""The command line as users run it: help, outputs, check's verdict, one-line errors."""
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+
+import click
+import numpy as np
+import pytest
+import trimesh
+from click.testing import CliRunner
+
+from c1surf.cli.main import main
+from c1surf.io.patch_file import read_patches_json
+
+from conftest import SAMPLES, shared_mesh
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+def test_help_describes_every_option():
+    ctx = click.Context(main)
+    commands = {"": main, **{name: main.get_command(ctx, name) for name in main.list_commands(ctx)}}
+    assert {"convert", "check"} <= set(commands)
+    for name, command in commands.items():
+        result = run(*([name] if name else []), "--help")
+        assert result.exit_code == 0
+        text = " ".join(result.output.split())
+        for param in command.params:
+            if isinstance(param, click.Option):
+                assert any(opt in text for opt in param.opts), (name, param.opts)
+                assert param.help, f"{name} {param.opts} has no help text"
+
+
+@pytest.mark.parametrize("suffix", [".obj", ".ply", ".stl", ".glb", ".off"])
+def test_convert_writes_every_mesh_format(tmp_path, suffix):
+    out = tmp_path / f"cube{suffix}"
+    result = run("convert", SAMPLES / "cube.obj", "-o", out, "--resolution", 4, "--quiet")
+    assert result.exit_code == 0, result.output
+    mesh = trimesh.load(out, force="mesh", process=True)
+    # 96 patches of 4 x 4 samples, welded: V = F_R + 2 E_R + 4 P (corners, edge interiors, interiors)
+    assert mesh.is_watertight
+    assert len(mesh.faces) == 96 * 2 * 9
+
+
+def test_convert_then_check_round_trip(tmp_path):
+    patches = tmp_path / "twisted.json"
+    result = run("convert", SAMPLES / "twisted.obj", "-o", tmp_path / "twisted.ply", "--patches", patches)
+    assert result.exit_code == 0, result.output
+    doc = json.loads(patches.read_text())
+    assert doc["format"] == "c1surf-patches" and doc["version"] == 1
+    kinds = {p["kind"] for p in doc["patches"]}
+    assert kinds == {"biquadratic", "bicubic"}
+    for p in doc["patches"][:5] + doc["patches"][-5:]:
+        du, dv = p["degree"]
+        assert np.asarray(p["points"]).shape == (du + 1, dv + 1, 3)
+        assert len(p["source"]) == 1
+    check = run("check", patches)
+    assert check.exit_code == 0 and "G1: yes" in check.output
+
+
+def test_check_fails_on_a_broken_surface(tmp_path):
+    patches = tmp_path / "cube.json"
+    assert run("convert", SAMPLES / "cube.obj", "-o", tmp_path / "cube.obj", "--patches", patches).exit_code == 0
+    doc = json.loads(patches.read_text())
+    bicubic = next(p for p in doc["patches"] if p["kind"] == "bicubic")
+    bicubic["points"][1][2][0] += 0.01  # a coefficient next to a shared edge
+    patches.write_text(json.dumps(doc))
+    result = run("check", patches)
+    assert result.exit_code == 1 and "G1: NO" in result.output
+
+
+def test_check_converts_a_mesh_first():
+    result = run("check", SAMPLES / "dodecahedron.obj", "--alpha", "0.6")
+    assert result.exit_code == 0 and "G1: yes" in result.output
+
+
+def test_patch_file_floats_round_trip_exactly(tmp_path):
+    from c1surf.core.surface import Surface
+    from c1surf.io.obj import read_obj
+
+    patches = tmp_path / "p.json"
+    assert run("convert", SAMPLES / "icosahedron.obj", "-o", tmp_path / "x.obj", "--patches", patches).exit_code == 0
+    mesh = read_obj(SAMPLES / "icosahedron.obj")
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points)
+    quad, cubic = read_patches_json(patches)
+    assert np.array_equal(quad, surface.biquadratic) and np.array_equal(cubic, surface.bicubic)
+
+
+def one_line_error(tmp_path, *args):
+    """Run the real executable; return (exit code, stderr lines)."""
+    proc = subprocess.run([sys.executable, "-m", "c1surf.cli.main", *map(str, args)], capture_output=True, text=True, cwd=tmp_path)
+    return proc.returncode, proc.stderr.strip().splitlines()
+
+
+def test_non_manifold_edge_is_refused_with_lines(tmp_path):
+    fan = shared_mesh("opensubdiv/catmark_fan.obj")
+    out = tmp_path / "fan.obj"
+    code, lines = one_line_error(tmp_path, "convert", fan, "-o", out)
+    assert code == 1 and len(lines) == 1
+    line = lines[0]
+    assert line.startswith(f"c1surf: error: {fan}:")
+    assert "shared by 3 faces" in line and "faces on lines" in line and "Traceback" not in line
+    assert not out.exists() and not list(tmp_path.glob("*.tmp*"))
+
+
+def test_bad_usage_exits_2(tmp_path):
+    code, lines = one_line_error(tmp_path, "convert", SAMPLES / "cube.obj", "-o", tmp_path / "cube.xyz")
+    assert code == 2
+    assert not (tmp_path / "cube.xyz").exists()
+
+
+def test_never_overwrites_the_input(tmp_path):
+    mesh = tmp_path / "cube.obj"
+    shutil.copy(SAMPLES / "cube.obj", mesh)
+    before = mesh.read_bytes()
+    code, lines = one_line_error(tmp_path, "convert", mesh, "-o", mesh)
+    assert code == 1 and len(lines) == 1 and lines[0].startswith("c1surf: error:")
+    assert mesh.read_bytes() == before
+
+
+def test_missing_input_is_one_line(tmp_path):
+    code, lines = one_line_error(tmp_path, "convert", tmp_path / "nope.obj", "-o", tmp_path / "x.obj")
+    assert code == 1 and len(lines) == 1 and "nope.obj" in lines[0]
+
+
+def test_too_large_output_is_refused_with_an_estimate(tmp_path):
+    out = tmp_path / "big.ply"
+    code, lines = one_line_error(tmp_path, "convert", SAMPLES / "cube.obj", "-o", out, "--resolution", 200000)
+    assert code == 1 and len(lines) == 1
+    assert "GiB" in lines[0] and "--force" in lines[0] and "--resolution" in lines[0]
+    assert not out.exists()

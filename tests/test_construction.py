@@ -1,0 +1,278 @@
+"""The construction (A1-A3) against the paper's claims, measured on real meshes.
+
+Every smoothness number here comes from ``measure_smoothness``, which finds
+shared patch edges from geometry alone.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+from scipy.interpolate import BSpline
+from scipy.spatial import cKDTree
+
+from c1surf.core.bezier import evaluate_patches, raise_degree
+from c1surf.core.patches import bicubic_hole_coefficients
+from c1surf.core.smoothness import measure_smoothness
+from c1surf.core.surface import Surface, SurfaceOptions
+from c1surf.core.tessellate import tessellate
+from c1surf.io.obj import read_obj
+
+from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, polygon_mesh, shared_mesh, surface_of
+
+MAX_JUMP = 1e-10  # radians
+MAX_GAP = 1e-12  # relative to the bounding-box diagonal
+
+
+def assert_g1(surface: Surface):
+    report = measure_smoothness([surface.biquadratic, surface.bicubic])
+    assert report.boundary_edges == 0 and report.overshared_edges == 0
+    assert report.shared_edges == 2 * surface.n_patches  # closed quad layout: 4 sides, each shared by 2
+    assert report.max_normal_jump < MAX_JUMP, report
+    assert report.relative_gap < MAX_GAP, report
+    return report
+
+
+@pytest.mark.parametrize("name", CLOSED_SAMPLES)
+def test_g1_on_sample_meshes(name):
+    assert_g1(surface_of(SAMPLES / name))
+
+
+@pytest.mark.parametrize("name", CLOSED_SAMPLES)
+@pytest.mark.parametrize("blend, alpha", [(0.2, 0.6), (0.9, 1.0)])
+def test_g1_for_other_shape_parameters(name, blend, alpha):
+    assert_g1(surface_of(SAMPLES / name, blend=blend, alpha=alpha))
+
+
+@pytest.mark.parametrize("relative", CLOSED_SHARED)
+def test_g1_on_shared_closed_meshes(relative):
+    assert_g1(surface_of(shared_mesh(relative)))
+
+
+def test_checker_catches_the_misprinted_p12():
+    """The transcription's P_12 (NOTES item 1) must show as a normal jump."""
+    surface = surface_of(SAMPLES / "twisted.obj")
+    x = surface.refined_points
+    bad = surface.bicubic.copy()
+    start = 0
+    for g in surface.holes:
+        A, B1, B2, C = (x[idx] for idx in (g.A, g.B1, g.B2, g.C))
+        n = g.n
+        c = np.cos(2 * np.pi / n)
+        a = c / (1 - c)
+        B2_prev, C_prev = np.roll(B2, 1, axis=1), np.roll(C, 1, axis=1)
+        misprint = (5 * B1 + 5 * C_prev + B2_prev + 25 * C) / 36 + a / 36 * (-11 * B1 + 3 * B2_prev + 3 * C_prev + 5 * C)
+        count = g.cells.size * n
+        bad[start : start + count, 1, 2] = misprint.reshape(-1, 3)
+        start += count
+    good = measure_smoothness([surface.biquadratic, surface.bicubic]).max_normal_jump
+    broken = measure_smoothness([surface.biquadratic, bad]).max_normal_jump
+    assert good < MAX_JUMP and broken > 1e-3
+
+
+def test_local_formulas_match_the_stencil():
+    """The sparse stencil is the formula applied to the basis: check against direct evaluation."""
+    surface = surface_of(SAMPLES / "hexagon_six_valent.obj", alpha=0.7)
+    x = surface.refined_points
+    start = 0
+    for g in surface.holes:
+        direct = bicubic_hole_coefficients(x[g.A], x[g.B1], x[g.B2], x[g.C], alpha=0.7)
+        count = g.cells.size * g.n
+        np.testing.assert_allclose(surface.bicubic[start : start + count], direct.reshape(-1, 4, 4, 3), atol=1e-13)
+        start += count
+
+
+def test_even_holes_sharing_b_points_are_perturbed_jointly():
+    """NOTES item 4: a hexagon with 6-valent corners couples two even holes."""
+    for name in ("hexagon_six_valent.obj", "hexagon_all_six_valent.obj"):
+        surface = surface_of(SAMPLES / name)
+        x = surface.refined_points
+        shared = 0
+        b_sets = []
+        for g in surface.holes:
+            if g.n % 2 == 0 and g.n > 4:
+                sign = np.where(np.arange(g.n) % 2 == 0, 1.0, -1.0)[None, :, None]
+                alternating = (sign * (x[g.B1] - x[g.B2])).sum(axis=1)
+                assert np.abs(alternating).max() < 1e-13
+                b_sets += [set(np.r_[b1, b2]) for b1, b2 in zip(g.B1, g.B2)]
+        for i in range(len(b_sets)):
+            for j in range(i + 1, len(b_sets)):
+                shared += len(b_sets[i] & b_sets[j])
+        assert shared > 0, f"{name} should have even holes that share B points"
+        assert_g1(surface)
+
+
+def test_surface_passes_through_every_cell_centroid():
+    for name in ("twisted.obj", "dodecahedron.obj", "double_torus.obj", "high_valence.obj"):
+        mesh = read_obj(SAMPLES / name)
+        surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points)
+        offsets = mesh.face_offsets()
+        centroids = np.add.reduceat(mesh.points[mesh.face_vertices], offsets[:-1]) / mesh.face_sizes[:, None]
+        corners = np.concatenate(
+            [evaluate_patches(g, np.array([0.0, 1.0]), np.array([0.0, 1.0])).reshape(-1, 3) for g in (surface.biquadratic, surface.bicubic)]
+        )
+        distance, _ = cKDTree(corners).query(centroids)
+        scale = np.linalg.norm(np.ptp(mesh.points, axis=0))
+        assert distance.max() < 1e-12 * scale
+
+
+def test_construction_is_linear_in_the_points():
+    mesh = read_obj(SAMPLES / "twisted.obj")
+    rng = np.random.default_rng(7)
+    X, Y = rng.normal(size=(2, mesh.n_vertices, 3))
+    a, b = 0.3, -1.7
+
+    def build(points):
+        return Surface(mesh.face_sizes, mesh.face_vertices, points)
+
+    sx, sy, sxy = build(X), build(Y), build(a * X + b * Y)
+    np.testing.assert_allclose(sxy.biquadratic, a * sx.biquadratic + b * sy.biquadratic, atol=1e-12)
+    np.testing.assert_allclose(sxy.bicubic, a * sx.bicubic + b * sy.bicubic, atol=1e-12)
+    # and update_points on the same connectivity agrees with a fresh build
+    sx.update_points(a * X + b * Y)
+    np.testing.assert_allclose(sx.bicubic, sxy.bicubic, atol=1e-13)
+
+
+def slab_with_polygons():
+    """A box whose top (z = 1) is a 6 x 6 grid with a merged octagon and hexagon."""
+    n = 6
+    xs = np.linspace(-1, 1, n + 1)
+    top = {(i, j): k for k, (i, j) in enumerate((i, j) for i in range(n + 1) for j in range(n + 1))}
+    points = [(xs[i], xs[j], 1.0) for i in range(n + 1) for j in range(n + 1)]
+    faces = []
+    merged = {(2, 2), (2, 3), (3, 2), (3, 3), (0, 4), (0, 5)}
+    for i in range(n):
+        for j in range(n):
+            if (i, j) not in merged:
+                faces.append([top[i, j], top[i + 1, j], top[i + 1, j + 1], top[i, j + 1]])
+    # octagon around the removed centre vertex (3, 3), counter-clockwise from above
+    ring = [(2, 2), (3, 2), (4, 2), (4, 3), (4, 4), (3, 4), (2, 4), (2, 3)]
+    faces.append([top[p] for p in ring])
+    faces.append([top[p] for p in [(0, 4), (1, 4), (1, 5), (1, 6), (0, 6), (0, 5)]])
+    # close with a bottom vertex for every boundary vertex of the top, sides as quads
+    boundary = [(i, 0) for i in range(n)] + [(n, j) for j in range(n)] + [(i, n) for i in range(n, 0, -1)] + [(0, j) for j in range(n, 0, -1)]
+    base = len(points)
+    points += [(xs[i], xs[j], -1.0) for i, j in boundary]
+    m = len(boundary)
+    for k in range(m):
+        a, b = boundary[k], boundary[(k + 1) % m]
+        faces.append([top[b], top[a], base + k, base + (k + 1) % m])
+    faces.append([base + k for k in range(m)][::-1])
+    used = sorted({v for f in faces for v in f})
+    remap = {v: k for k, v in enumerate(used)}
+    faces = [[remap[v] for v in f] for f in faces]
+    points = np.array(points)[used]
+    return polygon_mesh(faces, points)
+
+
+def total_operator(surface: Surface):
+    op = None
+    for m in surface.operators:
+        op = m if op is None else m @ op
+    return surface.quad_stencil @ op, surface.cubic_stencil @ op
+
+
+@pytest.mark.parametrize("blend", [0.5, 0.0])
+def test_planar_region_gives_planar_patches(blend):
+    """Prop. 1.3.8 / Lemma 1.3.12: patches fed only by the flat top are flat."""
+    sizes, vertices, points = slab_with_polygons()
+    surface = Surface(sizes, vertices, points, SurfaceOptions(blend=blend))
+    on_top = points[:, 2] == 1.0
+    counted = {"biquadratic": 0, "bicubic": 0}
+    for kind, op, group in zip(counted, total_operator(surface), (surface.biquadratic, surface.bicubic)):
+        op = op.tocsr()
+        per_patch = group.shape[1] * group.shape[2]
+        touches_off_plane = np.zeros(group.shape[0], dtype=bool)
+        coo = op.tocoo()
+        off = ~on_top[coo.col] & (np.abs(coo.data) > 0)
+        touches_off_plane[np.unique(coo.row[off] // per_patch)] = True
+        flat = ~touches_off_plane
+        counted[kind] = int(flat.sum())
+        assert np.abs(group[flat][..., 2] - 1.0).max() < 1e-14
+    assert counted["biquadratic"] > 50 and counted["bicubic"] >= 14  # octagon (8) and hexagon (6) cells
+
+
+def test_zero_blend_interpolates_the_edges_between_cells():
+    """Lemma 1.3.12: with blend ratio 0 every input edge lies on the surface.
+
+    Exactly: each input edge is covered by patch boundary curves whose control
+    points all lie on that edge (so the curves lie on it).
+    """
+    mesh = read_obj(SAMPLES / "twisted.obj")
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(blend=0.0))
+    patches = np.concatenate([raise_degree(surface.biquadratic, 3, 3), surface.bicubic])
+    curves = np.concatenate([patches[:, 0], patches[:, -1], patches[:, :, 0], patches[:, :, -1]])  # (K, 4, 3)
+    offsets = mesh.face_offsets()
+    nxt = np.arange(mesh.face_vertices.size) + 1
+    nxt[offsets[1:] - 1] = offsets[:-1]
+    edges = np.unique(np.sort(np.stack([mesh.face_vertices, mesh.face_vertices[nxt]], 1), axis=1), axis=0)
+    for a, b in mesh.points[edges]:
+        direction = b - a
+        length2 = direction @ direction
+        s = np.einsum("kcd,d->kc", curves - a, direction) / length2  # position along the edge
+        off_line = np.linalg.norm(curves - a - s[..., None] * direction, axis=-1).max(axis=1)
+        on_edge = (off_line < 1e-12) & (s.min(axis=1) > -1e-12) & (s.max(axis=1) < 1 + 1e-12)
+        intervals = np.sort(np.stack([s[on_edge, 0], s[on_edge, 3]], 1), axis=1)
+        intervals = intervals[np.argsort(intervals[:, 0])]
+        reach = 0.0
+        for lo, hi in intervals:
+            assert lo <= reach + 1e-12, "a piece of the edge is not on the surface"
+            reach = max(reach, hi)
+        assert reach >= 1 - 1e-12
+
+
+def test_regular_region_is_the_biquadratic_bspline():
+    """A2: on a regular quad mesh every patch is the uniform biquadratic B-spline of the refined points."""
+    surface = surface_of(SAMPLES / "torus.obj")
+    assert len(surface.bicubic) == 0
+    R, x = surface.refined, surface.refined_points
+    e = surface.quad_frames
+    # 3 x 3 control net around each regular vertex, indices [i, j] with i along e2 -> e0, j along e3 -> e1
+    diag = lambda h: R.dest[R.next[h]]  # noqa: E731  (vertex opposite the centre in face(h))
+    net = np.empty((len(e), 3, 3), dtype=np.int64)
+    net[:, 1, 1] = R.origin[e[:, 0]]
+    net[:, 2, 1], net[:, 1, 2], net[:, 0, 1], net[:, 1, 0] = (R.dest[e[:, k]] for k in range(4))
+    net[:, 2, 2], net[:, 0, 2], net[:, 0, 0], net[:, 2, 0] = (diag(e[:, k]) for k in range(4))
+    knots = np.arange(6.0)
+    t = np.linspace(0, 1, 5)
+    basis = BSpline(knots, np.eye(3), 2)(2.0 + t)  # (5, 3): the three B-splines alive on [2, 3]
+    expected = np.einsum("ai,bj,pijd->pabd", basis, basis, x[net])
+    np.testing.assert_allclose(evaluate_patches(surface.biquadratic, t, t), expected, atol=1e-13)
+
+
+@pytest.mark.parametrize("name", CLOSED_SAMPLES)
+def test_patch_counts_follow_the_paper(name):
+    """One biquadratic per regular refined vertex, n bicubics per n-sided refined cell.
+
+    Twice refined, a closed mesh with H face corners has 4H vertices; its
+    non-quad cells are the input faces with n != 4 and the input vertices of
+    valence != 4.
+    """
+    mesh = read_obj(SAMPLES / name)
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points)
+    valence = np.bincount(mesh.face_vertices, minlength=mesh.n_vertices)
+    holes = np.r_[mesh.face_sizes[mesh.face_sizes != 4], valence[(valence != 4) & (valence > 0)]]
+    assert len(surface.bicubic) == holes.sum()
+    assert len(surface.biquadratic) == 4 * mesh.face_vertices.size - holes.sum()
+    assert sorted(g.n for g in surface.holes for _ in range(g.cells.size)) == sorted(holes.tolist())
+
+
+@pytest.mark.parametrize("name", CLOSED_SAMPLES)
+def test_tessellation_is_watertight_and_outward(name):
+    surface = surface_of(SAMPLES / name)
+    tess = tessellate([surface.biquadratic, surface.bicubic], surface.refined, surface.frames, 5)
+    mesh = trimesh.Trimesh(tess.points, tess.triangles, process=False)
+    assert mesh.is_watertight and mesh.is_winding_consistent
+    assert mesh.volume > 0
+    assert np.all(np.isfinite(tess.normals))
+    # exact normals agree with the faces' orientation
+    face_normals = mesh.face_normals
+    vertex_normals = tess.normals[tess.triangles].mean(axis=1)
+    assert np.mean(np.einsum("ij,ij->i", face_normals, vertex_normals) > 0) > 0.99
+
+
+def test_degree_raising_keeps_the_surface():
+    rng = np.random.default_rng(1)
+    quad = rng.normal(size=(4, 3, 3, 3))
+    t = np.linspace(0, 1, 7)
+    np.testing.assert_allclose(evaluate_patches(raise_degree(quad, 3, 3), t, t), evaluate_patches(quad, t, t), atol=1e-14)
