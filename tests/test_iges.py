@@ -110,6 +110,7 @@ def _param_range(surf: dict) -> tuple[float, float, float, float]:
 
 
 def _sphere_point(theta: np.ndarray, phi: np.ndarray, r: float = 2.0) -> np.ndarray:
+    theta, phi = np.broadcast_arrays(theta, phi)
     return np.stack(
         [r * np.sin(theta) * np.cos(phi), r * np.sin(theta) * np.sin(phi), r * np.cos(theta)], axis=-1
     )
@@ -196,6 +197,9 @@ def _split_params(text: str) -> list[str]:
     out, i, n, cur = [], 0, len(text), ""
     while i < n:
         ch = text[i]
+        if ch == " " and not cur:  # blanks between parameters
+            i += 1
+            continue
         if ch.isdigit() and not cur:
             j = i
             while j < n and text[j].isdigit():
@@ -541,10 +545,11 @@ def _count(shape, kind) -> int:
     return n
 
 
-def _compare_faces(faces, surfs) -> None:
+def _compare_faces(faces, surfs, scale: float = 1.0) -> None:
+    """``scale``: Open CASCADE converts file units to millimetres."""
     assert len(faces) == len(surfs)
     pts = np.concatenate([np.asarray(s["points"], float).reshape(-1, 3) for s in surfs])
-    tol = 1e-9 * float(np.linalg.norm(pts.max(0) - pts.min(0)))
+    tol = 1e-9 * scale * float(np.linalg.norm(pts.max(0) - pts.min(0)))
     params = [(0.0, 0.0), (1.0, 1.0), (0.0, 1.0), (1.0, 0.0), (0.5, 0.5), (0.13, 0.71), (0.9, 0.27)]
     for face, surf in zip(faces, surfs):
         loc = TopLoc_Location()
@@ -557,7 +562,7 @@ def _compare_faces(faces, surfs) -> None:
             u, v = u0 + a * (u1 - u0), v0 + b * (v1 - v0)
             p = geom.Value(u, v)
             got = np.array([p.X(), p.Y(), p.Z()])
-            np.testing.assert_allclose(got, _evaluate(surf, u, v), rtol=0, atol=tol)
+            np.testing.assert_allclose(got, scale * _evaluate(surf, u, v), rtol=0, atol=tol)
 
 
 def test_occ_read_back_mixed(tmp_path):
@@ -585,6 +590,21 @@ def test_occ_read_back_mixed(tmp_path):
         assert geom.IsURational() or geom.IsVRational() or not rational
 
 
+def test_occ_ordered_group(tmp_path):
+    _need_ocp()
+    surfs = bezier_patches_to_surfaces(_sphere_patches(2, nt=2, nph=3))
+    path = tmp_path / "ordered.igs"
+    write_iges(path, surfs, group="ordered")
+    ents = _parse_iges(path.read_bytes())["entities"]
+    assert (ents[-1]["type"], ents[-1]["form"]) == (402, 15)
+    reader, shape = _occ_read(path, expect_roots=1)
+    grp = reader.IGESModel().Entity(len(surfs) + 1)
+    assert (grp.TypeNumber(), grp.FormNumber()) == (402, 15)
+    _compare_faces(_faces(shape), surfs)
+    with pytest.raises(ValueError):
+        write_iges(path, surfs, group="sorted")
+
+
 def test_occ_read_back_without_group(tmp_path):
     _need_ocp()
     surfs = bezier_patches_to_surfaces(_sphere_patches(3, noise=0.05, seed=5))
@@ -592,7 +612,8 @@ def test_occ_read_back_without_group(tmp_path):
     write_iges(path, surfs, group=False, units="m")
     reader, shape = _occ_read(path, expect_roots=len(surfs))
     assert reader.IGESModel().GlobalSection().UnitFlag() == 6
-    _compare_faces(_faces(shape), surfs)
+    # the file is in metres; Open CASCADE hands the shape back in millimetres
+    _compare_faces(_faces(shape), surfs, scale=1000.0)
 
 
 def test_occ_rational_quarter_cylinder(tmp_path):

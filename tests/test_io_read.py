@@ -118,6 +118,19 @@ def test_obj_vt_vn_forms(tmp_path):
     assert np.isnan(n[4]).all()
 
 
+def test_obj_mixed_corner_forms():
+    # Slash counts differ per corner but sum to a multiple of the corner
+    # count: must not be mistaken for one uniform form.
+    text = ("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0.5 0.5\nvn 0 0 1\n"
+            "f 1/1/1 2 3/1\nf 2//1 3/1/1 4/1\n")
+    m = parse_obj(text.encode())
+    np.testing.assert_array_equal(m.face_vertices, [0, 1, 2, 1, 2, 3])
+    np.testing.assert_array_equal(m.vertex_uvs[[0, 2, 3]], np.full((3, 2), 0.5))
+    assert np.isnan(m.vertex_uvs[1]).all()
+    np.testing.assert_array_equal(m.vertex_normals[[0, 1, 2]], [[0, 0, 1]] * 3)
+    assert np.isnan(m.vertex_normals[3]).all()
+
+
 def test_obj_slow_path_spellings_match_fast(tmp_path):
     # "1/" and "1//" are odd but legal: handled by the corner-by-corner path.
     odd = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1/ 2/ 3/ 4/\nf 1// 2// 3//\n"

@@ -46,17 +46,24 @@ class HoleGroup:
     C: np.ndarray
 
 
-def hole_neighbourhoods(mesh: HalfEdgeMesh) -> list[HoleGroup]:
+def hole_neighbourhoods(mesh: HalfEdgeMesh, wanted_vertex=None) -> list[HoleGroup]:
     """Find the A, B, C points around every non-quadrilateral cell, grouped by n.
 
     Parameters
     ----------
-    mesh : HalfEdgeMesh, the twice-refined closed mesh (every vertex 4-valent)
+    mesh : HalfEdgeMesh, the twice-refined mesh (every vertex used by a patch 4-valent)
+    wanted_vertex : (V,) bool or None; if given, only holes with a wanted corner
+        (open meshes: holes that reach into the real surface)
     """
     groups = []
     for n, cells, h in mesh.faces_by_size():
         if n == 4:
             continue
+        if wanted_vertex is not None:
+            keep = wanted_vertex[mesh.origin[h]].any(axis=1)
+            cells, h = cells[keep], h[keep]
+            if cells.size == 0:
+                continue
         t = mesh.twin[h]  # C_{i+1} -> C_i in the quad beside edge i
         to_b2 = mesh.next[t]  # C_i -> B_{i,2}
         back = mesh.twin[to_b2]  # B_{i,2} -> C_i in the corner quad
@@ -98,12 +105,16 @@ def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:
     return frames
 
 
-def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
+def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None):
     """Frames (e0..e3) of all biquadratic and all bicubic patches.
+
+    Parameters
+    ----------
+    wanted_vertex : (V,) bool or None, refined vertices that get a biquadratic patch if regular
 
     Returns
     -------
-    quad_frames : (Nq, 4) int, one per regular refined vertex, in vertex order
+    quad_frames : (Nq, 4) int, one per regular (wanted) refined vertex, in vertex order
     cubic_frames : (Nc, 4) int, for the holes in ``holes`` order, corner by corner
     """
     first = np.full(mesh.n_vertices, -1, dtype=np.int64)
@@ -111,7 +122,8 @@ def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
     irregular = np.zeros(mesh.n_vertices, dtype=bool)
     for g in holes:
         irregular[g.C.ravel()] = True
-    regular = np.flatnonzero((first >= 0) & ~irregular)
+    wanted = (first >= 0) if wanted_vertex is None else (first >= 0) & wanted_vertex
+    regular = np.flatnonzero(wanted & ~irregular)
     quad_frames = vertex_frames(mesh, first[regular])
     if np.any(mesh.face_sizes[mesh.face[quad_frames]] != 4):
         raise TopologyError("internal: a refined vertex touches two holes")

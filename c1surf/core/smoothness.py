@@ -54,7 +54,7 @@ def _cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
     tree = cKDTree(points)
     pairs = tree.query_pairs(tolerance, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
-    return connected_components(graph, directed=False)[1]
+    return connected_components(graph, directed=False)[1].astype(np.int64)  # int32 labels would overflow in edge keys
 
 
 def boundary_curves(patches: np.ndarray):

@@ -12,8 +12,12 @@ import numpy as np
 
 from .doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin, second_step_ratio
 from .errors import TopologyError
+from scipy.sparse import csr_matrix
+
+from .boundary import add_ghost_layer
 from .patches import biquadratic_stencil, bicubic_stencil, hole_neighbourhoods, patch_frames, perturbation_matrix
-from .topology import HalfEdgeMesh, build_halfedges, validate_closed_manifold
+from .repair import check_valence, prepare_topology
+from .topology import HalfEdgeMesh, build_halfedges
 
 SOURCE_NAMES = {FACE_FROM_FACE: "face", FACE_FROM_EDGE: "edge", FACE_FROM_VERTEX: "vertex"}
 TANGENT_RULES = ("symmetric", "corners")
@@ -57,18 +61,33 @@ class Surface:
         if self.options.tangent_rule not in TANGENT_RULES:
             raise ValueError(f"tangent rule must be one of {TANGENT_RULES}")
         points = np.asarray(points, dtype=np.float64)
-        self.input = build_halfedges(face_sizes, face_vertices, points.shape[0])
-        validate_closed_manifold(self.input)
-        blend = np.full(self.input.n_faces, float(self.options.blend))
+        self.n_input_vertices = points.shape[0]
+        face_sizes = np.asarray(face_sizes, dtype=np.int64)
+        self.n_input_faces = int(face_sizes.size)
+        blend = np.full(face_sizes.size, float(self.options.blend))
         if face_blend is not None:
             blend = np.asarray(face_blend, dtype=np.float64).copy()
-        self._build_topology(blend)
+        self._build_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), blend)
         self.update_points(points)
 
     # -- topology and operators (no coordinates) ------------------------------------
 
-    def _build_topology(self, blend: np.ndarray) -> None:
-        coarse = self.input
+    def _build_topology(self, face_sizes, face_vertices, blend) -> None:
+        # Repairs first (orientation, pinched vertices), then a ghost layer
+        # closes any boundary; from there on every mesh is handled alike.
+        prepared, vertex_source, self.repairs = prepare_topology(face_sizes, face_vertices, self.n_input_vertices)
+        check_valence(prepared, vertex_source)
+        self.vertex_source = vertex_source
+        select = csr_matrix((np.ones(vertex_source.size), (np.arange(vertex_source.size), vertex_source)),
+                            shape=(vertex_source.size, self.n_input_vertices))
+        if self.repairs["boundary_edges"]:
+            layer = add_ghost_layer(prepared)
+            coarse, real_face, place = layer.mesh, layer.real_face, layer.points_matrix @ select
+            blend = np.r_[blend, np.full(coarse.n_faces - blend.size, float(self.options.blend))]
+        else:
+            coarse, real_face, place = prepared, np.ones(prepared.n_faces, bool), select
+        self.input = coarse
+
         step1 = doo_sabin_matrix(coarse, blend)
         faces1 = refine_doo_sabin(coarse)
         level1 = build_halfedges(faces1.face_sizes, faces1.face_vertices, coarse.n_halfedges)
@@ -80,18 +99,26 @@ class Surface:
         step2 = doo_sabin_matrix(level1, second_step_ratio(level1.face_sizes, blend1))
         faces2 = refine_doo_sabin(level1)
         refined = build_halfedges(faces2.face_sizes, faces2.face_vertices, level1.n_halfedges)
-        holes = hole_neighbourhoods(refined)
-        quad_frames, cubic_frames = patch_frames(refined, holes)
+        # A refined vertex is a corner of a corner of a coarse face: real if that face is.
+        real_vertex = real_face[coarse.face[level1.origin[np.arange(refined.n_vertices)]]]
+        holes = hole_neighbourhoods(refined, None if real_face.all() else real_vertex)
+        quad_frames, cubic_frames = patch_frames(refined, holes, real_vertex)
 
         self.level1, self.faces1, self.refined, self.holes = level1, faces1, refined, holes
-        self.quad_frames, self.cubic_frames = quad_frames, cubic_frames
-        self.operators = [step1, step2]
+        self.quad_frames = quad_frames
+        self.operators = [place, step1, step2]
         perturb = perturbation_matrix(refined, holes)
         if perturb is not None:
             self.operators.append(perturb)
         o = self.options
         self.quad_stencil = biquadratic_stencil(refined, quad_frames)
-        self.cubic_stencil = bicubic_stencil(refined, holes, o.alpha, o.beta, o.tangent_rule)
+        cubic_stencil = bicubic_stencil(refined, holes, o.alpha, o.beta, o.tangent_rule)
+        # keep the bicubic patches at real corners only (all of them on a closed mesh)
+        real_cubic = real_vertex[refined.origin[cubic_frames[:, 0]]]
+        self.cubic_frames = cubic_frames[real_cubic]
+        rows = (np.flatnonzero(real_cubic)[:, None] * 16 + np.arange(16)).ravel()
+        self.cubic_stencil = cubic_stencil[rows] if not real_cubic.all() else cubic_stencil
+        self.cubic_hole = np.repeat(np.arange(sum(g.cells.size for g in holes)), [g.n for g in holes for _ in range(g.cells.size)])[real_cubic]
 
     # -- geometry ---------------------------------------------------------------------
 
@@ -103,8 +130,8 @@ class Surface:
         points : (V, d) float
         """
         points = np.asarray(points, dtype=np.float64)
-        if points.ndim != 2 or points.shape[0] != self.input.n_vertices:
-            raise ValueError(f"expected points of shape ({self.input.n_vertices}, d), got {points.shape}")
+        if points.ndim != 2 or points.shape[0] != self.n_input_vertices:
+            raise ValueError(f"expected points of shape ({self.n_input_vertices}, d), got {points.shape}")
         x = points
         for operator in self.operators:
             x = operator @ x
@@ -127,24 +154,26 @@ class Surface:
         return np.concatenate([self.quad_frames, self.cubic_frames])
 
     def patch_sources(self):
-        """Which input element each patch comes from.
+        """Which input element each patch comes from, in the input's numbering.
 
         Returns
         -------
-        kind : (Nq + Nc,) int8, FACE_FROM_FACE / FACE_FROM_EDGE / FACE_FROM_VERTEX
-        index : (Nq + Nc,) int, the input face, input vertex, or for an edge one
-            of its input half-edges (``self.input.origin/dest`` give its vertices)
+        kind : (P,) int8, FACE_FROM_FACE / FACE_FROM_EDGE / FACE_FROM_VERTEX
+        index : (P,) int, input face or input vertex (-1 for edges)
+        edge : (P, 2) int, the input edge's two vertices (-1 unless an edge)
         """
         centre = self.refined.origin[self.frames[:, 0]]
         face1 = self.level1.face[centre]
-        return self.faces1.kind[face1], self.faces1.parent[face1]
-
-    def hole_of_cubic(self):
-        """(Nc,) hole index and (Nc,) corner i of every bicubic patch."""
-        sizes = np.concatenate([np.full(g.cells.size, g.n) for g in self.holes]) if self.holes else np.zeros(0, int)
-        hole = np.repeat(np.arange(sizes.size), sizes)
-        start = np.concatenate([[0], np.cumsum(sizes)])[:-1]
-        return hole, np.arange(hole.size) - start[hole]
+        kind, parent = self.faces1.kind[face1], self.faces1.parent[face1]
+        coarse = self.input
+        is_vertex, is_edge = kind == FACE_FROM_VERTEX, kind == FACE_FROM_EDGE
+        index = parent.copy()
+        index[is_vertex] = self.vertex_source[parent[is_vertex]]
+        index[is_edge] = -1
+        edge = np.full((kind.size, 2), -1, dtype=np.int64)
+        h = parent[is_edge]
+        edge[is_edge] = self.vertex_source[np.stack([coarse.origin[h], coarse.dest[h]], axis=1)]
+        return kind, index, edge
 
 
 def build_surface(points, face_sizes, face_vertices, **options) -> Surface:

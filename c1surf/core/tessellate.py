@@ -2,8 +2,11 @@
 
 Patches are dual to the refined mesh (see ``patches``): patch corners are
 centroids of refined faces and patch sides cross refined edges. So the welded
-vertex numbering is index arithmetic: one vertex per refined face, N-2 per
-refined edge (in a canonical direction), (N-2)^2 per patch. No distance search.
+vertex numbering is index arithmetic on plain per-patch arrays (corner ids,
+side edge ids and directions: ``adjacency.PatchAdjacency``): one vertex per
+corner, N-2 per edge (in its own direction), (N-2)^2 per patch. No distance
+search. The arrays are stored in patch files, so ``c1surf tessellate``
+rebuilds exactly the mesh ``convert`` writes.
 """
 from __future__ import annotations
 
@@ -12,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .bezier import bernstein_basis, unit_normals
+from .adjacency import PatchAdjacency, adjacency_from_geometry, patch_adjacency  # noqa: F401 (re-exported)
 
 
 @dataclass(frozen=True)
@@ -64,42 +68,56 @@ def welded_grid(refined, frames: np.ndarray, n: int) -> np.ndarray:
 
     Returns
     -------
+    (P, n, n) int, a compact numbering 0..V-1 (see ``welded_grid_from_ids``)
+    """
+    return welded_grid_from_ids(patch_adjacency(refined, frames), n)
+
+
+def welded_grid_from_ids(adjacency: PatchAdjacency, n: int) -> np.ndarray:
+    """Global vertex index of every grid sample, from plain adjacency arrays.
+
+    Vertices are numbered corners first (by corner id), then the n-2 inner
+    samples of every edge (by edge id, in the edge's own direction), then the
+    (n-2)^2 inner samples of every patch (patch by patch, u slowest). Sample
+    (i, j) of a patch is the point at (u_i, v_j).
+
+    Parameters
+    ----------
+    adjacency : PatchAdjacency, corner ids (P, 4), side edge ids (P, 4), reversed flags (P, 4)
+    n : int >= 2, samples per side
+
+    Returns
+    -------
     (P, n, n) int, a compact numbering 0..V-1
     """
-    p = frames.shape[0]
-    h = np.arange(refined.n_halfedges)
-    canonical = h[h < refined.twin]
-    edge_id = np.full(refined.n_halfedges, -1, dtype=np.int64)
-    edge_id[canonical] = np.arange(canonical.size)
-    edge_id[refined.twin[canonical]] = np.arange(canonical.size)
+    corners, edges, reversed_ = adjacency.corners, adjacency.edges, adjacency.reversed
+    p = corners.shape[0]
     inner = n - 2
-    edge_base = refined.n_faces
-    patch_base = edge_base + canonical.size * inner
-
+    edge_base = adjacency.n_corners
+    patch_base = edge_base + adjacency.n_edges * inner
     grid = np.empty((p, n, n), dtype=np.int64)
-    face = refined.face
-    e0, e1, e2, e3 = frames.T
-    grid[:, 0, 0] = face[e2]
-    grid[:, -1, 0] = face[e3]
-    grid[:, -1, -1] = face[e0]
-    grid[:, 0, -1] = face[e1]
+    grid[:, 0, 0] = corners[:, 0]
+    grid[:, -1, 0] = corners[:, 1]
+    grid[:, -1, -1] = corners[:, 2]
+    grid[:, 0, -1] = corners[:, 3]
     if inner > 0:
         k = np.arange(inner)
 
-        def side(x):
-            # Samples running from face(x) to face(twin x); canonical direction
-            # is from face(c) to face(twin c) for the smaller half-edge c.
-            forward = x < refined.twin[x]
-            idx = np.where(forward[:, None], k[None, :], inner - 1 - k[None, :])
-            return edge_base + edge_id[x][:, None] * inner + idx
+        def side(s):
+            idx = np.where(reversed_[:, s, None], inner - 1 - k[None, :], k[None, :])
+            return edge_base + edges[:, s, None] * inner + idx
 
-        grid[:, -1, 1:-1] = side(refined.twin[e0])  # u = 1, v increasing
-        grid[:, 1:-1, -1] = side(e1)  # v = 1, u increasing
-        grid[:, 0, 1:-1] = side(e2)  # u = 0, v increasing
-        grid[:, 1:-1, 0] = side(refined.twin[e3])  # v = 0, u increasing
+        grid[:, 1:-1, 0] = side(0)  # v = 0, u increasing
+        grid[:, -1, 1:-1] = side(1)  # u = 1, v increasing
+        grid[:, 1:-1, -1] = side(2)  # v = 1, u increasing
+        grid[:, 0, 1:-1] = side(3)  # u = 0, v increasing
         grid[:, 1:-1, 1:-1] = patch_base + np.arange(p * inner * inner).reshape(p, inner, inner)
-    used, compact = np.unique(grid, return_inverse=True)
-    return compact.reshape(p, n, n)
+    total = patch_base + p * inner * max(inner, 0)
+    used = np.zeros(total, dtype=bool)
+    used[grid] = True
+    if not used.all():  # ids with gaps: close them, keeping the order
+        grid = (np.cumsum(used) - 1)[grid]
+    return grid
 
 
 def tessellate(patch_groups, refined, frames: np.ndarray, resolution: int = 8) -> Tessellation:
@@ -114,12 +132,31 @@ def tessellate(patch_groups, refined, frames: np.ndarray, resolution: int = 8) -
 
     Returns
     -------
+    Tessellation (the same as ``tessellate_patches(patch_groups, patch_adjacency(refined, frames), resolution)``)
+    """
+    return tessellate_patches(patch_groups, patch_adjacency(refined, frames), resolution)
+
+
+def tessellate_patches(patch_groups, adjacency: PatchAdjacency, resolution: int = 8) -> Tessellation:
+    """Sample patches on a welded grid given by plain adjacency arrays.
+
+    ``convert`` and ``tessellate`` both call this with the same arrays (from
+    the construction or from a patch file), so their outputs are identical.
+
+    Parameters
+    ----------
+    patch_groups : list of (p_k, d_k+1, d_k+1, dim) float, patches in adjacency order
+    adjacency : PatchAdjacency of the sum p_k patches
+    resolution : int >= 2, samples per patch side
+
+    Returns
+    -------
     Tessellation
     """
     if resolution < 2:
         raise ValueError("resolution must be at least 2")
     n = int(resolution)
-    grid = welded_grid(refined, frames, n)
+    grid = welded_grid_from_ids(adjacency, n)
     dim = patch_groups[0].shape[-1]
     points = np.empty((int(grid.max()) + 1 if grid.size else 0, dim))
     normals = np.empty((points.shape[0], 3))

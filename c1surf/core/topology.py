@@ -230,20 +230,27 @@ def validate_closed_manifold(mesh: HalfEdgeMesh) -> None:
         )
 
 
-def outgoing_rings(mesh: HalfEdgeMesh):
-    """Outgoing half-edges of every used vertex in counter-clockwise order.
+def interior_vertices(mesh: HalfEdgeMesh) -> np.ndarray:
+    """(V,) bool: used vertices not on a boundary edge (their rotation closes)."""
+    interior = np.bincount(mesh.origin, minlength=mesh.n_vertices) > 0
+    boundary = mesh.twin < 0
+    interior[mesh.origin[boundary]] = False
+    interior[mesh.dest[boundary]] = False
+    return interior
 
-    Assumes a closed manifold mesh (every rotation defined).
+
+def outgoing_rings(mesh: HalfEdgeMesh):
+    """Outgoing half-edges of every interior vertex in counter-clockwise order.
 
     Returns
     -------
-    vertices : (k,) int, the used vertices
+    vertices : (k,) int, the interior vertices (boundary and unused ones are left out)
     sizes : (k,) int, their valences
     ring : (sum(sizes),) int, each vertex's outgoing half-edges in rotation order,
         concatenated in the order of ``vertices``
     """
     valence = vertex_valences(mesh)
-    vertices = np.flatnonzero(valence > 0)
+    vertices = np.flatnonzero(interior_vertices(mesh))
     sizes = valence[vertices]
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     # Start each ring at the vertex's first half-edge, then walk the rotation:

@@ -2,7 +2,9 @@
 
 Each surface becomes one *Rational B-spline surface entity* (type 128, form 0);
 optionally all of them are collected by one *Unordered group without back
-pointers* (type 402, form 7) so that a CAD system shows a single object.
+pointers* (type 402, form 7; or form 15, ordered) so that a CAD system shows a
+single object.  Open CASCADE reads the files without a single load-check
+message; note that it converts file units to millimetres on import.
 
 The file has the five fixed-format sections of IGES 5.3 (Start, Global,
 Directory Entry, Parameter Data, Terminate), 80-column records, LF line ends.
@@ -348,7 +350,7 @@ def _pack_text_params(tokens: Sequence[str], width: int) -> list[str]:
 class _Kind:
     """All surfaces with one layout (degrees, control net size, knot counts)."""
 
-    __slots__ = ("du", "dv", "nu", "nv", "rows", "pts", "wts", "ku", "kv", "ntok", "floats", "ints")
+    __slots__ = ("du", "dv", "nu", "nv", "rows", "pts", "wts", "ku", "kv", "ntok")
 
     def __init__(self, du: int, dv: int, nu: int, nv: int):
         self.du, self.dv, self.nu, self.nv = du, dv, nu, nv
@@ -516,11 +518,12 @@ class _PDWriter:
         offf = off.reshape(-1)
         lflat = lens.reshape(-1)
         flat[np.arange(g * t), offf + lflat] = _COMMA
-        flat[np.arange(g) * t + ntok - 1, offf.reshape(g, t)[np.arange(g), ntok - 1] + lflat.reshape(g, t)[np.arange(g), ntok - 1]] = _SEMI
+        last = np.arange(g) * t + ntok - 1  # flat index of each entity's last token
+        flat[last, offf[last] + lflat[last]] = _SEMI
         tl = np.where(real, lens + 1, 0)
         if big:
             assert g == 1
-            line1, col1, nl = _pack_sequential(tl[0], _PD_COLS)
+            _, col1, nl = _pack_sequential(tl[0], _PD_COLS)
             col, nlines = col1[None, :], np.array([nl])
         else:
             _, col, nlines = _pack_lockstep(tl, _PD_COLS)
@@ -558,13 +561,12 @@ def _entity_tokens(kind: _Kind, rows: np.ndarray) -> tuple[np.ndarray, np.ndarra
     parameter range, unit weights, ...) are formatted once."""
     ints, floats = _kind_tables(kind, rows)
     g = rows.size
-    vals_i = ints
     ni, nf = ints.shape[1], floats.shape[1]
     nt = ni + nf
     chars = np.empty((g, nt, _W1), dtype=np.uint8)
     off = np.empty((g, nt), dtype=np.int64)
     lens = np.empty((g, nt), dtype=np.int64)
-    ic, io, il = _format_ints(vals_i)
+    ic, io, il = _format_ints(ints)
     chars[:, :ni] = ic.reshape(g, ni, _W1)
     off[:, :ni] = io.reshape(g, ni)
     lens[:, :ni] = il.reshape(g, ni)
@@ -750,7 +752,7 @@ def write_iges(
     surfaces: Sequence[Mapping[str, Any]],
     *,
     units: str = "mm",
-    group: bool = True,
+    group: bool | str = True,
     author: str = "c1surf",
     description: str | None = None,
     organization: str = "",
@@ -767,9 +769,11 @@ def write_iges(
     ``{"points": (nu, nv, 3), "weights": ... or None, "knots_u": (nu+du+1,),
     "knots_v": (nv+dv+1,), "degree": (du, dv)}``.  Each becomes an entity 128
     (form 0) in input order, labelled ``BEZIER``/``BSPLINE`` with subscript =
-    input index + 1.  With ``group=True`` an entity 402 form 7 (unordered group
-    without back pointers, label ``C1SURF``) collects them; its members get
-    status 00020000 (logically dependent).
+    input index + 1.  With ``group=True`` (or ``"unordered"``) an entity 402
+    form 7 (unordered group without back pointers, label ``C1SURF``) collects
+    them; ``group="ordered"`` uses form 15 (ordered group without back
+    pointers) instead.  Group members get status 00020000 (logically
+    dependent).  ``group=False``: independent surfaces, status 00000000.
 
     ``units``: key of `UNITS` (``mm``, ``m``, ``cm``, ``in``, ...).
     ``file_name``: name recorded in the Global section (default: basename of
@@ -788,7 +792,13 @@ def write_iges(
     surfaces = list(surfaces)
     kinds, kind_of, row_of = _normalise(surfaces)
     n_surf = len(surfaces)
-    has_group = bool(group) and n_surf > 0
+    if isinstance(group, str):
+        if group not in ("unordered", "ordered"):
+            raise ValueError(f"group must be a bool, 'unordered' or 'ordered', not {group!r}")
+        group_form = 7 if group == "unordered" else 15
+    else:
+        group_form = 7 if group else 0
+    has_group = group_form != 0 and n_surf > 0
     n_ent = n_surf + (1 if has_group else 0)
     if 2 * n_ent > 9_999_999:
         raise ValueError("too many entities for one IGES file")
@@ -820,7 +830,7 @@ def write_iges(
         description = (
             f"c1surf surface: {n_surf} rational B-spline surface entities (type 128), "
             f"{nb} of them Bezier patches"
-            + (", collected in one group (type 402 form 7)." if has_group else ".")
+            + (f", collected in one group (type 402 form {group_form})." if has_group else ".")
         )
     start_lines: list[str] = []
     for para in _ascii(description).splitlines() or [""]:
@@ -869,7 +879,7 @@ def write_iges(
         subscript = np.arange(1, n_ent + 1, dtype=np.int64)
         if has_group:
             etype[-1] = 402
-            form[-1] = 7
+            form[-1] = group_form
             status_idx[-1] = 0
             label_idx[-1] = 2
             subscript[-1] = 0

@@ -27,11 +27,8 @@ KIND_BY_DEGREE = {2: "biquadratic", 3: "bicubic"}
 
 def surface_patch_document(surface, input_path: str | None = None) -> dict:
     """The JSON document (a dict) of a ``core.surface.Surface``."""
-    kind, index = surface.patch_sources()
-    coarse = surface.input
-    edge = kind == FACE_FROM_EDGE
-    a = np.where(edge, coarse.origin[np.where(edge, index, 0)], -1)
-    b = np.where(edge, coarse.dest[np.where(edge, index, 0)], -1)
+    kind, index, edge = surface.patch_sources()
+    a, b = edge[:, 0], edge[:, 1]
     sources = [
         {"face": int(i)} if k == FACE_FROM_FACE else ({"edge": [int(x), int(y)]} if k == FACE_FROM_EDGE else {"vertex": int(i)})
         for k, i, x, y in zip(kind.tolist(), index.tolist(), a.tolist(), b.tolist())
@@ -49,7 +46,7 @@ def surface_patch_document(surface, input_path: str | None = None) -> dict:
         "version": FORMAT_VERSION,
         "c1surf_version": __version__,
         "options": {"blend": o.blend, "alpha": o.alpha, "beta": o.beta, "tangent_rule": o.tangent_rule},
-        "input": {"path": input_path, "vertices": int(coarse.n_vertices), "faces": int(coarse.n_faces)},
+        "input": {"path": input_path, "vertices": int(surface.n_input_vertices), "faces": int(surface.n_input_faces)},
         "counts": {"biquadratic": int(len(surface.biquadratic)), "bicubic": int(len(surface.bicubic))},
         "patches": patches,
     }

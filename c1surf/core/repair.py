@@ -1,0 +1,178 @@
+"""Topology repairs that keep the input's meaning: consistent orientation, pinch splitting.
+
+Both work on integers only and return what they changed, so the caller can
+report it ("flipped 3 faces") and map results back to the input's numbering.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_matrix, csr_matrix
+from scipy.sparse.csgraph import breadth_first_order, connected_components
+
+from .errors import TopologyError
+from .topology import HalfEdgeMesh, build_halfedges, rotation_cycles, undirected_edges
+
+
+def check_edge_manifold(mesh: HalfEdgeMesh) -> None:
+    """Raise TopologyError for an edge in more than two faces (the paper's precondition)."""
+    if mesh.n_faces == 0:
+        raise TopologyError("the mesh has no faces")
+    small = np.flatnonzero(mesh.face_sizes < 3)
+    if small.size:
+        raise TopologyError(f"face {small[0]} has {mesh.face_sizes[small[0]]} corners; every face needs at least 3", small[:1])
+    edges, edge_of, counts = undirected_edges(mesh)
+    bad = np.flatnonzero(counts > 2)
+    if bad.size:
+        e = bad[0]
+        raise TopologyError(
+            f"edge between vertices {{0}} and {{1}} is shared by {counts[e]} faces; the construction needs at most two "
+            f"faces per edge ({bad.size} such edges): split the mesh there",
+            np.unique(mesh.face[edge_of == e]),
+            edges[e],
+        )
+
+
+def reverse_faces(face_sizes: np.ndarray, face_vertices: np.ndarray, flip: np.ndarray) -> np.ndarray:
+    """Reverse the corner order of the faces marked in ``flip``.
+
+    Parameters
+    ----------
+    face_sizes : (F,) int
+    face_vertices : (H,) int
+    flip : (F,) bool
+
+    Returns
+    -------
+    (H,) int, new face_vertices (each flipped face keeps its first corner)
+    """
+    offsets = np.concatenate([[0], np.cumsum(face_sizes)])
+    face = np.repeat(np.arange(face_sizes.size), face_sizes)
+    local = np.arange(face_vertices.size) - offsets[face]
+    # corner k of a reversed n-gon is old corner (n - k) mod n
+    source = np.where(flip[face], offsets[face] + (face_sizes[face] - local) % face_sizes[face], np.arange(face_vertices.size))
+    return face_vertices[source]
+
+
+def orientation_flips(mesh: HalfEdgeMesh):
+    """Which faces to reverse so that neighbours agree, per connected component.
+
+    Faces sharing an edge agree when they run along it in opposite directions.
+    Relative parities come from a breadth-first tree and pointer jumping; each
+    component keeps the orientation most of its faces already have.
+
+    Returns
+    -------
+    flip : (F,) bool
+    non_orientable_faces : (k,) int, faces at an edge that no choice can make consistent (empty if orientable)
+    """
+    edges, edge_of, counts = undirected_edges(mesh)
+    interior = np.flatnonzero(counts == 2)
+    order = np.argsort(edge_of, kind="stable")
+    first_of_edge = np.searchsorted(edge_of[order], interior)
+    h1, h2 = order[first_of_edge], order[first_of_edge + 1]
+    f1, f2 = mesh.face[h1], mesh.face[h2]
+    parity = (mesh.origin[h1] == mesh.origin[h2]).astype(np.int8)  # same direction: one must flip
+    n = mesh.n_faces
+    _, component = connected_components(coo_matrix((np.ones(f1.size), (f1, f2)), shape=(n, n)), directed=False)
+    # A super-root joined to the first face of every component makes one BFS reach all faces.
+    roots = np.unique(component, return_index=True)[1]
+    # One tree edge per pair of neighbouring faces (faces may share several
+    # edges; if those disagree the final check reports it).
+    pair_key = np.minimum(f1, f2) * n + np.maximum(f1, f2)
+    _, first_pair = np.unique(pair_key, return_index=True)
+    t1, t2, tp = f1[first_pair], f2[first_pair], parity[first_pair]
+    rows = np.concatenate([t1, t2, np.full(roots.size, n)])
+    cols = np.concatenate([t2, t1, roots])
+    weight = np.concatenate([tp, tp, np.zeros(roots.size, np.int8)]).astype(np.float64) + 1.0  # +1 keeps zeros stored
+    graph = csr_matrix((weight, (rows, cols)), shape=(n + 1, n + 1))
+    _, predecessor = breadth_first_order(graph, n, directed=False, return_predecessors=True)
+    predecessor[n] = n
+    pointer = predecessor.copy()
+    acc = np.zeros(n + 1, dtype=np.int8)
+    acc[:n] = np.asarray(graph[np.arange(n), predecessor[:n]]).ravel() > 1.5
+    while np.any(pointer != pointer[pointer]):
+        acc, pointer = acc ^ acc[pointer], pointer[pointer]
+    flip = acc[:n].astype(bool)
+    # keep the majority orientation of each component
+    flipped_count = np.bincount(component, weights=flip, minlength=roots.size)
+    size = np.bincount(component, minlength=roots.size)
+    flip ^= (flipped_count > size / 2)[component]
+    bad = parity.astype(bool) != (flip[f1] ^ flip[f2])
+    return flip, np.unique(np.r_[f1[bad], f2[bad]])
+
+
+def split_pinched_vertices(mesh: HalfEdgeMesh):
+    """One vertex per fan of faces: renumber corners so no vertex is pinched.
+
+    Unused vertices disappear from the numbering.
+
+    Returns
+    -------
+    face_vertices : (H,) int, corners renumbered
+    vertex_source : (V',) int, the input vertex each new vertex copies
+    n_split : int, how many input vertices had more than one fan
+    """
+    fan = rotation_cycles(mesh)
+    key = mesh.origin * (fan.max() + 1) + fan
+    unique_key, new_vertex = np.unique(key, return_inverse=True)
+    vertex_source = mesh.origin[np.unique(new_vertex, return_index=True)[1]]
+    fans_per_vertex = np.bincount(vertex_source, minlength=mesh.n_vertices)
+    return new_vertex.ravel().astype(np.int64), vertex_source, int(np.sum(fans_per_vertex > 1))
+
+
+def prepare_topology(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices: int):
+    """Check, orient and un-pinch an input polygon mesh.
+
+    Returns
+    -------
+    mesh : HalfEdgeMesh, consistently oriented, every vertex one fan
+    vertex_source : (V',) int, input vertex of each vertex of ``mesh``
+    report : dict with ``flipped_faces``, ``split_vertices``, ``unused_vertices``, ``components``
+    """
+    face_sizes = np.asarray(face_sizes, dtype=np.int64)
+    face_vertices = np.asarray(face_vertices, dtype=np.int64)
+    raw = build_halfedges(face_sizes, face_vertices, n_vertices)
+    check_edge_manifold(raw)
+    flip, non_orientable = orientation_flips(raw)
+    if non_orientable.size:
+        raise TopologyError(
+            f"the mesh is not orientable (like a Moebius strip): {non_orientable.size} faces meet an edge where no consistent "
+            "orientation exists; c1surf needs an orientable surface",
+            non_orientable,
+        )
+    if flip.any():
+        face_vertices = reverse_faces(face_sizes, face_vertices, flip)
+        raw = build_halfedges(face_sizes, face_vertices, n_vertices)
+    split_vertices, vertex_source, n_split = split_pinched_vertices(raw)
+    mesh = build_halfedges(face_sizes, split_vertices, vertex_source.size)
+    used = np.zeros(n_vertices, dtype=bool)
+    used[face_vertices] = True
+    _, component = connected_components(
+        coo_matrix((np.ones(mesh.n_halfedges), (mesh.origin, mesh.dest)), shape=(mesh.n_vertices,) * 2), directed=False
+    )
+    report = {
+        "flipped_faces": int(flip.sum()),
+        "split_vertices": n_split,
+        "unused_vertices": int((~used).sum()),
+        "components": int(np.unique(component).size),
+        "boundary_edges": int(np.sum(mesh.twin < 0)),
+    }
+    return mesh, vertex_source, report
+
+
+def check_valence(mesh: HalfEdgeMesh, vertex_source: np.ndarray) -> None:
+    """Refuse interior vertices of valence 2: they make 2-sided holes (c = -1 in A3)."""
+    boundary = np.zeros(mesh.n_vertices, dtype=bool)
+    b = mesh.twin < 0
+    boundary[mesh.origin[b]] = True
+    boundary[mesh.dest[b]] = True
+    valence = np.bincount(mesh.origin, minlength=mesh.n_vertices)
+    two = np.flatnonzero((valence == 2) & ~boundary)
+    if two.size:
+        v = two[0]
+        raise TopologyError(
+            f"vertex {{0}} is an interior vertex of valence 2 ({two.size} such vertices): it makes a 2-sided cell "
+            "the construction cannot fill; merge its two faces or add an edge there",
+            np.unique(mesh.face[mesh.origin == v]),
+            [vertex_source[v]],
+        )
