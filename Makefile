@@ -35,5 +35,9 @@ test: $(VENV)/.stamp-test
 bench: $(VENV)/.stamp-bench
 	$(BIN)/python bench/run.py
 
+# Reference outputs of the sample meshes for tests/test_golden.py; rerun after an intended change.
+golden: $(VENV)/.stamp-base
+	$(BIN)/python tests/golden/regenerate.py
+
 clean:
 	rm -rf $(VENV) $(OUT) .pytest_cache

@@ -40,6 +40,23 @@ def topology_failure(error: TopologyError, mesh_file) -> Failure:
     return Failure(f"{where}: {message}")
 
 
+def repair_notes(surface, mesh_file) -> list[str]:
+    """One-line notes on what c1surf changed or ignored to make the input usable."""
+    r = getattr(surface, "repairs", {}) or {}
+    notes = []
+    if getattr(mesh_file, "collapsed_corners", 0):
+        notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
+    if r.get("flipped_faces"):
+        notes.append(f"flipped {r['flipped_faces']} faces to orient each connected component consistently")
+    if r.get("split_vertices"):
+        notes.append(f"split {r['split_vertices']} pinched vertices into one vertex per fan of faces")
+    if r.get("unused_vertices"):
+        notes.append(f"ignored {r['unused_vertices']} vertices used by no face")
+    if r.get("boundary_edges"):
+        notes.append(f"open mesh: {r['boundary_edges']} boundary edges, closed for the construction by a ghost layer")
+    return notes
+
+
 def friendly_errors(command):
     """Decorator: known failures become one line and exit 1; --debug shows the traceback."""
 

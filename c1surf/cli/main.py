@@ -1,11 +1,14 @@
 """The ``c1surf`` command: a click group; each subcommand lives in its own module."""
 from __future__ import annotations
 
+import signal
+
 import click
 
 from .. import __version__
 from .check import check
 from .convert import convert
+from .tessellate import tessellate
 
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
@@ -22,10 +25,18 @@ def main(ctx, debug):
     """
     ctx.ensure_object(dict)
     ctx.obj["debug"] = debug
+    # SIGTERM (a killed make job, a batch scheduler) unwinds like Ctrl-C, so
+    # temporary output files are removed and nothing partial is left behind.
+    signal.signal(signal.SIGTERM, _interrupt)
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
 
 
 main.add_command(convert)
 main.add_command(check)
+main.add_command(tessellate)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -39,12 +39,13 @@ class GhostLayer:
     points_matrix: csr_matrix
 
 
-def add_ghost_layer(mesh: HalfEdgeMesh) -> GhostLayer:
+def add_ghost_layer(mesh: HalfEdgeMesh, points: np.ndarray) -> GhostLayer:
     """Close every boundary loop of ``mesh`` with a ring of ghost quads.
 
     Parameters
     ----------
     mesh : HalfEdgeMesh, oriented, every vertex one fan (``repair.prepare_topology``)
+    points : (V, 3) float, used once to tell convex from reflex single-face corners
     """
     n = mesh.n_vertices
     boundary = np.flatnonzero(mesh.twin < 0)  # half-edges a -> b with no face across
@@ -57,14 +58,18 @@ def add_ghost_layer(mesh: HalfEdgeMesh) -> GhostLayer:
     face_vertices = np.concatenate([mesh.origin, quads.ravel()])
     ghosted = build_halfedges(face_sizes, face_vertices, n + boundary_vertices.size)
     real_face = np.r_[np.ones(mesh.n_faces, bool), np.zeros(boundary.size, bool)]
-    return GhostLayer(ghosted, real_face, ghost_points_matrix(mesh, boundary_vertices, ghost))
+    return GhostLayer(ghosted, real_face, ghost_points_matrix(mesh, boundary_vertices, ghost, points))
 
 
-def ghost_points_matrix(mesh: HalfEdgeMesh, boundary_vertices: np.ndarray, ghost: np.ndarray) -> csr_matrix:
+def ghost_points_matrix(mesh: HalfEdgeMesh, boundary_vertices: np.ndarray, ghost: np.ndarray, points: np.ndarray) -> csr_matrix:
     """(V + G, V) matrix: real points unchanged, ghost a' = 2 a - m(a).
 
-    m(a) is the mean of the neighbours of a along interior edges, or, for a
-    vertex in a single face, the centroid of that face.
+    m(a) is the mean of the neighbours of a along interior edges. A vertex in a
+    single face (a corner) has none: at a convex corner m(a) is the face's
+    centroid; at a reflex one (which the centroid rule would push into the
+    face) a' = x + y - a completes the parallelogram of its two neighbours
+    into the notch. Convex or reflex is decided once, from ``points``; the
+    matrix is then fixed, so ``update_points`` stays a sparse product.
     """
     n = mesh.n_vertices
     g = boundary_vertices.size
@@ -79,8 +84,15 @@ def ghost_points_matrix(mesh: HalfEdgeMesh, boundary_vertices: np.ndarray, ghost
     cols = [np.arange(n), boundary_vertices, dst]
     vals = [np.ones(n), np.full(g, 2.0), -1.0 / count[src]]
     corners = boundary_vertices[count[boundary_vertices] == 0]
+    reflex = corners[reflex_corner(mesh, corners, points)]
+    corners = np.setdiff1d(corners, reflex)
+    if reflex.size:
+        h = np.flatnonzero(np.isin(mesh.origin, reflex))  # the one half-edge leaving each
+        rows += [ghost[reflex]] * 3
+        cols += [mesh.origin[h], mesh.dest[h], mesh.origin[mesh.prev[h]]]
+        vals += [np.full(reflex.size, -1.0), np.ones(reflex.size), np.ones(reflex.size)]
     if corners.size:
-        # a corner lies in one face: reflect that face's centroid
+        # a convex corner lies in one face: reflect that face's centroid
         h = np.flatnonzero(np.isin(mesh.origin, corners))
         face = mesh.face[h]
         members = mesh.face_offsets[face][:, None] + np.arange(mesh.face_sizes.max())[None, :]
@@ -91,3 +103,23 @@ def ghost_points_matrix(mesh: HalfEdgeMesh, boundary_vertices: np.ndarray, ghost
     matrix = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n + g, n))
     matrix.sum_duplicates()
     return matrix
+
+
+def reflex_corner(mesh: HalfEdgeMesh, corners: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """(k,) bool: is each single-face corner vertex reflex within its face?
+
+    The turn x -> a -> y is compared with the face's (Newell) normal.
+    """
+    if corners.size == 0:
+        return np.zeros(0, dtype=bool)
+    h = np.flatnonzero(np.isin(mesh.origin, corners))
+    order = np.argsort(mesh.origin[h])
+    h = h[order][np.searchsorted(mesh.origin[h][order], corners)]
+    a, y, x = points[mesh.origin[h]], points[mesh.dest[h]], points[mesh.origin[mesh.prev[h]]]
+    corner_points = points[mesh.origin]
+    nxt = corner_points[mesh.next]
+    newell = np.cross(corner_points, nxt)  # sum over a face of p_k x p_k+1 is twice its area vector
+    normal = np.zeros((mesh.n_faces, 3))
+    np.add.at(normal, mesh.face, newell)
+    turn = np.einsum("ij,ij->i", np.cross(a - x, y - a), normal[mesh.face[h]])
+    return turn < 0

@@ -129,12 +129,13 @@ def frame_camera(points: np.ndarray, width: int, height: int, view: str = "iso",
     width, height : int, pixels
     view : a key of ``VIEWS``; ignored when ``eye`` is given
     eye, target, up : (3,) or None. ``target`` defaults to the centre of the bounding
-        box; with ``eye`` the camera stays there (perspective: the field of view is
-        chosen to frame everything unless ``fov`` is given).
+        box. With ``eye``, a perspective camera stays there and its field of view
+        frames everything unless ``fov`` is given; an orthographic one only takes the
+        direction ``target - eye``.
     projection : "perspective" or "orthographic"
     fov : vertical field of view in degrees (perspective), default 30
     margin : fraction of empty border
-    zoom : > 1 magnifies about the image centre
+    zoom : > 1 magnifies about the image centre (narrower field of view, same eye)
 
     Returns
     -------
@@ -156,25 +157,21 @@ def frame_camera(points: np.ndarray, width: int, height: int, view: str = "iso",
         forward, right, up_v = _frame(-_unit(direction), up if up is not None else default_up)
     rel = pts - centre
     x, y, z = rel @ right, rel @ up_v, rel @ forward
-    scale = (1.0 + margin) / zoom
+    scale = 1.0 + margin
     if projection == "orthographic":
-        # Centre the window on the projected extent; the eye sits in front of everything.
+        # Only the direction matters: centre the window on the projected extent and
+        # put the ray origins in front of everything.
         cx, cy = 0.5 * (x.min() + x.max()), 0.5 * (y.min() + y.max())
-        half = max(0.5 * (y.max() - y.min()), 0.5 * (x.max() - x.min()) / aspect, 1e-12) * scale
-        if eye is None:
-            eye = centre - forward * (z.max() - z.min() + radius)
-        eye = eye + cx * right + cy * up_v - ((eye - centre) @ right) * right - ((eye - centre) @ up_v) * up_v
-        near = (pts - eye) @ forward
-        if near.min() <= 0:  # keep everything in front of the ray origins
-            eye = eye + (near.min() - 0.05 * radius) * forward
-        return Camera(eye, forward, right, up_v, width, height, "orthographic", half_height=float(half))
+        half = max(0.5 * (y.max() - y.min()), 0.5 * (x.max() - x.min()) / aspect, 1e-12 * radius) * scale
+        eye = centre + cx * right + cy * up_v - forward * (float(np.max(-z)) + 0.1 * radius)
+        return Camera(eye, forward, right, up_v, width, height, "orthographic", half_height=float(half / zoom))
     if eye is None:
         ty = np.tan(np.radians(fov if fov is not None else 30.0) / 2.0)
         tx = ty * aspect
         # Smallest distance d with |x| <= (d + z) tx / scale and |y| <= (d + z) ty / scale.
         d = max(float(np.max(np.abs(x) * scale / tx - z)), float(np.max(np.abs(y) * scale / ty - z)),
                 float(np.max(-z)) + 1e-3 * radius)
-        return Camera(centre - d * forward, forward, right, up_v, width, height, "perspective", tan_half_y=float(ty))
+        return Camera(centre - d * forward, forward, right, up_v, width, height, "perspective", tan_half_y=float(ty / zoom))
     if fov is not None:
         ty = np.tan(np.radians(fov) / 2.0)
     else:
@@ -186,4 +183,5 @@ def frame_camera(points: np.ndarray, width: int, height: int, view: str = "iso",
         ty = max(float(np.max(np.abs(rel[front] @ up_v) / depth[front])),
                  float(np.max(np.abs(rel[front] @ right) / depth[front])) / aspect) * scale
         ty = min(ty, np.tan(np.radians(150.0) / 2.0))
+    ty = ty / zoom
     return Camera(eye, forward, right, up_v, width, height, "perspective", tan_half_y=float(ty))

@@ -126,6 +126,58 @@ def _unit_cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return n
 
 
+@dataclass(frozen=True)
+class SideMatching:
+    """Patch sides (``4 * patch + side``, sides as in ``_SIDES``) matched by geometry.
+
+    first, second : (k,) int, the two sides of each shared edge
+    reversed : (k,) bool, the two run in opposite directions
+    lone : (m,) int, sides found in one patch only (the surface's boundary)
+    overshared : int, edges found in more than two patches
+    """
+
+    first: np.ndarray
+    second: np.ndarray
+    reversed: np.ndarray
+    lone: np.ndarray
+    overshared: int
+
+
+def match_patch_sides(patches: np.ndarray, tolerance: float) -> SideMatching:
+    """Pair patch sides with the same end points and mid point (within ``tolerance``).
+
+    Parameters
+    ----------
+    patches : (p, 4, 4, 3) bicubic coefficients (raise lower degrees first)
+    tolerance : float, absolute distance below which two points are the same
+    """
+    p = patches.shape[0]
+    # Per patch: 4 corners, then the mid point of each side (order of _SIDES).
+    corners = patches[:, [0, 3, 0, 3], [0, 0, 3, 3]]  # P00, P30, P03, P33
+    curves = boundary_curves(patches)
+    mids = (curves[:, :, 0] + 3 * curves[:, :, 1] + 3 * curves[:, :, 2] + curves[:, :, 3]) / 8
+    labels = _cluster_points(np.concatenate([corners, mids], axis=1).reshape(-1, 3), tolerance).reshape(p, 8)
+    side_start = np.array([0, 1, 0, 2])  # u=0: P00 -> P03, u=1: P30 -> P33, v=0: P00 -> P30, v=1: P03 -> P33
+    side_end = np.array([2, 3, 1, 3])
+    start, end, mid = labels[:, side_start], labels[:, side_end], labels[:, 4:]
+    n_labels = int(labels.max()) + 1
+    key = ((np.minimum(start, end) * n_labels + np.maximum(start, end)) * n_labels + mid).ravel()
+    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
+    inverse = inverse.ravel()
+    degenerate = (start == end).ravel()
+    count_of_curve = counts[inverse]
+    shared = np.flatnonzero((count_of_curve == 2) & ~degenerate)
+    order = shared[np.argsort(inverse[shared], kind="stable")]
+    first, second = order[0::2], order[1::2]
+    return SideMatching(
+        first=first,
+        second=second,
+        reversed=start.ravel()[first] != start.ravel()[second],
+        lone=np.flatnonzero((count_of_curve == 1) & ~degenerate),
+        overshared=int(np.unique(inverse[(count_of_curve > 2) & ~degenerate]).size),
+    )
+
+
 def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False, tolerance: float = 1e-9) -> SmoothnessReport:
     """Sample every shared patch edge; measure position gap and normal jump.
 
@@ -146,31 +198,14 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     patches = np.concatenate([raise_degree(g, 3, 3) for g in groups])
     flat = patches.reshape(-1, 3)
     diagonal = float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
-    p = patches.shape[0]
-    # Per patch: 4 corners, then the mid point of each side (order of _SIDES).
-    corners = patches[:, [0, 3, 0, 3], [0, 0, 3, 3]]  # P00, P30, P03, P33
-    curves = boundary_curves(patches)
-    mids = (curves[:, :, 0] + 3 * curves[:, :, 1] + 3 * curves[:, :, 2] + curves[:, :, 3]) / 8
-    labels = _cluster_points(np.concatenate([corners, mids], axis=1).reshape(-1, 3), tolerance * max(diagonal, 1e-300)).reshape(p, 8)
-    side_start = np.array([0, 1, 0, 2])  # u=0: P00 -> P03, u=1: P30 -> P33, v=0: P00 -> P30, v=1: P03 -> P33
-    side_end = np.array([2, 3, 1, 3])
-    start, end, mid = labels[:, side_start], labels[:, side_end], labels[:, 4:]
-    n_labels = int(labels.max()) + 1
-    key = ((np.minimum(start, end) * n_labels + np.maximum(start, end)) * n_labels + mid).ravel()
-    _, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
-    inverse = inverse.ravel()
-    degenerate = (start == end).ravel()
-    count_of_curve = counts[inverse]
-    shared = np.flatnonzero((count_of_curve == 2) & ~degenerate)
-    order = shared[np.argsort(inverse[shared], kind="stable")]
-    first, second = order[0::2], order[1::2]
-    boundary = int(np.sum((count_of_curve == 1) & ~degenerate))
-    overshared = int(np.unique(inverse[(count_of_curve > 2) & ~degenerate]).size)
+    sides = match_patch_sides(patches, tolerance * max(diagonal, 1e-300))
+    first, second = sides.first, sides.second
+    boundary, overshared = int(sides.lone.size), sides.overshared
     if first.size == 0:
         return SmoothnessReport(0, boundary, overshared, 0.0, 0.0, diagonal, (-1, -1))
 
     t = np.linspace(0.0, 1.0, samples)
-    reversed_ = start.ravel()[first] != start.ravel()[second]
+    reversed_ = sides.reversed
     xa, na = side_frames(patches, first, t)
     xb, nb = side_frames(patches, second, t, reversed_)
     pa_r = np.repeat(first // 4, samples)

@@ -67,12 +67,12 @@ class Surface:
         blend = np.full(face_sizes.size, float(self.options.blend))
         if face_blend is not None:
             blend = np.asarray(face_blend, dtype=np.float64).copy()
-        self._build_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), blend)
+        self._build_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), blend, points)
         self.update_points(points)
 
     # -- topology and operators (no coordinates) ------------------------------------
 
-    def _build_topology(self, face_sizes, face_vertices, blend) -> None:
+    def _build_topology(self, face_sizes, face_vertices, blend, points) -> None:
         # Repairs first (orientation, pinched vertices), then a ghost layer
         # closes any boundary; from there on every mesh is handled alike.
         prepared, vertex_source, self.repairs = prepare_topology(face_sizes, face_vertices, self.n_input_vertices)
@@ -81,7 +81,7 @@ class Surface:
         select = csr_matrix((np.ones(vertex_source.size), (np.arange(vertex_source.size), vertex_source)),
                             shape=(vertex_source.size, self.n_input_vertices))
         if self.repairs["boundary_edges"]:
-            layer = add_ghost_layer(prepared)
+            layer = add_ghost_layer(prepared, (select @ points)[:, :3])
             coarse, real_face, place = layer.mesh, layer.real_face, layer.points_matrix @ select
             blend = np.r_[blend, np.full(coarse.n_faces - blend.size, float(self.options.blend))]
         else:

@@ -63,6 +63,7 @@ class MeshFile:
     face_attributes: dict[str, np.ndarray] = field(default_factory=dict)
     vertex_attributes: dict[str, np.ndarray] = field(default_factory=dict)
     face_groups: np.ndarray | None = None
+    collapsed_corners: int = 0
     group_names: list[str] = field(default_factory=list)
 
     @property
@@ -92,6 +93,40 @@ class MeshFile:
         if self.face_lines is None:
             return None
         return int(self.face_lines[face])
+
+
+def collapse_repeated_corners(face_sizes: np.ndarray, face_vertices: np.ndarray):
+    """Drop corners that repeat the previous corner (zero-length edges, e.g. ``f 4 3 5 5``).
+
+    Exporters write triangles as quads this way; the polygon they mean has the
+    repeat removed. Non-consecutive repeats are left for ``find_repeated_vertex``.
+
+    Parameters
+    ----------
+    face_sizes : (F,) int
+    face_vertices : (sum(face_sizes),) int
+
+    Returns
+    -------
+    face_sizes, face_vertices : the collapsed faces (same face count and order)
+    keep : (sum(face_sizes),) bool, which of the given corners remain
+    """
+    face_sizes = np.asarray(face_sizes, dtype=np.int64)
+    face_vertices = np.asarray(face_vertices, dtype=np.int64)
+    if face_vertices.size == 0:
+        return face_sizes, face_vertices, np.ones(0, bool)
+    offs = np.zeros(len(face_sizes) + 1, dtype=np.int64)
+    np.cumsum(face_sizes, out=offs[1:])
+    face = np.repeat(np.arange(face_sizes.size), face_sizes)
+    nxt = np.arange(face_vertices.size) + 1
+    last = offs[1:] - 1
+    nxt[last[face_sizes > 0]] = offs[:-1][face_sizes > 0]
+    repeat = face_vertices == face_vertices[nxt]
+    keep = ~repeat
+    if not repeat.any():
+        return face_sizes, face_vertices, keep
+    sizes = np.bincount(face[keep], minlength=face_sizes.size).astype(np.int64)
+    return sizes, face_vertices[keep], keep
 
 
 def find_repeated_vertex(face_sizes: np.ndarray, face_vertices: np.ndarray):

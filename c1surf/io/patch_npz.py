@@ -1,0 +1,131 @@
+"""The c1surf patch file as NumPy arrays (``.npz``): the JSON content, for large surfaces.
+
+Members (see docs/patch-format.md; P patches, biquadratic first, then bicubic)::
+
+    header       ()          str    JSON of everything but the patches (format, version,
+                                    c1surf_version, options, input, counts)
+    biquadratic  (Nq,3,3,3)  float64
+    bicubic      (Nc,4,4,3)  float64
+    source_kind  (P,)        str    "face" | "edge" | "vertex"
+    source       (P,2)       int64  (face, -1) | (vertex, -1) | (a, b) for an edge
+    corners      (P,4)       int64  corner ids
+    edges        (P,4)       int64  side edge ids
+    reversed     (P,4)       bool
+    neighbours   (P,4,2)     int64  (patch, side) across each side, (-1, -1) on a boundary
+
+Uncompressed and without pickles: ``numpy.load(path)`` reads it (lazily,
+member by member), and the zip entries carry a fixed date, so the same
+surface always gives the same bytes.
+"""
+from __future__ import annotations
+
+import json
+import zipfile
+
+import numpy as np
+
+from ..core.adjacency import PatchAdjacency
+from .errors import MeshInputError
+from .patch_set import FORMAT_NAME, FORMAT_VERSION, PatchSet, surface_patch_set
+
+_DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
+_ORDER = ("header", "biquadratic", "bicubic", "source_kind", "source", "corners", "edges", "reversed", "neighbours")
+
+
+def patch_set_arrays(patch_set: PatchSet) -> dict:
+    """The NPZ members of a PatchSet (c1surf surfaces: degrees (2, 2) and (3, 3) only)."""
+    quad, cubic = [], []
+    seen_cubic = False
+    for g in patch_set.groups:
+        shape = g.shape[1:3]
+        if shape == (3, 3) and not seen_cubic:
+            quad.append(g)
+        elif shape == (4, 4):
+            cubic.append(g)
+            seen_cubic = True
+        else:
+            raise ValueError("the NPZ patch format holds biquadratic patches followed by bicubic ones only")
+    arrays = {
+        "header": np.array(json.dumps(patch_set.header, separators=(",", ":"))),
+        "biquadratic": np.concatenate(quad) if quad else np.zeros((0, 3, 3, 3)),
+        "bicubic": np.concatenate(cubic) if cubic else np.zeros((0, 4, 4, 3)),
+    }
+    if patch_set.source_kind is not None:
+        arrays["source_kind"] = np.asarray(patch_set.source_kind, dtype="<U6")
+        arrays["source"] = np.asarray(patch_set.source, dtype=np.int64)
+    if patch_set.adjacency is not None:
+        a = patch_set.adjacency
+        arrays["corners"] = a.corners.astype(np.int64)
+        arrays["edges"] = a.edges.astype(np.int64)
+        arrays["reversed"] = a.reversed.astype(bool)
+        arrays["neighbours"] = a.neighbours()
+    return arrays
+
+
+def write_patch_set_npz(path, patch_set: PatchSet) -> None:
+    """Write a PatchSet as an uncompressed, byte-reproducible ``.npz``."""
+    arrays = patch_set_arrays(patch_set)
+    with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
+        for name in _ORDER:
+            if name not in arrays:
+                continue
+            info = zipfile.ZipInfo(name + ".npy", date_time=_DATE)
+            info.compress_type = zipfile.ZIP_STORED
+            info.external_attr = 0o644 << 16
+            with zf.open(info, "w", force_zip64=True) as f:
+                np.lib.format.write_array(f, np.ascontiguousarray(arrays[name]), allow_pickle=False)
+
+
+def write_patches_npz(path, surface, input_path: str | None = None, adjacency=None, **_options) -> None:
+    """Write ``surface``'s patches to ``path`` as c1surf-patches NPZ (same content as the JSON)."""
+    write_patch_set_npz(path, surface_patch_set(surface, input_path, adjacency))
+
+
+def read_patch_set_npz(path) -> PatchSet:
+    """Read a c1surf-patches ``.npz``: patches in file order, sources, adjacency, header."""
+    try:
+        data = np.load(path, allow_pickle=False)
+    except FileNotFoundError:
+        raise MeshInputError(str(path), "no such file") from None
+    except IsADirectoryError:
+        raise MeshInputError(str(path), "is a directory, not a patch file") from None
+    except (OSError, ValueError, zipfile.BadZipFile) as e:
+        raise MeshInputError(str(path), f"not an NPZ patch file ({e})") from None
+    if not isinstance(data, np.lib.npyio.NpzFile):
+        raise MeshInputError(str(path), "not an NPZ patch file (a single .npy array)")
+    with data:
+        try:
+            names = set(data.files)
+            if "header" not in names:
+                raise MeshInputError(str(path), f'not a c1surf patch file (no "header" member with "format": "{FORMAT_NAME}")')
+            header = json.loads(str(data["header"].item()))
+            if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
+                raise MeshInputError(str(path), f'not a c1surf patch file (missing "format": "{FORMAT_NAME}")')
+            if header.get("version") != FORMAT_VERSION:
+                raise MeshInputError(str(path), f"patch file version {header.get('version')} is not supported (this c1surf reads version {FORMAT_VERSION})")
+            quad = data["biquadratic"] if "biquadratic" in names else np.zeros((0, 3, 3, 3))
+            cubic = data["bicubic"] if "bicubic" in names else np.zeros((0, 4, 4, 3))
+            for name, g, n in (("biquadratic", quad, 3), ("bicubic", cubic, 4)):
+                if g.dtype != np.float64 or g.ndim != 4 or g.shape[1:] != (n, n, 3) or not np.all(np.isfinite(g)):
+                    raise MeshInputError(str(path), f"{name} must be finite float64 of shape (N, {n}, {n}, 3), got {g.dtype} {g.shape}")
+            p = len(quad) + len(cubic)
+            source_kind = source = adjacency = None
+            if {"source_kind", "source"} <= names:
+                source_kind, source = data["source_kind"], data["source"]
+                if source_kind.shape != (p,) or source.shape != (p, 2):
+                    raise MeshInputError(str(path), f"source_kind / source must have shapes ({p},) / ({p}, 2)")
+            if {"corners", "edges", "reversed"} <= names:
+                adjacency = PatchAdjacency(data["corners"].astype(np.int64), data["edges"].astype(np.int64), data["reversed"].astype(bool))
+                try:
+                    adjacency.validate(p)
+                except ValueError as e:
+                    raise MeshInputError(str(path), f"malformed patch adjacency ({e})") from None
+        except (KeyError, ValueError, OSError, zipfile.BadZipFile) as e:
+            if isinstance(e, MeshInputError):
+                raise
+            raise MeshInputError(str(path), f"damaged NPZ patch file ({e})") from None
+    groups = [g for g in (quad, cubic) if len(g)]
+    return PatchSet(groups, adjacency, source_kind, source, header)
+
+
+__all__ = ["write_patches_npz", "write_patch_set_npz", "read_patch_set_npz", "patch_set_arrays"]
