@@ -11,33 +11,41 @@ from .core.smoothness import measure_smoothness
 from .core.surface import Surface, SurfaceOptions, build_surface
 from .core.tessellate import tessellate
 from .io.read import read_mesh
+from .io.surface_data import surface_data
 
 
-def surface_from_file(path, **options):
+def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False, **options):
     """Read ``path`` (OBJ or PLY) and build its surface.
 
     Parameters
     ----------
     path : str or Path
-    **options : SurfaceOptions fields (blend, alpha, beta, tangent_rule)
+    blend_file : sidecar JSON of per-cell / per-vertex blend ratios (PLY "blend" properties are always used)
+    weights : None (use the file's vertex weights if some differ from 1), True or False: rational patches (A2a)
+    normals : interpolate the file's vertex normals (A1a; sets interpolate_vertices)
+    attributes : carry texture coordinates and colours as extra point columns
+    **options : SurfaceOptions fields (blend, alpha, beta, tangent_rule, interpolate_vertices, triangles)
 
     Returns
     -------
     (Surface, MeshFile)
     """
     mesh = read_mesh(path)
-    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(**options))
+    if normals:
+        options["interpolate_vertices"] = True
+    data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes)
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, data.points, SurfaceOptions(**options), **data.surface_kwargs())
     return surface, mesh
 
 
 def tessellate_surface(surface: Surface, resolution: int = 8):
     """Welded N x N sampling of every patch of ``surface`` (a ``Tessellation``)."""
-    return tessellate([surface.biquadratic, surface.bicubic], surface.refined, surface.frames, resolution)
+    return tessellate([surface.biquadratic, surface.bicubic], surface.refined, surface.frames, resolution, surface.patch_weights)
 
 
 def check_surface(surface: Surface, samples: int = 11):
     """Independent G1 measurement of ``surface`` (a ``SmoothnessReport``)."""
-    return measure_smoothness([surface.biquadratic, surface.bicubic], samples=samples)
+    return measure_smoothness([surface.biquadratic, surface.bicubic], samples=samples, weights=surface.patch_weights)
 
 
 __all__ = ["surface_from_file", "tessellate_surface", "check_surface", "build_surface", "Surface", "SurfaceOptions"]

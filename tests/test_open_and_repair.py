@@ -241,3 +241,28 @@ def test_non_manifold_edge_is_refused_with_its_faces():
         Surface(mesh.face_sizes, mesh.face_vertices, mesh.points)
     assert "shared by 100 faces" in str(info.value) and info.value.faces.size == 100
     assert len(info.value.vertices) == 2
+
+
+def moebius_strip(n=12, width=0.3):
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    rings = [np.c_[(1 + w * np.cos(t / 2)) * np.cos(t), (1 + w * np.cos(t / 2)) * np.sin(t), w * np.sin(t / 2)] for w in (-width, width)]
+    faces = [[i, i + 1, n + i + 1, n + i] for i in range(n - 1)]
+    faces.append([n - 1, n, 0, 2 * n - 1])  # the half twist: inner joins outer
+    return polygon_mesh(faces, np.concatenate(rings))
+
+
+def test_moebius_strip_is_tangent_plane_continuous():
+    """Non-orientable: built on the orientation double cover, one sheet kept; G1 with unoriented normals."""
+    sizes, vertices, points = moebius_strip()
+    surface = Surface(sizes, vertices, points)
+    assert surface.repairs["non_orientable"]
+    unoriented = measure_smoothness([surface.biquadratic, surface.bicubic], unoriented=True)
+    assert unoriented.max_normal_jump < MAX_JUMP and unoriented.overshared_edges == 0
+    # every patch edge is shared except the strip's one boundary loop
+    annulus = Surface(*open_cylinder(12, 1))
+    assert surface.n_patches == annulus.n_patches
+    assert unoriented.boundary_edges == measure_smoothness([annulus.biquadratic, annulus.bicubic]).boundary_edges
+    # orientation flips across the seam, as it must on a Moebius strip
+    assert measure_smoothness([surface.biquadratic, surface.bicubic]).max_normal_jump > 3.0
+    tess = tessellate([surface.biquadratic, surface.bicubic], surface.refined, surface.frames, 4)
+    assert np.isfinite(tess.points).all() and np.isfinite(tess.normals).all()

@@ -6,12 +6,11 @@ from pathlib import Path
 import click
 
 from ..core.smoothness import measure_smoothness
-from ..core.surface import SurfaceOptions
-from ..io.patch_formats import PATCH_READERS
+from ..io.patch_formats import PATCH_LOADERS, PATCH_READERS
 from ..io.read import read_mesh
 from .common import friendly_errors
-from .convert import build_or_fail
-from .options import surface_options
+from .convert import build_or_fail, extension_setup
+from .options import extension_options, surface_options
 
 
 @click.command()
@@ -20,9 +19,13 @@ from .options import surface_options
               help="Largest normal jump (radians) and relative position gap accepted as G1.")
 @click.option("--samples", type=click.IntRange(2, None), default=11, show_default=True,
               help="Points sampled along each shared patch edge, end points included.")
+@click.option("--unoriented", is_flag=True,
+              help="Compare normals up to sign (tangent-plane continuity of non-orientable surfaces such as a Moebius strip).")
 @surface_options
+@extension_options
 @friendly_errors
-def check(path, tolerance, samples, blend, alpha, beta, tangent_rule):
+def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices, interpolate_normals,
+          weights, triangles, attributes):
     """Check that a surface is G1 (tangent-plane continuous).
 
     PATCHES is a patch file written by `convert --patches`; an OBJ/PLY INPUT is
@@ -32,12 +35,20 @@ def check(path, tolerance, samples, blend, alpha, beta, tangent_rule):
     jump and exits 1 when the surface is not G1 to within --tolerance.
     """
     suffix = Path(path).suffix.lower()
-    if suffix in PATCH_READERS:
+    patch_weights = None
+    if suffix in PATCH_LOADERS:
+        patch_set = PATCH_LOADERS[suffix](path)
+        groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
+    elif suffix in PATCH_READERS:
         groups = PATCH_READERS[suffix](path)
     else:
-        surface = build_or_fail(read_mesh(path), SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule))
-        groups = [surface.biquadratic, surface.bicubic]
-    report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9))
+        mesh = read_mesh(path)
+        options, data = extension_setup(mesh, None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
+                                        interpolate_normals, weights, triangles, attributes)
+        surface = build_or_fail(mesh, options, data)
+        groups, patch_weights = [surface.biquadratic, surface.bicubic], surface.patch_weights
+    report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,
+                                unoriented=unoriented)
     n_patches = sum(len(g) for g in groups)
     click.echo(f"patches:          {n_patches}")
     click.echo(f"shared edges:     {report.shared_edges}")

@@ -48,6 +48,9 @@ def repair_notes(surface, mesh_file) -> list[str]:
         notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
     if r.get("flipped_faces"):
         notes.append(f"flipped {r['flipped_faces']} faces to orient each connected component consistently")
+    if r.get("non_orientable"):
+        notes.append("the surface is not orientable: built on its orientation double cover; normals flip across a seam "
+                     "(use `c1surf check --unoriented`)")
     if r.get("split_vertices"):
         notes.append(f"split {r['split_vertices']} pinched vertices into one vertex per fan of faces")
     if r.get("unused_vertices"):
@@ -72,6 +75,11 @@ def friendly_errors(command):
             if debug:
                 traceback.print_exc()
             raise Failure(str(e)) from None
+        except OSError as e:  # disk full, permissions, a vanished directory while writing
+            if debug:
+                traceback.print_exc()
+            where = f"{e.filename}: " if e.filename else ""
+            raise Failure(f"{where}{e.strerror or e}; no output was written") from None
         except MemoryError:
             if debug:
                 traceback.print_exc()
@@ -89,17 +97,46 @@ class Progress:
         self.enabled = not quiet and sys.stderr.isatty()
         self.start = time.perf_counter()
         self.last = None
+        self.bar = None  # (label, done, started) of the progress bar being drawn
 
     def phase(self, name: str) -> None:
         if not self.enabled:
             return
+        self._end_bar()
         now = time.perf_counter()
         if self.last is not None:
             click.echo(f" {now - self.last:.2f}s", err=True)
         click.echo(f"c1surf: {name}...", err=True, nl=False)
         self.last = now
 
+    def advance(self, label: str, amount: int, total: int) -> None:
+        """Progress bar of a long step: ``amount`` more of ``total`` done (redrawn in place)."""
+        if not self.enabled:
+            return
+        now = time.perf_counter()
+        if self.bar is None or self.bar[0] != label:
+            self._end_bar()
+            if self.last is not None:  # close the open phase line
+                click.echo(f" {now - self.last:.2f}s", err=True)
+                self.last = None
+            self.bar = (label, 0, now)
+        label, done, started = self.bar
+        done = min(done + amount, total)
+        self.bar = (label, done, started)
+        filled = int(30 * done / total) if total > 0 else 30
+        click.echo(f"\rc1surf: {label} [{'#' * filled}{'.' * (30 - filled)}] {100 * done // max(total, 1):3d}%",
+                   err=True, nl=False)
+        if done >= total:
+            self._end_bar()
+
+    def _end_bar(self) -> None:
+        if self.bar is not None:
+            click.echo(f" {time.perf_counter() - self.bar[2]:.2f}s", err=True)
+            self.bar = None
+
     def done(self) -> None:
+        if self.enabled:
+            self._end_bar()
         if self.enabled and self.last is not None:
             click.echo(f" {time.perf_counter() - self.last:.2f}s (total {time.perf_counter() - self.start:.2f}s)", err=True)
 

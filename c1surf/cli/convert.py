@@ -1,6 +1,7 @@
 """``c1surf convert``: mesh in, tessellated surface (and patch file) out."""
 from __future__ import annotations
 
+import contextlib
 import os
 
 import click
@@ -9,12 +10,14 @@ from ..core.errors import TopologyError
 from ..core.surface import Surface, SurfaceOptions
 from ..core.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
+from ..io.attribute_mesh import ATTRIBUTE_FORMATS, write_attribute_mesh
 from ..io.mesh_out import MESH_FORMATS, write_triangle_mesh
 from ..io.patch_formats import PATCH_WRITERS
 from ..io.patch_iges import DEFAULT_UNITS, UNITS
 from ..io.read import read_mesh
+from ..io.surface_data import surface_data
 from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes, topology_failure
-from .options import surface_options
+from .options import extension_options, surface_options
 
 BYTES_PER_SAMPLE = 200  # points, normals, two triangles and temporaries per grid sample, measured
 
@@ -31,12 +34,36 @@ def available_memory() -> int:
     return 8 << 30
 
 
-def build_or_fail(mesh, options: SurfaceOptions) -> Surface:
-    """Build the surface of a MeshFile; topology problems become one-line failures."""
+def build_or_fail(mesh, options: SurfaceOptions, data=None) -> Surface:
+    """Build the surface of a MeshFile; topology problems become one-line failures.
+
+    ``data``: an ``io.surface_data.SurfaceData`` (blend ratios, weights, normals,
+    attribute columns) for the paper's extensions, or None.
+    """
     try:
-        return Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, options)
+        if data is None:
+            return Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, options)
+        return Surface(mesh.face_sizes, mesh.face_vertices, data.points, options, **data.surface_kwargs())
     except TopologyError as e:
         raise topology_failure(e, mesh) from None
+    except ValueError as e:  # extension data the construction cannot use (e.g. weights making a patch weight <= 0)
+        raise Failure(f"{mesh.path}: {e}") from None
+
+
+def extension_setup(mesh, output_suffix_: str | None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
+                    interpolate_normals, weights, triangles, attributes):
+    """SurfaceOptions and SurfaceData for the surface options and the extension options of a command."""
+    interpolate = interpolate_vertices or interpolate_normals
+    if interpolate and beta != 0:
+        raise click.BadParameter("--interpolate-vertices/--interpolate-normals need --beta 0 (beta moves cell centres off the vertices)")
+    if interpolate_normals and alpha == 0:
+        raise click.BadParameter("--interpolate-normals needs --alpha > 0")
+    if attributes and output_suffix_ is not None and output_suffix_ not in ATTRIBUTE_FORMATS:
+        raise click.BadParameter(f"--attributes needs an --output in {', '.join(ATTRIBUTE_FORMATS)}")
+    options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
+                             interpolate_vertices=interpolate, triangles=triangles)
+    data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=interpolate_normals, attributes=attributes)
+    return options, data
 
 
 def check_tessellation_size(surface: Surface, resolution: int, force: bool) -> None:
@@ -55,19 +82,25 @@ def check_tessellation_size(surface: Surface, resolution: int, force: bool) -> N
 @click.argument("input_path", metavar="INPUT", type=click.Path(dir_okay=False))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
               help=f"Tessellated mesh to write; the suffix picks the format ({', '.join(sorted(MESH_FORMATS))}).")
-@click.option("--patches", "patches_path", type=click.Path(dir_okay=False), default=None,
-              help=f"Also write the Bezier patches; the suffix picks the format ({', '.join(sorted(PATCH_WRITERS))}).")
+@click.option("--patches", "patches_paths", type=click.Path(dir_okay=False), multiple=True,
+              help=f"Also write the Bezier patches; the suffix picks the format ({', '.join(sorted(PATCH_WRITERS))}); "
+                   "repeat for several formats.")
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="Samples per patch side: each patch becomes an N x N grid of welded vertices.")
 @click.option("--units", type=click.Choice(sorted(UNITS)), default=DEFAULT_UNITS, show_default=True,
               help="Length unit recorded in an IGES patch file (coordinates are written as they are).")
 @click.option("--no-group", is_flag=True,
               help="IGES patch file: independent surfaces, without the group entity that makes CAD show one object.")
+@click.option("--curvature", is_flag=True,
+              help="PLY output: add per-vertex kmax (max |k|), K (Gaussian), H (mean), quality (= kmax) and red/green/blue "
+                   "(kmax colour-mapped), evaluated exactly on the patches.")
 @surface_options
+@extension_options
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
-def convert(input_path, output, patches_path, resolution, units, no_group, blend, alpha, beta, tangent_rule, force, quiet):
+def convert(input_path, output, patches_paths, resolution, units, no_group, curvature, blend, alpha, beta, tangent_rule,
+            blend_file, interpolate_vertices, interpolate_normals, weights, triangles, attributes, force, quiet):
     """Convert the polygon mesh INPUT (OBJ or PLY, any n-gons) to a smooth surface.
 
     Writes OUTPUT, a triangle mesh sampled from the surface's Bezier patches
@@ -75,12 +108,21 @@ def convert(input_path, output, patches_path, resolution, units, no_group, blend
     output, with exact normals), and optionally the patches themselves.
     """
     mesh_suffix = output_suffix(output, MESH_FORMATS, "--output")
-    patch_suffix = output_suffix(patches_path, PATCH_WRITERS, "--patches") if patches_path else None
+    patch_suffixes = [output_suffix(p, PATCH_WRITERS, "--patches") for p in patches_paths]
+    targets = [os.path.abspath(p) for p in (output, *patches_paths)]
+    if len(set(targets)) != len(targets):
+        raise click.BadParameter("--output and --patches must name different files")
+    if curvature and mesh_suffix != ".ply":
+        raise click.BadParameter("--curvature needs a .ply --output (per-vertex properties)")
+    if curvature and attributes:
+        raise click.BadParameter("--curvature and --attributes both write vertex colours: choose one")
     progress = Progress(quiet)
     progress.phase(f"reading {input_path}")
     mesh = read_mesh(input_path)
+    options, data = extension_setup(mesh, mesh_suffix, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
+                                    interpolate_normals, weights, triangles, attributes)
     progress.phase(f"building the surface of {mesh.n_faces} faces")
-    surface = build_or_fail(mesh, SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule))
+    surface = build_or_fail(mesh, options, data)
     if not quiet:
         for note in repair_notes(surface, mesh):
             click.echo(f"c1surf: note: {note}", err=True)
@@ -88,14 +130,23 @@ def convert(input_path, output, patches_path, resolution, units, no_group, blend
     progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
     # the same welding `c1surf tessellate` reads from the patch file: identical meshes
     adjacency = patch_adjacency(surface.refined, surface.frames)
-    tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution)
+    tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution, surface.patch_weights)
+    extra = {}
+    if curvature:
+        from .curvature_ply import curvature_properties
+
+        extra = curvature_properties([surface.biquadratic, surface.bicubic], tess, progress.advance)
     progress.phase(f"writing {output}")
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:
-        write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix)
-        if patches_path:
-            if os.path.abspath(patches_path) == os.path.abspath(output):
-                raise click.BadParameter("--patches and --output name the same file")
-            with atomic_output(patches_path, inputs=[input_path]) as patch_tmp:
+        if attributes:  # texture coordinates / colours ride along as extra columns of the points
+            write_attribute_mesh(mesh_tmp, tess.points[:, :3], tess.triangles, tess.normals, tess.points[:, 3:],
+                                 data.attribute_names, data.colour_scale, suffix=mesh_suffix)
+        else:
+            write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix, **extra)
+        with contextlib.ExitStack() as patch_files:  # all files appear together, or none
+            for patches_path, patch_suffix in zip(patches_paths, patch_suffixes):
+                progress.phase(f"writing {patches_path}")
+                patch_tmp = patch_files.enter_context(atomic_output(patches_path, inputs=[input_path]))
                 PATCH_WRITERS[patch_suffix](patch_tmp, surface, input_path=str(input_path), adjacency=adjacency,
                                             file_name=os.path.basename(patches_path), units=units, group=not no_group)
     progress.done()

@@ -8,6 +8,7 @@ import click
 from .. import __version__
 from .check import check
 from .convert import convert
+from .render import render_command
 from .tessellate import tessellate
 
 
@@ -37,6 +38,7 @@ def _interrupt(signum, frame):
 main.add_command(convert)
 main.add_command(check)
 main.add_command(tessellate)
+main.add_command(render_command)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from ..core.surface import TANGENT_RULES
+from ..core.surface import TANGENT_RULES, TRIANGLE_RULES
 
 
 def surface_options(command):
@@ -17,6 +17,35 @@ def surface_options(command):
                      help="Centre point S = S_C + beta (S_P - S_C) of each bicubic cell (section 1.3.3); 0 keeps the cell centroid."),
         click.option("--tangent-rule", type=click.Choice(TANGENT_RULES), default="symmetric", show_default=True,
                      help="Tangent plane at cell centres: 'symmetric' (A3) or 'corners' (A3a, from the C_i only)."),
+    ]
+    for option in reversed(options):
+        command = option(command)
+    return command
+
+
+EXTENSION_OPTIONS = ("blend_file", "interpolate_vertices", "interpolate_normals", "weights", "triangles", "attributes")
+
+
+def extension_options(command):
+    """Add the options of the paper's extensions (README, "Extensions of the paper")."""
+    options = [
+        click.option("--blend-file", type=click.Path(dir_okay=False), default=None,
+                     help='JSON of per-cell and per-vertex blend ratios: {"default": r, "faces": {index or OBJ group: r}, '
+                          '"vertices": {index: r}} (0-based). PLY face/vertex properties "blend" are used without it.'),
+        click.option("--interpolate-vertices", is_flag=True,
+                     help="A1a: make the surface pass through every input vertex (needs --beta 0)."),
+        click.option("--interpolate-normals", is_flag=True,
+                     help="A1a: also give the surface the input's vertex normals there (OBJ vn, PLY nx ny nz); "
+                          "implies --interpolate-vertices."),
+        click.option("--weights/--no-weights", "weights", default=None,
+                     help="A2a: rational patches from the vertex weights (OBJ 'v x y z w', PLY 'weight'); "
+                          "default: on when some weight differs from 1."),
+        click.option("--triangles", type=click.Choice(TRIANGLE_RULES), default="g1", show_default=True,
+                     help="3-sided cells: 'g1' (A3) or 'parametric' (section 1.3.4: parametrically C1 to the "
+                          "biquadratic patches around)."),
+        click.option("--attributes", is_flag=True,
+                     help="Carry texture coordinates and vertex colours through the construction into the output "
+                          "(.ply or .obj output)."),
     ]
     for option in reversed(options):
         command = option(command)

@@ -52,7 +52,7 @@ def tessellate(patches_path, output, resolution, force, quiet):
         progress.phase("finding shared corners and sides from the geometry")
     adjacency = patch_set.welding()
     progress.phase(f"tessellating {patch_set.n_patches} patches at {resolution} x {resolution}")
-    tess = tessellate_patches(patch_set.groups, adjacency, resolution)
+    tess = tessellate_patches(patch_set.groups, adjacency, resolution, patch_set.weights)  # weights: rational (A2a)
     progress.phase(f"writing {output}")
     with atomic_output(output, inputs=[patches_path]) as mesh_tmp:
         write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix)

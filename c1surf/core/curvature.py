@@ -285,4 +285,54 @@ def patch_offsets(groups) -> np.ndarray:
     return np.concatenate([[0], np.cumsum([g.shape[0] for g in groups])]).astype(np.int64)
 
 
-__all__ = ["Curvature", "bernstein_columns", "patch_columns", "polynomial_derivatives", "patch_derivatives", "patch_tangents", "curvature_from_derivatives", "patch_curvature", "surface_curvature", "grid_curvature", "patch_offsets"]
+
+
+def tessellation_curvature(groups, grid: np.ndarray, n_vertices: int | None = None, progress=None,
+                           chunk_patches: int = 1 << 14) -> dict:
+    """Per-vertex curvature of a welded tessellation (``core.tessellate.Tessellation``).
+
+    Sample (i, j) of patch k is vertex ``grid[k, i, j]`` at u = i / (n-1), v = j / (n-1).
+    A vertex on a patch edge or corner belongs to several patches; G1 surfaces have
+    continuous normals but not continuous curvature there, so it gets the mean of the
+    patches' values.
+
+    Parameters
+    ----------
+    groups : list of patch groups, global patch order as ``grid``
+    grid : (P, n, n) int
+    progress : callable(label, advance, total) or None
+
+    Returns
+    -------
+    dict name -> (V,) float for kmax, K, H, k1, k2
+    """
+    n = grid.shape[1]
+    t = np.linspace(0.0, 1.0, n)
+    v_count = int(n_vertices if n_vertices is not None else grid.max() + 1)
+    names = ("kmax", "K", "H", "k1", "k2")
+    sums = {name: np.zeros(v_count) for name in names}
+    counts = np.zeros(v_count)
+    total = int(grid.shape[0])
+    start = 0
+    for group in groups:
+        columns = patch_columns(group)
+        for lo in range(0, group.shape[0], chunk_patches):
+            hi = min(group.shape[0], lo + chunk_patches)
+            p = hi - lo
+            ii, jj = np.meshgrid(t, t, indexing="ij")
+            index = np.repeat(np.arange(lo, hi), n * n)
+            d = patch_derivatives(group, np.tile(ii.ravel(), p), np.tile(jj.ravel(), p), index=index, columns=columns)
+            c = curvature_from_derivatives(*d)
+            ids = grid[start + lo : start + hi].ravel()
+            ok = np.isfinite(c.kmax)
+            counts += np.bincount(ids[ok], minlength=v_count)
+            for name in names:
+                sums[name] += np.bincount(ids[ok], weights=c[name][ok], minlength=v_count)
+            if progress is not None:
+                progress("evaluating curvature", p, total)
+        start += group.shape[0]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return {name: sums[name] / counts for name in names}
+
+
+__all__ = ["Curvature", "tessellation_curvature", "bernstein_columns", "patch_columns", "polynomial_derivatives", "patch_derivatives", "patch_tangents", "curvature_from_derivatives", "patch_curvature", "surface_curvature", "grid_curvature", "patch_offsets"]

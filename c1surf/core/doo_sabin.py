@@ -9,7 +9,9 @@ every half-edge ``h`` of the coarse mesh (the corner at ``origin[h]`` in
 - a V-face per coarse vertex (as many sides as the vertex has faces).
 
 The point of corner ``h`` is ``(1 - a) V + a S`` with ``V = origin[h]``, ``S``
-the centroid of ``face[h]`` and ``a`` the ratio of that face (paper, A1).
+the centroid of ``face[h]`` and ``a`` the ratio of that face (paper, A1), or
+of that corner when ratios are given per corner (per-vertex blend ratios,
+``core.blend``).
 """
 from __future__ import annotations
 
@@ -78,25 +80,30 @@ def refine_doo_sabin(mesh: HalfEdgeMesh) -> RefinedFaces:
     )
 
 
-def doo_sabin_matrix(mesh: HalfEdgeMesh, ratio: np.ndarray) -> csr_matrix:
+def doo_sabin_matrix(mesh: HalfEdgeMesh, ratio: np.ndarray, per_corner: bool = False) -> csr_matrix:
     """Sparse averaging matrix of one Doo-Sabin step.
 
     Parameters
     ----------
     mesh : HalfEdgeMesh with V vertices and H half-edges
-    ratio : (F,) float, the ratio ``a`` of each coarse face
+    ratio : (F,) float, the ratio ``a`` of each coarse face; or, with
+        ``per_corner``, (H,) float, the ratio of each corner (half-edge), so
+        corners of one face may differ (per-vertex blend ratios)
+    per_corner : bool
 
     Returns
     -------
     (H, V) csr_matrix M: fine points = M @ coarse points.
     """
-    rows, cols, vals = [mesh.origin * 0 + np.arange(mesh.n_halfedges)], [mesh.origin], [1.0 - ratio[mesh.face]]
+    ratio = np.asarray(ratio, dtype=np.float64)
+    corner_ratio = ratio if per_corner else ratio[mesh.face]
+    rows, cols, vals = [mesh.origin * 0 + np.arange(mesh.n_halfedges)], [mesh.origin], [1.0 - corner_ratio]
     for n, faces, halfedges in mesh.faces_by_size():
         # Each corner of an n-gon takes a/n of every vertex of the n-gon.
         corner_vertices = mesh.origin[halfedges]
         rows.append(np.repeat(halfedges, n, axis=1).ravel())
         cols.append(np.tile(corner_vertices, (1, n)).ravel())
-        vals.append(np.repeat(ratio[faces] / n, n * n))
+        vals.append(np.repeat(corner_ratio[halfedges] / n, n, axis=1).ravel())
     matrix = csr_matrix(
         (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
         shape=(mesh.n_halfedges, mesh.n_vertices),

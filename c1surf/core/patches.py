@@ -23,6 +23,7 @@ from scipy.sparse.csgraph import connected_components
 
 from .errors import TopologyError
 from .topology import HalfEdgeMesh
+from .triangles import triangle_hole_coefficients
 
 
 @dataclass(frozen=True)
@@ -234,20 +235,26 @@ def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.
 
 
 @lru_cache(maxsize=64)
-def _local_bicubic_weights(n: int, alpha: float, beta: float, tangent_rule: str):
+def _local_bicubic_weights(n: int, alpha: float, beta: float, tangent_rule: str, triangles: str = "g1"):
     """Weights of ``bicubic_hole_coefficients`` on the 4n local points [A, B1, B2, C].
+
+    ``triangles="parametric"`` takes section 1.3.4's patches for n = 3 (``core.triangles``).
 
     Returns (patch, coefficient, local point, weight) arrays of the non-zeros.
     """
     eye = np.eye(4 * n)
-    W = bicubic_hole_coefficients(eye[:n], eye[n : 2 * n], eye[2 * n : 3 * n], eye[3 * n :], alpha, beta, tangent_rule)
+    if n == 3 and triangles == "parametric":
+        W = triangle_hole_coefficients(eye[:n], eye[n : 2 * n], eye[2 * n : 3 * n], eye[3 * n :])
+    else:
+        W = bicubic_hole_coefficients(eye[:n], eye[n : 2 * n], eye[2 * n : 3 * n], eye[3 * n :], alpha, beta, tangent_rule)
     W = W.reshape(n, 16, 4 * n)
     W[np.abs(W) < 1e-15] = 0.0  # exact cancellations (e.g. a = 0 terms) left as round-off
     i, r, c = np.nonzero(W)
     return i, r, c, W[i, r, c]
 
 
-def bicubic_stencil(mesh: HalfEdgeMesh, holes: list[HoleGroup], alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric") -> csr_matrix:
+def bicubic_stencil(mesh: HalfEdgeMesh, holes: list[HoleGroup], alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric",
+                    triangles: str = "g1") -> csr_matrix:
     """Step A3 for all holes: (Nc * 16, V) matrix, row ``16 p + 4 k + l`` = P_{kl} of patch p.
 
     Patches are numbered hole by hole in ``holes`` order, corner i within a hole.
@@ -255,7 +262,7 @@ def bicubic_stencil(mesh: HalfEdgeMesh, holes: list[HoleGroup], alpha: float = 1
     rows, cols, vals = [], [], []
     base = 0
     for g in holes:
-        i, r, c, w = _local_bicubic_weights(g.n, float(alpha), float(beta), tangent_rule)
+        i, r, c, w = _local_bicubic_weights(g.n, float(alpha), float(beta), tangent_rule, triangles)
         local = np.concatenate([g.A, g.B1, g.B2, g.C], axis=1)  # (k, 4n)
         patch = base + np.arange(g.cells.size)[:, None] * g.n + i[None, :]
         rows.append((patch * 16 + r[None, :]).ravel())

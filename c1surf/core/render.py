@@ -143,6 +143,8 @@ class RayCaster:
         self._scene = rtcore_scene.EmbreeScene(robust=True)
         TriangleMesh(scene=self._scene, vertices=((self.points - lo) * self._scale).astype(np.float32),
                      indices=self.triangles.astype(np.int32))
+        # Embree builds its hierarchy at the first query: do it now, so it is timed here.
+        self._scene.run(np.zeros((1, 3), np.float32), np.ones((1, 3), np.float32))
 
     def cast(self, origins: np.ndarray, directions: np.ndarray):
         """Closest hit of each ray.
@@ -198,31 +200,139 @@ def _ray_distance(x, o, d):
     return np.linalg.norm(rel - np.einsum("md,md->m", rel, d)[:, None] * d, axis=1)
 
 
-def refine_on_rays(group, index, u, v, origins, directions, steps: int = 2, columns=None):
-    """Newton steps on ``x(u, v) = o + t d``, one patch per ray; (u, v) stay in [0, 1].
+def newton_on_rays(group, index, u, v, origins, directions, steps: int = 8, columns=None, tolerance: float = 1e-9):
+    """Newton steps on ``x(u, v) = o + t d``, one patch per ray, until the parameter step
+    is below ``tolerance`` (at most ``steps`` steps).
+
+    The patch polynomials are used a little beyond [0, 1] (clamped to [-0.5, 1.5]),
+    so a ray that meets the surface on a neighbouring patch ends outside the unit
+    square, on the side where that neighbour is.
 
     Parameters
     ----------
     group : (p, d+1, d+1, dim) float; index : (m,) int, the patch of each ray
-    columns : ``curvature.patch_columns(group)`` to reuse, or None
     u, v : (m,) float, start values; origins, directions : (m, 3)
+    columns : ``curvature.patch_columns(group)`` to reuse, or None
 
     Returns
     -------
     u, v : (m,) float after the steps
-    start_distance : (m,) float, distance of the start point from its ray (callers keep
-        the start values where the steps did not bring the point closer)
+    start_distance : (m,) float, distance of the start point from its ray
     """
+    u, v = np.array(u, dtype=np.float64), np.array(v, dtype=np.float64)
     x, xu, xv = patch_tangents(group, u, v, index=index, columns=columns)
     start = _ray_distance(x, origins, directions)
     t = np.einsum("md,md->m", x - origins, directions)
+    active = np.arange(u.size)
     for k in range(steps):
-        r = origins + t[:, None] * directions - x
-        du, dv, dt = _solve3(xu, xv, -directions, r)
-        u, v, t = np.clip(u + du, 0.0, 1.0), np.clip(v + dv, 0.0, 1.0), t + dt
-        if k < steps - 1:
-            x, xu, xv = patch_tangents(group, u, v, index=index, columns=columns)
+        o, d = origins[active], directions[active]
+        r = o + t[:, None] * d - x
+        du, dv, dt = _solve3(xu, xv, -d, r)
+        u[active] = np.clip(u[active] + du, -0.5, 1.5)
+        v[active] = np.clip(v[active] + dv, -0.5, 1.5)
+        going = np.abs(du) + np.abs(dv) > tolerance
+        active, t = active[going], (t + dt)[going]
+        if active.size == 0 or k == steps - 1:
+            break
+        x, xu, xv = patch_tangents(group, u[active], v[active], index=index[active], columns=columns)
     return u, v, start
+
+
+class SideNeighbours:
+    """The patch across each side of each patch, found from the geometry: two sides match
+    when their boundary curves have the same mid point (and end points, maybe reversed).
+    Sides: 0: u = 0, 1: u = 1, 2: v = 0, 3: v = 1 (the other parameter runs along)."""
+
+    def __init__(self, groups):
+        from scipy.spatial import cKDTree
+
+        mids, starts = [], []
+        for group in groups:
+            half = bernstein_basis(group.shape[1] - 1, np.array([0.5]))[0]
+            half_v = bernstein_basis(group.shape[2] - 1, np.array([0.5]))[0]
+            sides = ((group[:, 0], half_v), (group[:, -1], half_v), (group[:, :, 0], half), (group[:, :, -1], half))
+            mids.append(np.stack([euclidean(np.einsum("i,pid->pd", w, c)) for c, w in sides], axis=1).reshape(-1, 3))
+            starts.append(np.stack([euclidean(c[:, 0]) for c, _ in sides], axis=1).reshape(-1, 3))
+        self.mids = np.concatenate(mids)
+        self.starts = np.concatenate(starts)
+        self.tolerance = 1e-7 * max(float(np.ptp(self.mids, axis=0).max()), 1e-300)
+        self.tree = cKDTree(self.mids, balanced_tree=False, compact_nodes=False)
+
+    def across(self, patch: np.ndarray, side: np.ndarray):
+        """(q, side_q, reversed) for each (patch, side); q = -1 where no patch is across."""
+        key = patch * 4 + side
+        dist, idx = self.tree.query(self.mids[key], k=3)
+        other = np.where(idx[:, 0] != key, idx[:, 0], idx[:, 1])
+        gap = np.where(idx[:, 0] != key, dist[:, 0], dist[:, 1])
+        other = np.where(gap <= self.tolerance, other, -1)
+        safe = np.maximum(other, 0)
+        flipped = np.linalg.norm(self.starts[key] - self.starts[safe], axis=1) > self.tolerance
+        return np.where(other >= 0, other // 4, -1), np.where(other >= 0, other % 4, -1), flipped
+
+
+def _hop(neighbours: SideNeighbours, patch, u, v):
+    """Move (patch, u, v) that lie outside the unit square to the patch across the side they
+    crossed, at the matching parameters; those with no neighbour are clamped instead.
+
+    Returns
+    -------
+    patch, u, v : (m,) updated; moved : (m,) bool
+    """
+    below_u, above_u, below_v, above_v = -u, u - 1, -v, v - 1
+    excess = np.stack([below_u, above_u, below_v, above_v], axis=1)
+    side = np.argmax(excess, axis=1)
+    along = np.where(side < 2, v, u)
+    depth = np.clip(excess[np.arange(side.size), side], 0.0, 0.5)
+    q, side_q, flipped = neighbours.across(patch, side)
+    moved = q >= 0
+    t = np.clip(np.where(flipped, 1.0 - along, along), 0.0, 1.0)
+    nu = np.select([side_q == 0, side_q == 1], [depth, 1.0 - depth], t)
+    nv = np.select([side_q == 2, side_q == 3], [depth, 1.0 - depth], t)
+    return (np.where(moved, q, patch), np.where(moved, nu, np.clip(u, 0, 1)),
+            np.where(moved, nv, np.clip(v, 0, 1)), moved)
+
+
+def locate_on_rays(groups, patch, u, v, origins, directions, steps: int = 8, hops: int = 2, progress=None,
+                   columns=None):
+    """Exact (patch, u, v) where each ray meets the surface, from approximate ones.
+
+    Newton steps on the start patch; a ray whose solution leaves the patch moves to the
+    patch across that side (``SideNeighbours``) and continues there, at most ``hops``
+    times. Callers should keep the start values where this did not bring the point
+    closer to the ray (a ray that grazes the silhouette may miss the exact surface).
+
+    Returns
+    -------
+    patch : (m,) int; u, v : (m,) float in [0, 1]
+    start_distance : (m,) float, distance of the start point from its ray
+    """
+    offsets = np.concatenate([[0], np.cumsum([g.shape[0] for g in groups])])
+    if columns is None:
+        columns = [patch_columns(g) if g.shape[0] else None for g in groups]
+    patch, u, v = np.array(patch, dtype=np.int64), np.array(u, dtype=np.float64), np.array(v, dtype=np.float64)
+    start_distance = np.zeros(patch.size)
+    todo = np.arange(patch.size)
+    neighbours = None
+    for round_ in range(hops + 1):
+        for k, group in enumerate(groups):
+            which = todo[(patch[todo] >= offsets[k]) & (patch[todo] < offsets[k + 1])]
+            for lo in range(0, which.size, EVAL_CHUNK):
+                idx = which[lo : lo + EVAL_CHUNK]
+                u[idx], v[idx], d0 = newton_on_rays(group, patch[idx] - offsets[k], u[idx], v[idx], origins[idx],
+                                                    directions[idx], steps, columns[k])
+                if round_ == 0:
+                    start_distance[idx] = d0
+                    _report(progress, "finding the exact hits", idx.size, patch.size)
+        eps = 1e-12
+        out = (u[todo] < -eps) | (u[todo] > 1 + eps) | (v[todo] < -eps) | (v[todo] > 1 + eps)
+        todo = todo[out]
+        if todo.size == 0 or round_ == hops:
+            break
+        if neighbours is None:
+            neighbours = SideNeighbours(groups)
+        patch[todo], u[todo], v[todo], moved = _hop(neighbours, patch[todo], u[todo], v[todo])
+        todo = todo[moved]
+    return patch, np.clip(u, 0.0, 1.0), np.clip(v, 0.0, 1.0), start_distance
 
 
 # -- images -----------------------------------------------------------------------------
@@ -253,40 +363,27 @@ def _empty_channels(shape) -> dict:
     return out
 
 
-def evaluate_samples(groups, patch, u, v, origins=None, directions=None, newton_steps: int = 2,
-                     progress=None, label: str = "curvature"):
-    """Curvature and geometry at samples (patch, u, v), optionally first moved onto rays.
+def evaluate_samples(groups, patch, u, v, progress=None, label: str = "evaluating curvature", columns=None):
+    """Curvature and geometry at samples (patch, u, v); ``columns``: the groups'
+    ``curvature.patch_columns`` if already made.
 
     Returns
     -------
-    dict of (m,) arrays: u, v, kmax, K, H, k1, k2, and (m, 3) point, normal
+    dict of (m,) arrays: patch, u, v, kmax, K, H, k1, k2, and (m, 3) point, normal
     """
+    patch = np.asarray(patch, dtype=np.int64)
     m = patch.size
     out = {name: np.full(m, np.nan) for name in CURVATURE_NAMES}
-    out["u"], out["v"] = np.asarray(u, dtype=np.float64).copy(), np.asarray(v, dtype=np.float64).copy()
+    out["patch"] = patch
+    out["u"], out["v"] = np.asarray(u, dtype=np.float64), np.asarray(v, dtype=np.float64)
     out["point"], out["normal"] = np.full((m, 3), np.nan), np.full((m, 3), np.nan)
     start = 0
-    for group in groups:
+    for k, group in enumerate(groups):
         which = np.flatnonzero((patch >= start) & (patch < start + group.shape[0]))
-        columns = patch_columns(group) if which.size else None
+        cols = columns[k] if columns is not None else (patch_columns(group) if which.size else None)
         for lo in range(0, which.size, EVAL_CHUNK):
             idx = which[lo : lo + EVAL_CHUNK]
-            local = patch[idx] - start
-            uu, vv = out["u"][idx], out["v"][idx]
-            if origins is not None and newton_steps > 0:
-                u1, v1, before = refine_on_rays(group, local, uu, vv, origins[idx], directions[idx], newton_steps,
-                                               columns)
-                d = patch_derivatives(group, u1, v1, index=local, columns=columns)
-                worse = _ray_distance(d[0], origins[idx], directions[idx]) > before
-                if worse.any():  # keep the tessellation's parameters there
-                    u1, v1 = np.where(worse, uu, u1), np.where(worse, vv, v1)
-                    back = patch_derivatives(group, uu[worse], vv[worse], index=local[worse], columns=columns)
-                    for a, b in zip(d, back):
-                        a[worse] = b
-                uu, vv = u1, v1
-                out["u"][idx], out["v"][idx] = uu, vv
-            else:
-                d = patch_derivatives(group, uu, vv, index=local, columns=columns)
+            d = patch_derivatives(group, out["u"][idx], out["v"][idx], index=patch[idx] - start, columns=cols)
             c = curvature_from_derivatives(*d)
             for name in CURVATURE_NAMES:
                 out[name][idx] = c[name]
@@ -309,7 +406,8 @@ def _fill(channels, flat_index, values, camera):
         channels["Z"].reshape(-1)[flat_index] = 0.0
 
 
-def render(groups, camera: Camera, resolution: int | None = None, newton_steps: int = 2, progress=None) -> Image:
+def render(groups, camera: Camera, resolution: int | None = None, newton_steps: int = 8, progress=None,
+           mesh: PatchGridMesh | None = None) -> Image:
     """Ray-cast the surface: exact (patch, u, v), curvature, normal and depth per pixel.
 
     Parameters
@@ -319,8 +417,10 @@ def render(groups, camera: Camera, resolution: int | None = None, newton_steps: 
     camera : Camera
     resolution : samples per patch side of the ray-casting mesh (default: about 2M
         triangles in all)
-    newton_steps : Newton steps from the tessellation hit onto the exact patch
+    newton_steps : at most this many Newton steps from the tessellation hit onto the exact
+        patch (per patch visited; they stop when converged); 0 keeps the tessellation's (u, v)
     progress : callable(label, advance, total) or None
+    mesh : ``patch_grid_mesh(groups, n)`` if already made (e.g. to frame the camera)
 
     Returns
     -------
@@ -329,17 +429,18 @@ def render(groups, camera: Camera, resolution: int | None = None, newton_steps: 
     n_patches = sum(g.shape[0] for g in groups)
     if n_patches == 0:
         raise ValueError("no patches to render")
-    n = resolution or default_resolution(n_patches)
+    n = mesh.resolution if mesh is not None else resolution or default_resolution(n_patches)
     clock = [time.perf_counter()]
 
     def lap():
         clock.append(time.perf_counter())
         return round(clock[-1] - clock[-2], 4)
 
-    _report(progress, "tessellating", 0, 1)
-    mesh = patch_grid_mesh(groups, n)
+    _report(progress, "building the ray tracer", 0, 1)
+    if mesh is None:
+        mesh = patch_grid_mesh(groups, n)
     caster = RayCaster(mesh.points, mesh.triangles)
-    _report(progress, "tessellating", 1, 1)
+    _report(progress, "building the ray tracer", 1, 1)
     seconds = {"tessellate": lap()}
     h, w = camera.height, camera.width
     channels = _empty_channels((h, w))
@@ -365,8 +466,23 @@ def render(groups, camera: Camera, resolution: int | None = None, newton_steps: 
     patch = tri // mesh.per_patch
     corners = mesh.corner_uv[tri % mesh.per_patch]  # (m, 3, 2)
     uv = (1.0 - b1 - b2)[:, None] * corners[:, 0] + b1[:, None] * corners[:, 1] + b2[:, None] * corners[:, 2]
-    values = evaluate_samples(groups, patch, np.clip(uv[:, 0], 0, 1), np.clip(uv[:, 1], 0, 1), origins, dirs,
-                              newton_steps, progress)
+    u, v = np.clip(uv[:, 0], 0, 1), np.clip(uv[:, 1], 0, 1)
+    columns = [patch_columns(g) if g.shape[0] else None for g in groups]
+    if newton_steps > 0:
+        patch0, u0, v0 = patch, u, v
+        patch, u, v, before = locate_on_rays(groups, patch, u, v, origins, dirs, newton_steps, progress=progress,
+                                             columns=columns)
+    seconds["locate"] = lap()
+    values = evaluate_samples(groups, patch, u, v, progress, columns=columns)
+    if newton_steps > 0:
+        # Keep the tessellation's (patch, u, v) where the exact search did not get closer
+        # to the ray (rays grazing the silhouette may miss the exact surface).
+        worse = np.flatnonzero(_ray_distance(values["point"], origins, dirs) > before * (1 + 1e-9) + 1e-300)
+        if worse.size:
+            redo = evaluate_samples(groups, patch0[worse], u0[worse], v0[worse], columns=columns)
+            for name, array in values.items():
+                array[worse] = redo[name]
+            patch = values["patch"]
     channels["patch"].reshape(-1)[pixel] = patch
     _fill(channels, pixel, values, camera)
     view = np.zeros((h * w, 3))

@@ -101,6 +101,50 @@ def orientation_flips(mesh: HalfEdgeMesh):
     return flip, np.unique(np.r_[f1[bad], f2[bad]])
 
 
+def orientation_double_cover(mesh: HalfEdgeMesh):
+    """Faces of the orientation double cover of a non-orientable mesh.
+
+    Every face appears twice, as itself (sheet 0) and reversed (sheet 1). Across
+    an edge where the two faces agree, copies on the same sheet are glued;
+    where they disagree, copies on opposite sheets. Cover vertices are the
+    classes of glued corners, so the cover is oriented by construction.
+
+    Returns
+    -------
+    face_sizes : (2F,) int, sheet 0 then sheet 1
+    face_vertices : (2H,) int, cover vertex of each corner
+    vertex_source : (V',) int, input vertex of each cover vertex
+    """
+    h = np.arange(mesh.n_halfedges)
+    n_half = mesh.n_halfedges
+    # corner node (sheet s, half-edge h) = s * H + h, the corner at origin[h] of face copy s
+    edges, edge_of, counts = undirected_edges(mesh)
+    interior = np.flatnonzero(counts == 2)
+    order = np.argsort(edge_of, kind="stable")
+    first_of_edge = np.searchsorted(edge_of[order], interior)
+    h1, h2 = order[first_of_edge], order[first_of_edge + 1]
+    same_direction = mesh.origin[h1] == mesh.origin[h2]
+    # corners of h1's face at its two ends, and of h2's face at the same two vertices
+    a1, b1 = h1, mesh.next[h1]  # corners at origin[h1], dest[h1]
+    a2 = np.where(same_direction, h2, mesh.next[h2])  # corner of g at origin[h1]
+    b2 = np.where(same_direction, mesh.next[h2], h2)  # corner of g at dest[h1]
+    cross = same_direction.astype(np.int64)  # glue to the other sheet where the faces disagree
+    rows, cols = [], []
+    for sheet in (0, 1):
+        other = (sheet + cross) % 2
+        rows += [sheet * n_half + a1, sheet * n_half + b1]
+        cols += [other * n_half + a2, other * n_half + b2]
+    rows, cols = np.concatenate(rows), np.concatenate(cols)
+    graph = coo_matrix((np.ones(rows.size), (rows, cols)), shape=(2 * n_half, 2 * n_half))
+    _, label = connected_components(graph, directed=False)
+    label = label.astype(np.int64)
+    vertex_source = np.empty(label.max() + 1, dtype=np.int64)
+    vertex_source[label] = np.r_[mesh.origin, mesh.origin]
+    sheet0 = label[:n_half]
+    sheet1 = reverse_faces(mesh.face_sizes, label[n_half:], np.ones(mesh.n_faces, bool))
+    return np.r_[mesh.face_sizes, mesh.face_sizes], np.r_[sheet0, sheet1], vertex_source
+
+
 def split_pinched_vertices(mesh: HalfEdgeMesh):
     """One vertex per fan of faces: renumber corners so no vertex is pinched.
 
@@ -127,7 +171,10 @@ def prepare_topology(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertic
     -------
     mesh : HalfEdgeMesh, consistently oriented, every vertex one fan
     vertex_source : (V',) int, input vertex of each vertex of ``mesh``
-    report : dict with ``flipped_faces``, ``split_vertices``, ``unused_vertices``, ``components``
+    report : dict with ``flipped_faces``, ``split_vertices``, ``unused_vertices``, ``components``,
+        ``boundary_edges``, ``non_orientable`` and ``second_sheet`` ((F',) bool: faces of the
+        orientation double cover's second sheet, built for a non-orientable input; the
+        surface keeps the patches of the first sheet only)
     """
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     face_vertices = np.asarray(face_vertices, dtype=np.int64)
@@ -135,27 +182,33 @@ def prepare_topology(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertic
     check_edge_manifold(raw)
     flip, non_orientable = orientation_flips(raw)
     if non_orientable.size:
-        raise TopologyError(
-            f"the mesh is not orientable (like a Moebius strip): {non_orientable.size} faces meet an edge where no consistent "
-            "orientation exists; c1surf needs an orientable surface",
-            non_orientable,
-        )
-    if flip.any():
-        face_vertices = reverse_faces(face_sizes, face_vertices, flip)
-        raw = build_halfedges(face_sizes, face_vertices, n_vertices)
-    split_vertices, vertex_source, n_split = split_pinched_vertices(raw)
-    mesh = build_halfedges(face_sizes, split_vertices, vertex_source.size)
+        # Work on the orientation double cover; the caller keeps sheet 0 only.
+        cover_sizes, cover_vertices, cover_source = orientation_double_cover(raw)
+        cover = build_halfedges(cover_sizes, cover_vertices, cover_source.size)
+        split_vertices, pinch_source, n_split = split_pinched_vertices(cover)
+        mesh = build_halfedges(cover_sizes, split_vertices, pinch_source.size)
+        vertex_source = cover_source[pinch_source]
+        sheet = np.r_[np.zeros(raw.n_faces, bool), np.ones(raw.n_faces, bool)]
+    else:
+        if flip.any():
+            face_vertices = reverse_faces(face_sizes, face_vertices, flip)
+            raw = build_halfedges(face_sizes, face_vertices, n_vertices)
+        split_vertices, vertex_source, n_split = split_pinched_vertices(raw)
+        mesh = build_halfedges(face_sizes, split_vertices, vertex_source.size)
+        sheet = np.zeros(raw.n_faces, bool)
     used = np.zeros(n_vertices, dtype=bool)
     used[face_vertices] = True
     _, component = connected_components(
         coo_matrix((np.ones(mesh.n_halfedges), (mesh.origin, mesh.dest)), shape=(mesh.n_vertices,) * 2), directed=False
     )
     report = {
-        "flipped_faces": int(flip.sum()),
+        "flipped_faces": 0 if non_orientable.size else int(flip.sum()),
         "split_vertices": n_split,
         "unused_vertices": int((~used).sum()),
         "components": int(np.unique(component).size),
-        "boundary_edges": int(np.sum(mesh.twin < 0)),
+        "boundary_edges": int(np.sum(mesh.twin < 0)) // (2 if non_orientable.size else 1),  # the cover doubles them
+        "non_orientable": bool(non_orientable.size),
+        "second_sheet": sheet,
     }
     return mesh, vertex_source, report
 

@@ -71,7 +71,7 @@ def boundary_curves(patches: np.ndarray):
     return np.stack([patches[:, 0, :], patches[:, -1, :], patches[:, :, 0], patches[:, :, -1]], axis=1)
 
 
-def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=None):
+def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=None, rational: bool = False):
     """Points and unit normals along patch sides.
 
     Along a side, position and normal need only the boundary row of control
@@ -79,7 +79,9 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
 
     Parameters
     ----------
-    patches : (p, 4, 4, 3) bicubic coefficients
+    patches : (p, 4, 4, 3) bicubic coefficients, or with ``rational`` (p, 4, 4, 4)
+        homogeneous ones (w x, w): points are then x = H / w and derivatives
+        follow the quotient rule, (H' - x w') / w
     curves : (k,) int, ``4 * patch + side`` (sides as in ``_SIDES``)
     t : (m,) float, parameters along the side
     reverse : (k,) bool or None, run the side from 1 to 0
@@ -108,6 +110,11 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
     boundary = np.matmul(b, rows[:, 0])  # (k, m, 3)
     along = np.matmul(db, rows[:, 0] * sign_along)
     across = np.matmul(b, (rows[:, 1] - rows[:, 0]) * sign_across[:, None, None])
+    if rational:
+        w = boundary[..., 3:]
+        boundary = boundary[..., :3] / w
+        along = (along[..., :3] - boundary * along[..., 3:]) / w
+        across = (across[..., :3] - boundary * across[..., 3:]) / w
     u_side = u_side[:, None, None]
     du = np.where(u_side, across, along)
     dv = np.where(u_side, along, across)
@@ -148,7 +155,8 @@ def match_patch_sides(patches: np.ndarray, tolerance: float) -> SideMatching:
 
     Parameters
     ----------
-    patches : (p, 4, 4, 3) bicubic coefficients (raise lower degrees first)
+    patches : (p, 4, 4, 3) bicubic coefficients (raise lower degrees first), or
+        (p, 4, 4, 4) homogeneous ones (w x, w) of rational patches
     tolerance : float, absolute distance below which two points are the same
     """
     p = patches.shape[0]
@@ -156,6 +164,8 @@ def match_patch_sides(patches: np.ndarray, tolerance: float) -> SideMatching:
     corners = patches[:, [0, 3, 0, 3], [0, 0, 3, 3]]  # P00, P30, P03, P33
     curves = boundary_curves(patches)
     mids = (curves[:, :, 0] + 3 * curves[:, :, 1] + 3 * curves[:, :, 2] + curves[:, :, 3]) / 8
+    if patches.shape[-1] == 4:  # rational: the points of the surface itself
+        corners, mids = corners[..., :3] / corners[..., 3:], mids[..., :3] / mids[..., 3:]
     labels = _cluster_points(np.concatenate([corners, mids], axis=1).reshape(-1, 3), tolerance).reshape(p, 8)
     side_start = np.array([0, 1, 0, 2])  # u=0: P00 -> P03, u=1: P30 -> P33, v=0: P00 -> P30, v=1: P03 -> P33
     side_end = np.array([2, 3, 1, 3])
@@ -178,12 +188,15 @@ def match_patch_sides(patches: np.ndarray, tolerance: float) -> SideMatching:
     )
 
 
-def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False, tolerance: float = 1e-9) -> SmoothnessReport:
+def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False, tolerance: float = 1e-9,
+                       weights=None) -> SmoothnessReport:
     """Sample every shared patch edge; measure position gap and normal jump.
 
     Parameters
     ----------
     patch_groups : list of (p, du+1, dv+1, 3) float arrays, du, dv <= 3
+    weights : None, or a list of (p, du+1, dv+1) float arrays (one per group):
+        rational patches, evaluated as sum(w P B) / sum(w B)
     samples : int, points per edge (end points included)
     unoriented : bool, compare normals up to sign (non-orientable surfaces)
     tolerance : float, relative distance below which two points are the same
@@ -198,6 +211,12 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     patches = np.concatenate([raise_degree(g, 3, 3) for g in groups])
     flat = patches.reshape(-1, 3)
     diagonal = float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
+    if weights is not None:
+        # Rational patches: match sides by the surface's own corner and mid
+        # points, and take frames by the quotient rule (homogeneous patches).
+        weights = [np.asarray(w, dtype=np.float64) for g, w in zip(patch_groups, weights) if len(g)]
+        patches = np.concatenate([raise_degree(np.concatenate([g * w[..., None], w[..., None]], axis=-1), 3, 3)
+                                  for g, w in zip(groups, weights)])
     sides = match_patch_sides(patches, tolerance * max(diagonal, 1e-300))
     first, second = sides.first, sides.second
     boundary, overshared = int(sides.lone.size), sides.overshared
@@ -206,8 +225,8 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
 
     t = np.linspace(0.0, 1.0, samples)
     reversed_ = sides.reversed
-    xa, na = side_frames(patches, first, t)
-    xb, nb = side_frames(patches, second, t, reversed_)
+    xa, na = side_frames(patches, first, t, rational=weights is not None)
+    xb, nb = side_frames(patches, second, t, reversed_, rational=weights is not None)
     pa_r = np.repeat(first // 4, samples)
     pb_r = np.repeat(second // 4, samples)
     gap = np.linalg.norm(xa - xb, axis=1)

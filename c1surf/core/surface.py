@@ -14,13 +14,16 @@ from .doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sab
 from .errors import TopologyError
 from scipy.sparse import csr_matrix
 
+from .blend import check_ratios, corner_ratios, refined_cell_ratios
 from .boundary import add_ghost_layer
+from .interpolation import normal_constraint, vertex_interpolation_step
 from .patches import biquadratic_stencil, bicubic_stencil, hole_neighbourhoods, patch_frames, perturbation_matrix
 from .repair import check_valence, prepare_topology
 from .topology import HalfEdgeMesh, build_halfedges
 
 SOURCE_NAMES = {FACE_FROM_FACE: "face", FACE_FROM_EDGE: "edge", FACE_FROM_VERTEX: "vertex"}
 TANGENT_RULES = ("symmetric", "corners")
+TRIANGLE_RULES = ("g1", "parametric")
 
 
 @dataclass(frozen=True)
@@ -31,12 +34,17 @@ class SurfaceOptions:
     alpha : float, shape parameter of the bicubic tangents P_32 (A3), default 1
     beta : float, S = S_C + beta (S_P - S_C) (section 1.3.3), default 0
     tangent_rule : "symmetric" (A3) or "corners" (A3a)
+    interpolate_vertices : bool, A1a: the surface passes through every input vertex (needs beta = 0)
+    triangles : "g1" (A3 for every hole) or "parametric" (section 1.3.4 for 3-sided holes:
+        parametrically C1 to the biquadratic patches around)
     """
 
     blend: float = 0.5
     alpha: float = 1.0
     beta: float = 0.0
     tangent_rule: str = "symmetric"
+    interpolate_vertices: bool = False
+    triangles: str = "g1"
 
 
 class Surface:
@@ -49,33 +57,78 @@ class Surface:
     points : (V, d) float, d >= 1 (3 for positions; more columns are carried along linearly)
     options : SurfaceOptions
     face_blend : (F,) float or None, per-face blend ratio overriding ``options.blend``
+    vertex_blend : (V,) float or None, per-vertex blend ratio (NaN or negative: unset),
+        used for the corners at that vertex (``core.blend``)
+    weights : (V,) float > 0 or None, homogeneous weight of every input point (A2a):
+        the patches become rational, with weights
+    vertex_normals : (V, 3) float or None, NaN rows where unset: with
+        ``options.interpolate_vertices`` the surface normal at each such vertex is this one
 
     Attributes (after construction)
     -------------------------------
     biquadratic : (Nq, 3, 3, d) float, Bezier coefficients of the A2 patches
     bicubic : (Nc, 4, 4, d) float, Bezier coefficients of the A3 patches
+    biquadratic_weights, bicubic_weights : (Nq, 3, 3), (Nc, 4, 4) float, or None when not rational
     """
 
-    def __init__(self, face_sizes, face_vertices, points, options: SurfaceOptions | None = None, face_blend=None):
-        self.options = options or SurfaceOptions()
-        if self.options.tangent_rule not in TANGENT_RULES:
+    def __init__(self, face_sizes, face_vertices, points, options: SurfaceOptions | None = None, face_blend=None,
+                 vertex_blend=None, weights=None, vertex_normals=None):
+        self.options = o = options or SurfaceOptions()
+        if o.tangent_rule not in TANGENT_RULES:
             raise ValueError(f"tangent rule must be one of {TANGENT_RULES}")
+        if o.triangles not in TRIANGLE_RULES:
+            raise ValueError(f"triangles must be one of {TRIANGLE_RULES}")
+        if o.interpolate_vertices and o.beta != 0:
+            raise ValueError("vertex interpolation (A1a) needs beta = 0: beta moves the cell centres off the vertices")
+        if vertex_normals is not None and not o.interpolate_vertices:
+            raise ValueError("vertex normals are interpolated together with the vertices: set interpolate_vertices")
+        if vertex_normals is not None and o.alpha == 0:
+            raise ValueError("vertex normals need alpha > 0 (alpha = 0 leaves no tangent plane at cell centres)")
         points = np.asarray(points, dtype=np.float64)
         self.n_input_vertices = points.shape[0]
         face_sizes = np.asarray(face_sizes, dtype=np.int64)
         self.n_input_faces = int(face_sizes.size)
         blend = np.full(face_sizes.size, float(self.options.blend))
         if face_blend is not None:
-            blend = np.asarray(face_blend, dtype=np.float64).copy()
-        self._build_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), blend, points)
+            blend = check_ratios(face_blend, face_sizes.size, "per-face blend ratios", allow_unset=True)
+            blend = np.where(np.isnan(blend), float(self.options.blend), blend)
+        if vertex_blend is not None:
+            vertex_blend = check_ratios(vertex_blend, self.n_input_vertices, "per-vertex blend ratios", allow_unset=True)
+        if vertex_normals is not None:
+            vertex_normals = np.asarray(vertex_normals, dtype=np.float64).reshape(self.n_input_vertices, 3)
+        self.weights = None if weights is None else self._check_weights(weights)
+        self._build_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), blend, points,
+                             vertex_blend=vertex_blend, vertex_normals=vertex_normals)
         self.update_points(points)
+
+    def _check_weights(self, weights) -> np.ndarray:
+        w = np.asarray(weights, dtype=np.float64).reshape(-1)
+        if w.size != self.n_input_vertices:
+            raise ValueError(f"expected {self.n_input_vertices} weights, got {w.size}")
+        if not np.all(np.isfinite(w) & (w > 0)):
+            raise ValueError("vertex weights must be finite and positive")
+        return w
+
+    @property
+    def rational(self) -> bool:
+        return self.weights is not None
+
+    @property
+    def patch_weights(self):
+        """[biquadratic_weights, bicubic_weights], or None for a polynomial surface."""
+        return None if self.weights is None else [self.biquadratic_weights, self.bicubic_weights]
 
     # -- topology and operators (no coordinates) ------------------------------------
 
-    def _build_topology(self, face_sizes, face_vertices, blend, points) -> None:
+    def _build_topology(self, face_sizes, face_vertices, blend, points, vertex_blend=None, vertex_normals=None) -> None:
         # Repairs first (orientation, pinched vertices), then a ghost layer
         # closes any boundary; from there on every mesh is handled alike.
         prepared, vertex_source, self.repairs = prepare_topology(face_sizes, face_vertices, self.n_input_vertices)
+        # A non-orientable input comes back as its orientation double cover:
+        # both sheets are refined, the patches of the second are dropped.
+        second_sheet = self.repairs.pop("second_sheet")
+        if second_sheet.any():
+            blend = np.r_[blend, blend]
         check_valence(prepared, vertex_source)
         self.vertex_source = vertex_source
         select = csr_matrix((np.ones(vertex_source.size), (np.arange(vertex_source.size), vertex_source)),
@@ -86,16 +139,25 @@ class Surface:
             blend = np.r_[blend, np.full(coarse.n_faces - blend.size, float(self.options.blend))]
         else:
             coarse, real_face, place = prepared, np.ones(prepared.n_faces, bool), select
+        real_face[: second_sheet.size] &= ~second_sheet
         self.input = coarse
 
-        step1 = doo_sabin_matrix(coarse, blend)
+        def per_coarse_vertex(values):  # input numbering -> coarse numbering (ghost vertices: NaN)
+            if values is None:
+                return None
+            pad = np.full((coarse.n_vertices - vertex_source.size,) + values.shape[1:], np.nan)
+            return np.concatenate([values[vertex_source], pad])
+
+        # First step: a corner takes its vertex's ratio where one is given,
+        # else its cell's. Second step: every once-refined cell takes the mean
+        # ratio of the input corners it is made of (core.blend).
+        corner = corner_ratios(coarse, blend, per_coarse_vertex(vertex_blend))
+        step1 = doo_sabin_matrix(coarse, corner, per_corner=True)
         faces1 = refine_doo_sabin(coarse)
+        if self.options.interpolate_vertices:
+            step1 = vertex_interpolation_step(step1, coarse, faces1)  # A1a
         level1 = build_halfedges(faces1.face_sizes, faces1.face_vertices, coarse.n_halfedges)
-        # Second step: F-faces keep their cell's blend ratio; cells born at
-        # edges and vertices take the global one (the paper leaves this open).
-        blend1 = np.full(level1.n_faces, float(self.options.blend))
-        from_face = faces1.kind == FACE_FROM_FACE
-        blend1[from_face] = blend[faces1.parent[from_face]]
+        blend1 = refined_cell_ratios(faces1.face_sizes, faces1.face_vertices, corner)
         step2 = doo_sabin_matrix(level1, second_step_ratio(level1.face_sizes, blend1))
         faces2 = refine_doo_sabin(level1)
         refined = build_halfedges(faces2.face_sizes, faces2.face_vertices, level1.n_halfedges)
@@ -111,8 +173,15 @@ class Surface:
         if perturb is not None:
             self.operators.append(perturb)
         o = self.options
+        # Functions applied after the (linear, row-wise) operators: vertex normals (A1a).
+        self.constraints = []
+        if vertex_normals is not None:
+            constraint = normal_constraint(refined, faces1, per_coarse_vertex(vertex_normals), o.tangent_rule,
+                                           o.triangles == "parametric", self.weights is not None)
+            if constraint is not None:
+                self.constraints.append(constraint)
         self.quad_stencil = biquadratic_stencil(refined, quad_frames)
-        cubic_stencil = bicubic_stencil(refined, holes, o.alpha, o.beta, o.tangent_rule)
+        cubic_stencil = bicubic_stencil(refined, holes, o.alpha, o.beta, o.tangent_rule, o.triangles)
         # keep the bicubic patches at real corners only (all of them on a closed mesh)
         real_cubic = real_vertex[refined.origin[cubic_frames[:, 0]]]
         self.cubic_frames = cubic_frames[real_cubic]
@@ -122,24 +191,47 @@ class Surface:
 
     # -- geometry ---------------------------------------------------------------------
 
-    def update_points(self, points) -> "Surface":
+    def update_points(self, points, weights=None) -> "Surface":
         """Recompute all patches for new input points on the same connectivity.
 
         Parameters
         ----------
         points : (V, d) float
+        weights : (V,) float > 0 or None, new homogeneous weights (rational surfaces
+            only; None keeps the current ones)
+
+        A rational surface runs every step on the homogeneous points
+        ``(w x, w)`` (A2a); ``refined_points`` are then homogeneous and the
+        patch coefficients are ``(w x) / w`` with ``*_weights`` = w.
         """
         points = np.asarray(points, dtype=np.float64)
         if points.ndim != 2 or points.shape[0] != self.n_input_vertices:
             raise ValueError(f"expected points of shape ({self.n_input_vertices}, d), got {points.shape}")
+        if weights is not None:
+            if self.weights is None:
+                raise ValueError("this surface is polynomial: build it with weights to make it rational")
+            self.weights = self._check_weights(weights)
         x = points
+        if self.weights is not None:
+            x = np.concatenate([points * self.weights[:, None], self.weights[:, None]], axis=1)
         for operator in self.operators:
             x = operator @ x
+        for constraint in self.constraints:
+            x = constraint.apply(x)
         self.points = points
         self.refined_points = x
-        d = points.shape[1]
-        self.biquadratic = (self.quad_stencil @ x).reshape(-1, 3, 3, d)
-        self.bicubic = (self.cubic_stencil @ x).reshape(-1, 4, 4, d)
+        d = x.shape[1]
+        biquadratic = (self.quad_stencil @ x).reshape(-1, 3, 3, d)
+        bicubic = (self.cubic_stencil @ x).reshape(-1, 4, 4, d)
+        if self.weights is None:
+            self.biquadratic, self.bicubic = biquadratic, bicubic
+            self.biquadratic_weights = self.bicubic_weights = None
+            return self
+        self.biquadratic_weights, self.bicubic_weights = biquadratic[..., -1], bicubic[..., -1]
+        if not (np.all(self.biquadratic_weights > 0) and np.all(self.bicubic_weights > 0)):
+            raise ValueError("the vertex weights vary too much: some patch weight is not positive")
+        self.biquadratic = biquadratic[..., :-1] / biquadratic[..., -1:]
+        self.bicubic = bicubic[..., :-1] / bicubic[..., -1:]
         return self
 
     # -- bookkeeping ------------------------------------------------------------------
@@ -177,9 +269,12 @@ class Surface:
 
 
 def build_surface(points, face_sizes, face_vertices, **options) -> Surface:
-    """Convenience: ``Surface(face_sizes, face_vertices, points, SurfaceOptions(**options))``."""
-    face_blend = options.pop("face_blend", None)
-    return Surface(face_sizes, face_vertices, points, SurfaceOptions(**options), face_blend=face_blend)
+    """Convenience: ``Surface(face_sizes, face_vertices, points, SurfaceOptions(**options))``.
+
+    ``face_blend``, ``vertex_blend``, ``weights`` and ``vertex_normals`` go to ``Surface``.
+    """
+    data = {key: options.pop(key, None) for key in ("face_blend", "vertex_blend", "weights", "vertex_normals")}
+    return Surface(face_sizes, face_vertices, points, SurfaceOptions(**options), **data)
 
 
 __all__ = ["Surface", "SurfaceOptions", "build_surface", "TopologyError", "HalfEdgeMesh", "SOURCE_NAMES"]

@@ -9,7 +9,8 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["COLORMAPS", "colormap", "curvature_range", "preview_rgb", "add_colorbar", "write_png", "srgb_to_linear"]
+__all__ = ["COLORMAPS", "colormap", "curvature_range", "preview_rgb", "add_colorbar", "write_png", "srgb_to_linear",
+           "curvature_picture", "zebra_picture"]
 
 _VIRIDIS = np.array([
     (0.2670, 0.0049, 0.3294), (0.2770, 0.0503, 0.3757), (0.2823, 0.0950, 0.4173), (0.2829, 0.1359, 0.4534),
@@ -114,3 +115,38 @@ def write_png(path, image) -> None:
     if isinstance(image, np.ndarray):
         image = to_image(image)
     image.save(str(path), format="PNG", optimize=True)
+
+
+QUANTITY_LABELS = {"kmax": "max |k|", "K": "Gaussian K", "H": "mean H", "k1": "k1", "k2": "k2"}
+
+
+def curvature_picture(image, quantity: str = "kmax", name: str = "viridis", value_range=None, legend: bool = True):
+    """Shaded curvature preview of a rendered ``core.render.Image``.
+
+    Returns
+    -------
+    picture : PIL.Image with a colour bar (when ``legend``)
+    rgb : (H, W, 3) float sRGB of the surface without the colour bar
+    (lo, hi) : the colour range used
+    """
+    from ..core.render import SIGNED, headlight
+
+    values = image.channels[quantity]
+    mask = image.mask
+    lo, hi = value_range if value_range is not None else curvature_range(values[mask], SIGNED[quantity])
+    rgb = preview_rgb(values, mask, headlight(image, ambient=0.45), lo, hi, name)
+    picture = to_image(rgb)
+    if legend:
+        add_colorbar(picture, lo, hi, name, QUANTITY_LABELS[quantity])
+    return picture, rgb, (lo, hi)
+
+
+def zebra_picture(image, count: int = 16, axis=None) -> np.ndarray:
+    """(H, W, 3) float sRGB: reflection lines of parallel light lines (``core.render.reflection_phase``)
+    as black and white stripes, lightly shaded, on the background colour."""
+    from ..core.render import headlight, reflection_phase, stripes
+
+    z = stripes(reflection_phase(image, axis), count)
+    shade = 0.75 + 0.25 * headlight(image, ambient=0.0)
+    grey = 0.06 + 0.9 * np.nan_to_num(z) * shade
+    return np.where(image.mask[..., None], grey[..., None] * np.ones(3), np.asarray(BACKGROUND))

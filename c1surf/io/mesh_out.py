@@ -24,7 +24,8 @@ def mesh_format(path) -> str:
     return suffix
 
 
-def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None, suffix: str | None = None) -> None:
+def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None, suffix: str | None = None,
+                        vertex_properties: dict | None = None, vertex_colors: np.ndarray | None = None) -> None:
     """Write a triangle mesh; the format comes from ``suffix`` (default: the path's).
 
     Parameters
@@ -32,8 +33,18 @@ def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals
     points : (V, 3) float
     triangles : (T, 3) int
     normals : (V, 3) float or None, per-vertex unit normals
+    vertex_properties : dict name -> (V,) float, or None: extra per-vertex scalars
+        (PLY only, written by ``ply_out.write_ply``)
+    vertex_colors : (V, 3) uint8 or None, with ``vertex_properties`` (PLY only)
     """
     suffix = suffix or mesh_format(path)
+    if vertex_properties is not None or vertex_colors is not None:
+        if suffix != ".ply":
+            raise ValueError(f"per-vertex properties need a .ply output, not {suffix}")
+        from .ply_out import write_ply
+
+        write_ply(path, points[:, :3], triangles, normals, vertex_properties, vertex_colors, comments=["c1surf"])
+        return
     file_type, kwargs = MESH_FORMATS[suffix]
     mesh = trimesh.Trimesh(vertices=points[:, :3], faces=triangles, vertex_normals=normals, process=False, validate=False)
     data = mesh.export(file_type=file_type, **kwargs)

@@ -6,6 +6,7 @@ Shape (see docs/patch-format.md)::
      "options": {...}, "input": {...}, "counts": {...},
      "patches": [{"kind": "biquadratic" | "bicubic", "degree": [du, dv],
                   "points": (du+1) x (dv+1) x 3 nested lists,
+                  "weights": (du+1) x (dv+1) (rational patches only, A2a),
                   "source": {"face": f} | {"vertex": v} | {"edge": [a, b]},
                   "corners": [4 ids], "edges": [4 ids], "reversed": [4 bools],
                   "neighbours": [[patch, side] x 4]}, ...]}
@@ -36,6 +37,10 @@ def patch_set_document(patch_set: PatchSet) -> dict:
         kind = KIND_BY_DEGREE.get(du) if du == dv else None
         for points in group[..., :3].tolist():
             patches.append({"kind": kind or f"bezier{du}x{dv}", "degree": [du, dv], "points": points})
+    if patch_set.weights is not None:  # rational patches (A2a): "weights" of shape (du+1, dv+1)
+        flat_weights = [w for group in patch_set.weights for w in np.asarray(group).tolist()]
+        for patch, w in zip(patches, flat_weights):
+            patch["weights"] = w
     for patch, source in zip(patches, patch_set.source_dicts()):
         if source is not None:
             patch["source"] = source
@@ -59,8 +64,9 @@ def write_patches_json(path, surface, input_path: str | None = None, adjacency=N
 
 def write_patch_set_json(path, patch_set: PatchSet) -> None:
     """Write a ``PatchSet`` as c1surf-patches JSON (compact, one line, ``repr`` floats)."""
+    text = json.dumps(patch_set_document(patch_set), separators=(",", ":"))  # dumps: the C encoder, unlike dump
     with open(path, "w", encoding="utf-8") as f:
-        json.dump(patch_set_document(patch_set), f, separators=(",", ":"))
+        f.write(text)
         f.write("\n")
 
 
@@ -71,11 +77,13 @@ def read_patch_set_json(path) -> PatchSet:
     "reversed" ("neighbours" is derived from them and not read).
     """
     doc = _load_document(path)
-    patches, kinds, sources, corners, edges, flags = [], [], [], [], [], []
+    patches, kinds, sources, corners, edges, flags, weights = [], [], [], [], [], [], []
     has_source, has_adjacency = True, True
     for k, patch in enumerate(doc.get("patches", [])):
         points = _patch_points(path, k, patch)
         patches.append(points)
+        if isinstance(patch, dict) and "weights" in patch:
+            weights.append(_patch_weights(path, k, patch, points.shape[:2]))
         source = patch.get("source") if isinstance(patch, dict) else None
         if isinstance(source, dict) and len(source) == 1:
             (kind, value), = source.items()
@@ -105,7 +113,19 @@ def read_patch_set_json(path) -> PatchSet:
     header = {key: value for key, value in doc.items() if key != "patches"}
     source_kind = np.array(kinds) if has_source and n else None
     source = np.asarray(sources, dtype=np.int64).reshape(-1, 2) if has_source and n else None
-    return PatchSet(degree_runs(patches), adjacency, source_kind, source, header)
+    if weights and len(weights) != n:
+        raise MeshInputError(str(path), f'only {len(weights)} of {n} patches have "weights": give all or none')
+    return PatchSet(degree_runs(patches), adjacency, source_kind, source, header, degree_runs(weights) if weights else None)
+
+
+def _patch_weights(path, k: int, patch, shape) -> np.ndarray:
+    try:
+        w = np.asarray(patch["weights"], dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise MeshInputError(str(path), f"patch {k}: malformed weights ({e})") from None
+    if w.shape != tuple(shape) or not np.all(np.isfinite(w) & (w > 0)):
+        raise MeshInputError(str(path), f"patch {k}: weights must be positive with shape {tuple(shape)}, got {w.shape}")
+    return w
 
 
 def _load_document(path) -> dict:

@@ -40,15 +40,16 @@ def write_patches_iges(path, surface, input_path: str | None = None, *, units: s
     file_name : the name recorded in the Global section (default: basename of ``path``)
     """
     surfaces = []
-    for g in (surface.biquadratic, surface.bicubic):
+    weights = getattr(surface, "patch_weights", None) or [None, None]  # rational surfaces (A2a): IGES weights
+    for g, w in zip((surface.biquadratic, surface.bicubic), weights):
         if len(g):
-            surfaces.extend(bezier_patches_to_surfaces(np.ascontiguousarray(g[..., :3])))
+            surfaces.extend(bezier_patches_to_surfaces(np.ascontiguousarray(g[..., :3]), w))
     o = surface.options
     source = os.path.basename(str(input_path)) if input_path else "a mesh"
     description = (
         f"c1surf {__version__}: G1 surface of {source}, {len(surface.biquadratic)} biquadratic and "
         f"{len(surface.bicubic)} bicubic Bezier patches as rational B-spline surfaces (type 128 form 0, "
-        f"polynomial), biquadratic first; options blend={o.blend!r} alpha={o.alpha!r} beta={o.beta!r} "
+        f"{'rational' if getattr(surface, 'patch_weights', None) is not None else 'polynomial'}), biquadratic first; options blend={o.blend!r} alpha={o.alpha!r} beta={o.beta!r} "
         f"tangent_rule={o.tangent_rule}."
     )
     write_iges(path, surfaces, units=units, group=group, file_name=file_name or os.path.basename(os.fspath(path)),

@@ -19,7 +19,11 @@ surface always gives the same bytes.
 """
 from __future__ import annotations
 
+import io
 import json
+import mmap
+import os
+import struct
 import zipfile
 
 import numpy as np
@@ -81,49 +85,92 @@ def write_patches_npz(path, surface, input_path: str | None = None, adjacency=No
     write_patch_set_npz(path, surface_patch_set(surface, input_path, adjacency))
 
 
+def _mapped_members(path) -> dict:
+    """Arrays of an uncompressed ``.npz`` mapped straight from the file (no copy, no CRC pass).
+
+    Members that are compressed (e.g. re-saved with ``numpy.savez_compressed``)
+    are read the ordinary way.
+    """
+    arrays = {}
+    with open(path, "rb") as f:
+        size = os.fstat(f.fileno()).st_size
+        mapped = mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) if size else None
+        with zipfile.ZipFile(f) as zf:
+            for info in zf.infolist():
+                if not info.filename.endswith(".npy"):
+                    continue
+                name = info.filename[:-4]
+                if info.compress_type != zipfile.ZIP_STORED or mapped is None:
+                    with zf.open(info) as member:
+                        arrays[name] = np.lib.format.read_array(member, allow_pickle=False)
+                    continue
+                local = info.header_offset
+                if mapped[local : local + 4] != b"PK\x03\x04":
+                    raise ValueError(f"bad local header for {info.filename}")
+                name_len, extra_len = struct.unpack("<HH", mapped[local + 26 : local + 30])
+                start = local + 30 + name_len + extra_len
+                head = io.BytesIO(mapped[start : start + min(info.file_size, 65536)])
+                version = np.lib.format.read_magic(head)
+                if version == (1, 0):
+                    shape, fortran, dtype = np.lib.format.read_array_header_1_0(head)
+                else:
+                    shape, fortran, dtype = np.lib.format.read_array_header_2_0(head)
+                if dtype.hasobject:
+                    raise ValueError(f"{name} holds Python objects (pickles are not read)")
+                count = int(np.prod(shape, dtype=np.int64))
+                offset = start + head.tell()
+                if offset + count * dtype.itemsize > start + info.file_size:
+                    raise ValueError(f"{name} is truncated")
+                flat = np.frombuffer(mapped, dtype=dtype, count=count, offset=offset)
+                arrays[name] = flat.reshape(shape, order="F" if fortran else "C")
+    return arrays
+
+
 def read_patch_set_npz(path) -> PatchSet:
-    """Read a c1surf-patches ``.npz``: patches in file order, sources, adjacency, header."""
+    """Read a c1surf-patches ``.npz``: patches in file order, sources, adjacency, header.
+
+    The arrays are memory-mapped read-only views of the file (uncompressed
+    members), so opening even a large surface takes milliseconds.
+    """
     try:
-        data = np.load(path, allow_pickle=False)
+        data = _mapped_members(path)
     except FileNotFoundError:
         raise MeshInputError(str(path), "no such file") from None
     except IsADirectoryError:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
-    except (OSError, ValueError, zipfile.BadZipFile) as e:
+    except (OSError, ValueError, EOFError, struct.error, zipfile.BadZipFile) as e:
         raise MeshInputError(str(path), f"not an NPZ patch file ({e})") from None
-    if not isinstance(data, np.lib.npyio.NpzFile):
-        raise MeshInputError(str(path), "not an NPZ patch file (a single .npy array)")
-    with data:
+    names = set(data)
+    if "header" not in names:
+        raise MeshInputError(str(path), f'not a c1surf patch file (no "header" member with "format": "{FORMAT_NAME}")')
+    try:
+        header = json.loads(str(data["header"].item()))
+    except (ValueError, TypeError) as e:
+        raise MeshInputError(str(path), f"damaged header ({e})") from None
+    if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
+        raise MeshInputError(str(path), f'not a c1surf patch file (missing "format": "{FORMAT_NAME}")')
+    if header.get("version") != FORMAT_VERSION:
+        raise MeshInputError(str(path), f"patch file version {header.get('version')} is not supported (this c1surf reads version {FORMAT_VERSION})")
+    quad = data.get("biquadratic", np.zeros((0, 3, 3, 3)))
+    cubic = data.get("bicubic", np.zeros((0, 4, 4, 3)))
+    for name, g, n in (("biquadratic", quad, 3), ("bicubic", cubic, 4)):
+        if g.dtype != np.float64 or g.ndim != 4 or g.shape[1:] != (n, n, 3):
+            raise MeshInputError(str(path), f"{name} must be float64 of shape (N, {n}, {n}, 3), got {g.dtype} {g.shape}")
+        if not np.isfinite(g).all():
+            raise MeshInputError(str(path), f"{name} holds NaN or infinite coordinates")
+    p = len(quad) + len(cubic)
+    source_kind = source = adjacency = None
+    if {"source_kind", "source"} <= names:
+        source_kind, source = data["source_kind"], data["source"]
+        if source_kind.shape != (p,) or source.shape != (p, 2) or source.dtype.kind != "i":
+            raise MeshInputError(str(path), f"source_kind / source must have shapes ({p},) / ({p}, 2)")
+    if {"corners", "edges", "reversed"} <= names:
         try:
-            names = set(data.files)
-            if "header" not in names:
-                raise MeshInputError(str(path), f'not a c1surf patch file (no "header" member with "format": "{FORMAT_NAME}")')
-            header = json.loads(str(data["header"].item()))
-            if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
-                raise MeshInputError(str(path), f'not a c1surf patch file (missing "format": "{FORMAT_NAME}")')
-            if header.get("version") != FORMAT_VERSION:
-                raise MeshInputError(str(path), f"patch file version {header.get('version')} is not supported (this c1surf reads version {FORMAT_VERSION})")
-            quad = data["biquadratic"] if "biquadratic" in names else np.zeros((0, 3, 3, 3))
-            cubic = data["bicubic"] if "bicubic" in names else np.zeros((0, 4, 4, 3))
-            for name, g, n in (("biquadratic", quad, 3), ("bicubic", cubic, 4)):
-                if g.dtype != np.float64 or g.ndim != 4 or g.shape[1:] != (n, n, 3) or not np.all(np.isfinite(g)):
-                    raise MeshInputError(str(path), f"{name} must be finite float64 of shape (N, {n}, {n}, 3), got {g.dtype} {g.shape}")
-            p = len(quad) + len(cubic)
-            source_kind = source = adjacency = None
-            if {"source_kind", "source"} <= names:
-                source_kind, source = data["source_kind"], data["source"]
-                if source_kind.shape != (p,) or source.shape != (p, 2):
-                    raise MeshInputError(str(path), f"source_kind / source must have shapes ({p},) / ({p}, 2)")
-            if {"corners", "edges", "reversed"} <= names:
-                adjacency = PatchAdjacency(data["corners"].astype(np.int64), data["edges"].astype(np.int64), data["reversed"].astype(bool))
-                try:
-                    adjacency.validate(p)
-                except ValueError as e:
-                    raise MeshInputError(str(path), f"malformed patch adjacency ({e})") from None
-        except (KeyError, ValueError, OSError, zipfile.BadZipFile) as e:
-            if isinstance(e, MeshInputError):
-                raise
-            raise MeshInputError(str(path), f"damaged NPZ patch file ({e})") from None
+            adjacency = PatchAdjacency(np.asarray(data["corners"], dtype=np.int64), np.asarray(data["edges"], dtype=np.int64),
+                                       np.asarray(data["reversed"], dtype=bool))
+            adjacency.validate(p)
+        except (TypeError, ValueError) as e:
+            raise MeshInputError(str(path), f"malformed patch adjacency ({e})") from None
     groups = [g for g in (quad, cubic) if len(g)]
     return PatchSet(groups, adjacency, source_kind, source, header)
 

@@ -9,6 +9,7 @@ the same mesh ``convert`` writes. See docs/patch-format.md.
 """
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -33,6 +34,8 @@ class PatchSet:
     source : (P, 2) int64 or None: (face, -1), (vertex, -1) or the edge's (a, b)
     header : dict, everything of the file but the patches (format, version,
         c1surf_version, options, input, counts), as far as the file says
+    weights : None (polynomial patches) or a list parallel to ``groups`` of
+        (p_k, du+1, dv+1) float: rational patches sum(w P B) / sum(w B) (A2a)
     """
 
     groups: list
@@ -40,6 +43,7 @@ class PatchSet:
     source_kind: np.ndarray | None = None
     source: np.ndarray | None = None
     header: dict = field(default_factory=dict)
+    weights: list | None = None
 
     @property
     def n_patches(self) -> int:
@@ -108,12 +112,11 @@ def surface_sources(surface):
 
 def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -> dict:
     """Header of a Surface's patch file (everything but the patches)."""
-    o = surface.options
     return {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "c1surf_version": __version__,
-        "options": {"blend": o.blend, "alpha": o.alpha, "beta": o.beta, "tangent_rule": o.tangent_rule},
+        "options": dataclasses.asdict(surface.options),  # every SurfaceOptions field, by name
         "input": {"path": input_path, "vertices": int(surface.n_input_vertices), "faces": int(surface.n_input_faces)},
         "counts": {
             "biquadratic": int(len(surface.biquadratic)),
@@ -130,7 +133,10 @@ def surface_patch_set(surface, input_path: str | None = None, adjacency: PatchAd
         adjacency = patch_adjacency(surface.refined, surface.frames)
     groups = [np.ascontiguousarray(g[..., :3]) for g in (surface.biquadratic, surface.bicubic) if len(g)]
     kind, source = surface_sources(surface)
-    return PatchSet(groups, adjacency, kind, source, surface_header(surface, input_path, adjacency))
+    weights = getattr(surface, "patch_weights", None)  # rational surfaces (A2a)
+    if weights is not None:
+        weights = [np.ascontiguousarray(w) for g, w in zip((surface.biquadratic, surface.bicubic), weights) if len(g)]
+    return PatchSet(groups, adjacency, kind, source, surface_header(surface, input_path, adjacency), weights)
 
 
 __all__ = ["PatchSet", "surface_patch_set", "degree_runs", "FORMAT_NAME", "FORMAT_VERSION", "KIND_BY_DEGREE", "SOURCE_KINDS"]

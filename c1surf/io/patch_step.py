@@ -95,7 +95,6 @@ def write_patches_step(path, surface, input_path: str | None = None, *, file_nam
     name = file_name or os.path.basename(os.fspath(path))
     Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
     Interface_Static.SetCVal_s("write.step.unit", "MM")
-    Interface_Static.SetCVal_s("write.step.product.name", os.path.splitext(name)[0] or "c1surf")
     with _quiet_stdout():  # Open CASCADE prints transfer statistics on stdout
         writer = STEPControl_Writer()
         if writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone:
@@ -131,13 +130,27 @@ def _quiet_stdout():
 
 
 def _fix_header(path, name: str) -> None:
-    """Pin FILE_NAME's name and time stamp (Open CASCADE may put the clock and the temporary name there)."""
+    """Pin FILE_NAME's name and time stamp and the product name.
+
+    Open CASCADE may put the clock and the temporary file name in the header,
+    and numbers product names with a per-process counter; neither belongs in
+    a reproducible file.
+    """
     with open(path, "r", encoding="latin-1", newline="") as f:
         text = f.read()
-    fixed = re.sub(r"FILE_NAME\('(?:[^']|'')*','[^']*'", lambda m: f"FILE_NAME('{name}','1970-01-01T00:00:00'", text, count=1)
+    quoted = _step_string(name)
+    fixed = re.sub(r"FILE_NAME\('(?:[^']|'')*','[^']*'", lambda m: f"FILE_NAME({quoted},'1970-01-01T00:00:00'", text, count=1)
+    product = _step_string(os.path.splitext(name)[0] or "c1surf")
+    fixed = re.sub(r"= PRODUCT\('(?:[^']|'')*',\s*'(?:[^']|'')*'", lambda m: f"= PRODUCT({product},{product}", fixed, count=1)
     if fixed != text:
         with open(path, "w", encoding="latin-1", newline="") as f:
             f.write(fixed)
+
+
+def _step_string(text: str) -> str:
+    """A STEP string literal (ASCII, apostrophes doubled)."""
+    text = text.encode("ascii", "replace").decode("ascii").replace("'", "''")
+    return f"'{text}'"
 
 
 __all__ = ["write_patches_step", "bezier_faces", "sewn_shape", "SEWING_TOLERANCE"]

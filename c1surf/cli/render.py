@@ -1,0 +1,186 @@
+"""``c1surf render``: EXR images with exact per-pixel curvature, PNG previews, zebra stripes."""
+from __future__ import annotations
+
+import os
+from pathlib import Path
+
+import click
+import numpy as np
+
+from .. import __version__
+from ..core.camera import PROJECTIONS, VIEWS, frame_camera
+from ..core.render import CURVATURE_NAMES, GEOMETRY_NAMES, default_resolution, patch_grid_mesh, render, render_atlas
+from ..core.surface import SurfaceOptions
+from ..io.atomic import atomic_output
+from ..io.exr import write_exr
+from ..io.images import COLORMAPS, curvature_picture, srgb_to_linear, write_png, zebra_picture
+from ..io.patch_formats import PATCH_LOADERS
+from ..io.read import read_mesh
+from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes
+from .convert import build_or_fail
+from .options import surface_options
+
+# EXR channels, in the order listed by `c1surf render --help` (the file sorts them by name).
+EXR_CHANNELS = ("R", "G", "B", "A") + CURVATURE_NAMES + GEOMETRY_NAMES
+
+
+def parse_size(text: str) -> tuple[int, int]:
+    """'1024x768' -> (1024, 768); '512' -> (512, 512)."""
+    try:
+        parts = [int(p) for p in str(text).lower().replace("*", "x").split("x")]
+    except ValueError:
+        parts = []
+    if len(parts) == 1:
+        parts = parts * 2
+    if len(parts) != 2 or min(parts) < 1 or max(parts) > 32768:
+        raise click.BadParameter(f"expected WIDTHxHEIGHT such as 1024x768 (1 to 32768 pixels), got {text!r}")
+    return parts[0], parts[1]
+
+
+def load_groups(input_path, options: SurfaceOptions, quiet: bool, progress: Progress):
+    """Patch groups (global patch index runs through them in order) of a mesh or patch file."""
+    suffix = Path(input_path).suffix.lower()
+    if suffix in PATCH_LOADERS:
+        progress.phase(f"reading the patches of {input_path}")
+        patch_set = PATCH_LOADERS[suffix](input_path)
+        groups = [g for g in patch_set.groups if len(g)]
+    else:
+        progress.phase(f"reading {input_path}")
+        mesh = read_mesh(input_path)
+        progress.phase(f"building the surface of {mesh.n_faces} faces")
+        surface = build_or_fail(mesh, options)
+        if not quiet:
+            for note in repair_notes(surface, mesh):
+                click.echo(f"c1surf: note: {note}", err=True)
+        groups = [g for g in (surface.biquadratic, surface.bicubic) if len(g)]
+    if not groups:
+        raise Failure(f"{input_path}: there are no patches to render")
+    if any(max(g.shape[1:3]) > 4 for g in groups):
+        raise Failure(f"{input_path}: patches of degree above 3 are not supported")
+    return groups
+
+
+def exr_channels(image, rgb: np.ndarray) -> dict:
+    """The EXR channels of a rendered image: colour preview (linear light) and data."""
+    linear = srgb_to_linear(rgb)
+    out = {"R": linear[..., 0], "G": linear[..., 1], "B": linear[..., 2], "A": image.mask.astype(np.float32)}
+    for name in CURVATURE_NAMES + GEOMETRY_NAMES:
+        out[name] = image.channels[name]
+    return out
+
+
+@click.command("render")
+@click.argument("input_path", metavar="INPUT|PATCHES", type=click.Path(dir_okay=False))
+@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+              help="EXR image of float32 channels: R G B A (preview, linear), kmax K H k1 k2 (curvature), Z (depth "
+                   "along the view), N.X N.Y N.Z (unit normal), P.X P.Y P.Z (position), patch (-1 = background), u v.")
+@click.option("--png", "png_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write a shaded preview coloured by curvature, with a colour bar.")
+@click.option("--zebra", "zebra_path", type=click.Path(dir_okay=False), default=None,
+              help="Also write reflection lines (zebra stripes): continuous on a G1 surface, broken where normals jump.")
+@click.option("--view", type=click.Choice(sorted(VIEWS)), default="iso", show_default=True,
+              help="Camera direction for a Y-up scene (front looks along -Z, top along -Y, side along -X).")
+@click.option("--eye", type=float, nargs=3, default=None, metavar="X Y Z", help="Camera position (overrides --view).")
+@click.option("--target", type=float, nargs=3, default=None, metavar="X Y Z",
+              help="Point looked at [default: centre of the bounding box].")
+@click.option("--up", type=float, nargs=3, default=None, metavar="X Y Z", help="Up direction [default: +Y, or the view's].")
+@click.option("--size", default="1024x1024", show_default=True, metavar="WxH", help="Image size WIDTHxHEIGHT (or N for N x N).")
+@click.option("--projection", type=click.Choice(PROJECTIONS), default="perspective", show_default=True,
+              help="Pinhole camera, or parallel rays (orthographic: only the direction of --eye/--view counts).")
+@click.option("--fov", type=click.FloatRange(0.1, 170.0), default=None,
+              help="Vertical field of view in degrees (perspective) [default: 30, or framing everything with --eye].")
+@click.option("--zoom", type=click.FloatRange(min=1e-6), default=1.0, show_default=True,
+              help="Magnify about the image centre (the whole surface is framed at 1).")
+@click.option("--atlas", is_flag=True,
+              help="Parameter space instead of a view: patch k is a square tile (u to the right, v up), same channels.")
+@click.option("--tile", type=click.IntRange(1, 4096), default=None,
+              help="--atlas: pixels per patch side [default: as large as fits about 4 million pixels, at most 32].")
+@click.option("--color-by", "quantity", type=click.Choice(CURVATURE_NAMES), default="kmax", show_default=True,
+              help="Curvature shown by the colours (R G B and --png).")
+@click.option("--colormap", type=click.Choice(sorted(COLORMAPS)), default="viridis", show_default=True,
+              help="'viridis' (perceptual) or 'gray' (the paper's black-to-white ramp).")
+@click.option("--range", "value_range", type=float, nargs=2, default=None, metavar="LO HI",
+              help="Colour range [default: 0 to the 98th percentile of |value| on screen; symmetric when signed].")
+@click.option("--stripes", type=click.IntRange(1, 10000), default=16, show_default=True,
+              help="--zebra: black and white stripe pairs per turn of the reflected ray.")
+@click.option("--stripe-axis", type=float, nargs=3, default=None, metavar="X Y Z",
+              help="--zebra: direction of the parallel light lines [default: the camera's up]. Normals that jump "
+                   "across an edge show best with lines along that edge.")
+@click.option("--mesh-resolution", type=click.IntRange(2, 64), default=None,
+              help="Samples per patch side of the mesh the rays hit first [default: about 600k triangles, 2 to 8]; "
+                   "the hit is then moved onto the exact patch by Newton steps.")
+@surface_options
+@click.option("-q", "--quiet", is_flag=True, help="No progress bars (they only appear on a terminal anyway).")
+@friendly_errors
+def render_command(input_path, output, png_path, zebra_path, view, eye, target, up, size, projection, fov, zoom, atlas,
+                   tile, quantity, colormap, value_range, stripes, stripe_axis, mesh_resolution, blend, alpha, beta,
+                   tangent_rule, quiet):
+    """Render the surface of INPUT (a mesh: OBJ, PLY) or PATCHES (a patch file) to images.
+
+    Each pixel's curvature is exact: the pixel's ray hits a tessellation, the hit
+    triangle gives the patch and an approximate (u, v), Newton steps move it onto
+    the patch, and curvature, normal and position are evaluated there. The
+    default camera frames the whole surface. Give at least one of -o (EXR),
+    --png and --zebra.
+    """
+    if not (output or png_path or zebra_path):
+        raise click.UsageError("nothing to write: give -o IMAGE.exr, --png PREVIEW.png and/or --zebra ZEBRA.png")
+    if output:
+        output_suffix(output, {".exr": None}, "--output")
+    for path, what in ((png_path, "--png"), (zebra_path, "--zebra")):
+        if path:
+            output_suffix(path, {".png": None}, what)
+    outputs = [p for p in (output, png_path, zebra_path) if p]
+    if len({os.path.abspath(p) for p in outputs}) != len(outputs):
+        raise click.BadParameter("-o, --png and --zebra must name different files")
+    if value_range is not None and not value_range[1] > value_range[0]:
+        raise click.BadParameter(f"--range needs LO < HI, got {value_range[0]} {value_range[1]}")
+    width, height = parse_size(size)
+    progress = Progress(quiet)
+    options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule)
+    groups = load_groups(input_path, options, quiet, progress)
+    n_patches = sum(len(g) for g in groups)
+
+    try:
+        if atlas:
+            progress.phase(f"atlas of {n_patches} patches")
+            # Control points bound the surface (convex hull), enough to place the camera.
+            control = np.concatenate([g[..., :3].reshape(-1, 3) / (g[..., 3:4].reshape(-1, 1) if g.shape[-1] == 4 else 1)
+                                      for g in groups])
+            camera = frame_camera(control, width, height, view, eye, target, up, projection, fov, zoom=zoom)
+            image = render_atlas(groups, tile, camera, progress=progress.advance)
+        else:
+            n = mesh_resolution or default_resolution(n_patches)
+            progress.phase(f"tessellating {n_patches} patches at {n} x {n} for ray casting")
+            mesh = patch_grid_mesh(groups, n)
+            camera = frame_camera(mesh.points, width, height, view, eye, target, up, projection, fov, zoom=zoom)
+            image = render(groups, camera, progress=progress.advance, mesh=mesh)
+    except ValueError as e:  # camera set-up: the surface behind the eye, zero-length directions
+        raise Failure(str(e)) from None
+    if image.info.get("engine") == "trimesh" and not quiet:
+        click.echo("c1surf: note: embreex is not installed; ray casting used trimesh's slow fallback", err=True)
+    if not image.mask.any() and not quiet:
+        click.echo("c1surf: note: the surface is not in the picture (check --eye, --target, --zoom)", err=True)
+
+    picture, rgb, (lo, hi) = curvature_picture(image, quantity, colormap, value_range)
+    inputs = [input_path]
+    if output:
+        progress.phase(f"writing {output}")
+        attributes = {"c1surfVersion": __version__, "c1surfKind": "atlas" if atlas else "render",
+                      "c1surfColorBy": quantity, "c1surfColorRange": [lo, hi], "c1surfPatches": int(n_patches)}
+        attributes.update(camera.attributes())
+        if atlas:
+            attributes.update({"c1surfTile": int(image.info["tile"]), "c1surfColumns": int(image.info["columns"])})
+        with atomic_output(output, inputs=inputs) as tmp:
+            write_exr(tmp, exr_channels(image, rgb), attributes)
+    if png_path:
+        progress.phase(f"writing {png_path}")
+        with atomic_output(png_path, inputs=inputs) as tmp:
+            write_png(tmp, picture)
+    if zebra_path:
+        progress.phase(f"writing {zebra_path}")
+        with atomic_output(zebra_path, inputs=inputs) as tmp:
+            write_png(tmp, zebra_picture(image, stripes, stripe_axis))
+    progress.done()
+
+

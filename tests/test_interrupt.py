@@ -1,0 +1,69 @@
+"""A conversion stopped midway leaves no partial output, and earlier outputs stay intact."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from click.testing import CliRunner
+
+from c1surf.cli.main import main
+
+from conftest import SAMPLES, shared_mesh
+
+
+def temp_files(directory):
+    return [p for p in directory.iterdir() if p.name.startswith(".tmp-c1surf")]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_signal_while_writing_leaves_nothing_partial(tmp_path, sig):
+    mesh = shared_mesh("spot/spot_quadrangulated.obj")
+    out = tmp_path / "spot.ply"
+    out.write_bytes(b"earlier output")
+    proc = subprocess.Popen([sys.executable, "-m", "c1surf.cli.main", "convert", str(mesh), "-o", str(out), "-r", "12", "-q"],
+                            stderr=subprocess.PIPE, text=True)
+    deadline = time.time() + 120
+    while not temp_files(tmp_path) and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.002)
+    assert proc.poll() is None, "the conversion finished before it could be interrupted"
+    proc.send_signal(sig)  # the temporary output is being written right now
+    _, stderr = proc.communicate(timeout=120)
+    assert proc.returncode == 1
+    assert stderr.strip().splitlines() == ["c1surf: error: interrupted; no output was written"]
+    assert out.read_bytes() == b"earlier output"
+    assert temp_files(tmp_path) == []
+
+
+def test_sigkill_never_damages_the_target(tmp_path):
+    """SIGKILL cannot be caught: a hidden temporary file may remain, the named output never half-written."""
+    mesh = shared_mesh("spot/spot_quadrangulated.obj")
+    out = tmp_path / "spot.ply"
+    out.write_bytes(b"earlier output")
+    proc = subprocess.Popen([sys.executable, "-m", "c1surf.cli.main", "convert", str(mesh), "-o", str(out), "-r", "12", "-q"])
+    deadline = time.time() + 120
+    while not temp_files(tmp_path) and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.002)
+    os.kill(proc.pid, signal.SIGKILL)
+    proc.wait(timeout=60)
+    assert out.read_bytes() == b"earlier output"
+
+
+def test_write_failure_leaves_no_output(tmp_path, monkeypatch):
+    import c1surf.cli.convert as convert_module
+
+    def failing_writer(path, *args, **kwargs):
+        with open(path, "wb") as f:
+            f.write(b"half a mesh")
+        raise OSError(28, "No space left on device")
+
+    monkeypatch.setattr(convert_module, "write_triangle_mesh", failing_writer)
+    out = tmp_path / "cube.ply"
+    patches = tmp_path / "cube.json"
+    result = CliRunner().invoke(main, ["convert", str(SAMPLES / "cube.obj"), "-o", str(out), "--patches", str(patches)])
+    assert result.exit_code == 1
+    assert "No space left on device" in result.stderr and len(result.stderr.strip().splitlines()) == 1
+    assert not out.exists() and not patches.exists() and temp_files(tmp_path) == []
