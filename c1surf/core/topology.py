@@ -13,7 +13,6 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from .errors import TopologyError
 
 
 @dataclass(frozen=True)
@@ -90,7 +89,7 @@ def build_halfedges(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertice
     Returns
     -------
     HalfEdgeMesh; ``twin`` is -1 for half-edges without an oppositely directed
-    partner (boundary, or inconsistent orientation: see ``validate_closed_manifold``).
+    partner (boundary, or inconsistent orientation: see ``repair.prepare_topology``).
     """
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     origin = np.asarray(face_vertices, dtype=np.int64)
@@ -161,73 +160,6 @@ def rotation_cycles(mesh: HalfEdgeMesh) -> np.ndarray:
     graph = coo_matrix((np.ones(ok.sum()), (h[ok], r[ok])), shape=(h.size, h.size))
     _, labels = connected_components(graph, directed=False)
     return labels
-
-
-def validate_closed_manifold(mesh: HalfEdgeMesh) -> None:
-    """Check the preconditions of the closed-mesh construction.
-
-    Raises TopologyError naming the offending vertices and faces for: edges in
-    more than two faces (the paper's precondition), boundary edges (open
-    meshes), inconsistently oriented neighbours, pinched vertices, vertices of
-    valence 2 and faces with fewer than 3 corners.
-    """
-    if mesh.n_faces == 0:
-        raise TopologyError("the mesh has no faces")
-    small = np.flatnonzero(mesh.face_sizes < 3)
-    if small.size:
-        raise TopologyError(f"face {small[0]} has {mesh.face_sizes[small[0]]} corners; every face needs at least 3", small[:1])
-    edges, edge_of, counts = undirected_edges(mesh)
-    bad = np.flatnonzero(counts > 2)
-    if bad.size:
-        e = bad[0]
-        faces = np.unique(mesh.face[edge_of == e])
-        raise TopologyError(
-            f"edge between vertices {{0}} and {{1}} is shared by {counts[e]} faces; the construction needs at most two "
-            f"faces per edge ({bad.size} such edges): split the mesh there",
-            faces,
-            edges[e],
-        )
-    lone = np.flatnonzero(counts == 1)
-    if lone.size:
-        e = lone[0]
-        raise TopologyError(
-            f"the mesh is open: the edge between vertices {{0}} and {{1}} lies in one face only ({lone.size} boundary edges); "
-            "only closed meshes are supported so far",
-            mesh.face[edge_of == e],
-            edges[e],
-        )
-    flipped = np.flatnonzero(mesh.twin < 0)
-    if flipped.size:
-        h = flipped[0]
-        e = edge_of[h]
-        raise TopologyError(
-            f"the two faces at the edge between vertices {{0}} and {{1}} are inconsistently oriented "
-            f"({np.unique(edge_of[flipped]).size} such edges): orient all faces the same way",
-            np.unique(mesh.face[edge_of == e]),
-            edges[e],
-        )
-    labels = rotation_cycles(mesh)
-    fans = np.zeros(mesh.n_vertices, dtype=np.int64)
-    np.add.at(fans, mesh.origin[np.unique(labels, return_index=True)[1]], 1)
-    pinched = np.flatnonzero(fans > 1)
-    if pinched.size:
-        v = pinched[0]
-        raise TopologyError(
-            f"vertex {{0}} is pinched: {fans[v]} separate fans of faces meet there ({pinched.size} such vertices); "
-            "split it into one vertex per fan",
-            np.unique(mesh.face[mesh.origin == v]),
-            [v],
-        )
-    valence = vertex_valences(mesh)
-    two = np.flatnonzero(valence == 2)
-    if two.size:
-        v = two[0]
-        raise TopologyError(
-            f"vertex {{0}} has valence 2 ({two.size} such vertices): it makes a 2-sided hole the construction cannot fill; "
-            "remove the vertex or add an edge there",
-            np.unique(mesh.face[mesh.origin == v]),
-            [v],
-        )
 
 
 def interior_vertices(mesh: HalfEdgeMesh) -> np.ndarray:
