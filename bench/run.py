@@ -291,6 +291,9 @@ def work_limit(job):
     """The numpy limit: bicubic patches on an 8 x 8 grid as one dense product (positions only)."""
     from scipy.special import comb
 
+    from c1surf import runtime
+
+    runtime.tune_allocator()  # the same allocator setting as the c1surf workers
     patches, n = job["patches"], 8
     rng = np.random.default_rng(0)
     # coefficients stored coefficient-major (16, 3 P): the layout that makes one GEMM of it
@@ -381,7 +384,7 @@ def memory_limit_bytes() -> int:
         with open("/proc/meminfo") as f:
             for line in f:
                 if line.startswith("MemTotal:"):
-                    return int(int(line.split()[1]) * 1024 * 0.85)
+                    return int(int(line.split()[1]) * 1024 * 0.7)  # room for the rest of the machine
     except OSError:
         pass
     return 16 << 30
@@ -518,6 +521,8 @@ def run(args) -> dict:
                     f"peak {summary['peak_mb']:7.0f} MB")
             else:
                 log(f"bench: {item['name']:>24} {tool:>13} FAILED: {summary['error']}")
+            if args.out:  # partial results, in case the run is stopped
+                Path(args.out).write_text(json.dumps(results, indent=1) + "\n")
     if "c1surf" in tools:
         grid = (50, 20) if args.quick else (250, 250)  # 16,000 / 1,000,000 patches
         log("bench: tessellation throughput at resolution 8 ...")

@@ -28,8 +28,8 @@ from c1surf.core.adjacency import PatchAdjacency, SIDE_CORNERS, adjacency_from_g
 from c1surf.core.bezier import bernstein_basis, evaluate_patches
 from c1surf.core.surface import SurfaceOptions
 from c1surf.core.tessellate import tessellate, tessellate_patches
-from c1surf.io.iges import bezier_patches_to_surfaces, write_iges
-from c1surf.io.patch_file import read_patch_set_json, read_patches_json
+from c1surf.io.iges import write_iges
+from c1surf.io.patch_file import read_patch_set_json
 from c1surf.io.patch_formats import PATCH_LOADERS, PATCH_READERS, load_patch_set
 from c1surf.io.patch_npz import read_patch_set_npz, write_patch_set_npz
 from c1surf.io.patch_set import PatchSet
@@ -344,3 +344,17 @@ def test_convert_writes_several_patch_files_at_once(tmp_path):
     code, lines = one_line(tmp_path, "convert", SAMPLES / "cube.obj", "-o", tmp_path / "t.obj",
                            "--patches", tmp_path / "t.json", "--patches", tmp_path / "t.json")
     assert code == 2 and not (tmp_path / "t.obj").exists() and not (tmp_path / "t.json").exists()
+
+
+def test_open_mesh_adjacency_and_tessellate(tmp_path):
+    """An open input: boundary sides have no neighbour, and everything else works the same."""
+    mesh = shared_mesh("opensubdiv/catmark_bishop.obj")
+    surface = surface_of(mesh)
+    adjacency = patch_adjacency(surface.refined, surface.frames)
+    assert adjacency_from_geometry([surface.biquadratic, surface.bicubic]) == adjacency
+    boundary = (adjacency.neighbours() < 0).all(axis=2)
+    assert boundary.sum() > 0 and np.bincount(adjacency.edges.ravel())[adjacency.edges[boundary]].max() == 1
+    converted, patches = tmp_path / "c.ply", tmp_path / "p.npz"
+    assert run("convert", mesh, "-o", converted, "-r", 3, "--patches", patches, "-q").exit_code == 0
+    assert run("tessellate", patches, "-o", tmp_path / "t.ply", "-r", 3, "-q").exit_code == 0
+    assert (tmp_path / "t.ply").read_bytes() == converted.read_bytes()

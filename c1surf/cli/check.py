@@ -25,7 +25,7 @@ from .options import extension_options, surface_options
 @extension_options
 @friendly_errors
 def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices, interpolate_normals,
-          weights, triangles, attributes):
+          weights, triangles, attributes, refinements):
     """Check that a surface is G1 (tangent-plane continuous).
 
     PATCHES is a patch file written by `convert --patches`; an OBJ/PLY INPUT is
@@ -44,7 +44,7 @@ def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule
     else:
         mesh = read_mesh(path)
         options, data = extension_setup(mesh, None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
-                                        interpolate_normals, weights, triangles, attributes)
+                                        interpolate_normals, weights, triangles, attributes, refinements)
         surface = build_or_fail(mesh, options, data)
         groups, patch_weights = [surface.biquadratic, surface.bicubic], surface.patch_weights
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,

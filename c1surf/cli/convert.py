@@ -51,7 +51,7 @@ def build_or_fail(mesh, options: SurfaceOptions, data=None) -> Surface:
 
 
 def extension_setup(mesh, output_suffix_: str | None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
-                    interpolate_normals, weights, triangles, attributes):
+                    interpolate_normals, weights, triangles, attributes, refinements="2"):
     """SurfaceOptions and SurfaceData for the surface options and the extension options of a command."""
     interpolate = interpolate_vertices or interpolate_normals
     if interpolate and beta != 0:
@@ -60,8 +60,11 @@ def extension_setup(mesh, output_suffix_: str | None, blend, alpha, beta, tangen
         raise click.BadParameter("--interpolate-normals needs --alpha > 0")
     if attributes and output_suffix_ is not None and output_suffix_ not in ATTRIBUTE_FORMATS:
         raise click.BadParameter(f"--attributes needs an --output in {', '.join(ATTRIBUTE_FORMATS)}")
+    if interpolate and refinements == "0":
+        raise click.BadParameter("--interpolate-vertices needs at least one refinement step (--refinements 1, 2 or auto)")
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
-                             interpolate_vertices=interpolate, triangles=triangles)
+                             interpolate_vertices=interpolate, triangles=triangles,
+                             refinements=refinements if refinements == "auto" else int(refinements))
     data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=interpolate_normals, attributes=attributes)
     return options, data
 
@@ -94,13 +97,19 @@ def check_tessellation_size(surface: Surface, resolution: int, force: bool) -> N
 @click.option("--curvature", is_flag=True,
               help="PLY output: add per-vertex kmax (max |k|), K (Gaussian), H (mean), quality (= kmax) and red/green/blue "
                    "(kmax colour-mapped), evaluated exactly on the patches.")
+@click.option("--float32", is_flag=True,
+              help="Write points and normals of an .obj/.ply output as float32 (smaller files; float64 by default).")
 @surface_options
 @extension_options
+@click.option("--merge", is_flag=True,
+              help="JSON/IGES patch files: also merge rectangles of biquadratic patches into B-spline surfaces "
+                   "(JSON key \"merged\"; IGES writes them instead of their patches).")
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
 def convert(input_path, output, patches_paths, resolution, units, no_group, curvature, blend, alpha, beta, tangent_rule,
-            blend_file, interpolate_vertices, interpolate_normals, weights, triangles, attributes, force, quiet):
+            blend_file, interpolate_vertices, interpolate_normals, weights, triangles, attributes, refinements, merge, force, quiet,
+            float32=False):
     """Convert the polygon mesh INPUT (OBJ or PLY, any n-gons) to a smooth surface.
 
     Writes OUTPUT, a triangle mesh sampled from the surface's Bezier patches
@@ -120,7 +129,7 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     progress.phase(f"reading {input_path}")
     mesh = read_mesh(input_path)
     options, data = extension_setup(mesh, mesh_suffix, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
-                                    interpolate_normals, weights, triangles, attributes)
+                                    interpolate_normals, weights, triangles, attributes, refinements)
     progress.phase(f"building the surface of {mesh.n_faces} faces")
     surface = build_or_fail(mesh, options, data)
     if not quiet:
@@ -135,18 +144,29 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     if curvature:
         from .curvature_ply import curvature_properties
 
-        extra = curvature_properties([surface.biquadratic, surface.bicubic], tess, progress.advance)
+        groups = [surface.biquadratic, surface.bicubic]
+        if surface.rational:  # core.curvature reads 4 columns as homogeneous (w x, w)
+            from ..core.rational import homogeneous
+
+            groups = [homogeneous(g, w) for g, w in zip(groups, surface.patch_weights)]
+        extra = curvature_properties(groups, tess, progress.advance)
     progress.phase(f"writing {output}")
+    merged = None
+    if merge:
+        from ..core.merge import merge_biquadratic
+
+        merged = merge_biquadratic(surface)
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:
         if attributes:  # texture coordinates / colours ride along as extra columns of the points
             write_attribute_mesh(mesh_tmp, tess.points[:, :3], tess.triangles, tess.normals, tess.points[:, 3:],
                                  data.attribute_names, data.colour_scale, suffix=mesh_suffix)
         else:
-            write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix, **extra)
+            write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix, float32=float32, **extra)
         with contextlib.ExitStack() as patch_files:  # all files appear together, or none
             for patches_path, patch_suffix in zip(patches_paths, patch_suffixes):
                 progress.phase(f"writing {patches_path}")
                 patch_tmp = patch_files.enter_context(atomic_output(patches_path, inputs=[input_path]))
                 PATCH_WRITERS[patch_suffix](patch_tmp, surface, input_path=str(input_path), adjacency=adjacency,
-                                            file_name=os.path.basename(patches_path), units=units, group=not no_group)
+                                            file_name=os.path.basename(patches_path), units=units, group=not no_group,
+                                            merged=merged)
     progress.done()

@@ -6,6 +6,8 @@ import signal
 import click
 
 from .. import __version__
+from ..runtime import tune_allocator
+from .batch import batch
 from .check import check
 from .convert import convert
 from .render import render_command
@@ -29,6 +31,7 @@ def main(ctx, debug):
     # SIGTERM (a killed make job, a batch scheduler) unwinds like Ctrl-C, so
     # temporary output files are removed and nothing partial is left behind.
     signal.signal(signal.SIGTERM, _interrupt)
+    tune_allocator()  # reuse freed memory instead of faulting in fresh pages (c1surf.runtime)
 
 
 def _interrupt(signum, frame):
@@ -36,6 +39,7 @@ def _interrupt(signum, frame):
 
 
 main.add_command(convert)
+main.add_command(batch)
 main.add_command(check)
 main.add_command(tessellate)
 main.add_command(render_command)

@@ -23,7 +23,8 @@ def surface_options(command):
     return command
 
 
-EXTENSION_OPTIONS = ("blend_file", "interpolate_vertices", "interpolate_normals", "weights", "triangles", "attributes")
+EXTENSION_OPTIONS = ("blend_file", "interpolate_vertices", "interpolate_normals", "weights", "triangles", "attributes",
+                     "refinements")
 
 
 def extension_options(command):
@@ -46,6 +47,9 @@ def extension_options(command):
         click.option("--attributes", is_flag=True,
                      help="Carry texture coordinates and vertex colours through the construction into the output "
                           "(.ply or .obj output)."),
+        click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default="2", show_default=True,
+                     help="Doo-Sabin steps before A2/A3: 2 as in the paper; 0 or 1 when a closed input already "
+                          "satisfies R1-R3 after that many (Prop. 1.3.1); auto: the fewest that work."),
     ]
     for option in reversed(options):
         command = option(command)

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import os
+import warnings
 from pathlib import Path
 
 import click
@@ -17,11 +18,20 @@ from ..io.images import COLORMAPS, curvature_picture, srgb_to_linear, write_png,
 from ..io.patch_formats import PATCH_LOADERS
 from ..io.read import read_mesh
 from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes
-from .convert import build_or_fail
+from .convert import available_memory, build_or_fail
 from .options import surface_options
 
 # EXR channels, in the order listed by `c1surf render --help` (the file sorts them by name).
 EXR_CHANNELS = ("R", "G", "B", "A") + CURVATURE_NAMES + GEOMETRY_NAMES
+BYTES_PER_PIXEL = 450  # float64 buffers, rays, pictures and the EXR copy per pixel, measured (atlas: 1.4 GB / 3.2M)
+
+
+def check_image_size(pixels: int) -> None:
+    """Refuse an image that would not fit in memory, with the estimate."""
+    needed, available = pixels * BYTES_PER_PIXEL, available_memory()
+    if needed > 0.8 * available:
+        raise Failure(f"an image of {pixels} pixels would need about {needed / 2**30:.1f} GiB but about "
+                      f"{available / 2**30:.1f} GiB is available: lower --size (or --tile with --atlas)")
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -63,10 +73,9 @@ def load_groups(input_path, options: SurfaceOptions, quiet: bool, progress: Prog
 def exr_channels(image, rgb: np.ndarray) -> dict:
     """The EXR channels of a rendered image: colour preview (linear light) and data."""
     linear = srgb_to_linear(rgb)
-    out = {"R": linear[..., 0], "G": linear[..., 1], "B": linear[..., 2], "A": image.mask.astype(np.float32)}
-    for name in CURVATURE_NAMES + GEOMETRY_NAMES:
-        out[name] = image.channels[name]
-    return out
+    data = {"R": linear[..., 0], "G": linear[..., 1], "B": linear[..., 2], "A": image.mask.astype(np.float32),
+            **image.channels}
+    return {name: data[name] for name in EXR_CHANNELS}
 
 
 @click.command("render")
@@ -136,29 +145,45 @@ def render_command(input_path, output, png_path, zebra_path, view, eye, target, 
     if value_range is not None and not value_range[1] > value_range[0]:
         raise click.BadParameter(f"--range needs LO < HI, got {value_range[0]} {value_range[1]}")
     width, height = parse_size(size)
+    if not atlas:
+        check_image_size(width * height)
     progress = Progress(quiet)
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule)
     groups = load_groups(input_path, options, quiet, progress)
     n_patches = sum(len(g) for g in groups)
 
-    try:
+    if stripe_axis is not None and not np.linalg.norm(stripe_axis) > 0:
+        raise click.BadParameter("--stripe-axis must not be the zero vector")
+
+    def place_camera(points):
+        try:
+            return frame_camera(points, width, height, view, eye, target, up, projection, fov, zoom=zoom)
+        except ValueError as e:  # eye on the target, surface behind the eye
+            raise Failure(str(e)) from None
+
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="embreex is not installed")  # a note below says it
         if atlas:
+            from ..core.render import atlas_layout, default_tile
+
+            tile = tile or default_tile(n_patches)
+            rows, columns = atlas_layout(n_patches, tile)
+            check_image_size(rows * columns * tile * tile)
             progress.phase(f"atlas of {n_patches} patches")
             # Control points bound the surface (convex hull), enough to place the camera.
             control = np.concatenate([g[..., :3].reshape(-1, 3) / (g[..., 3:4].reshape(-1, 1) if g.shape[-1] == 4 else 1)
                                       for g in groups])
-            camera = frame_camera(control, width, height, view, eye, target, up, projection, fov, zoom=zoom)
+            camera = place_camera(control)
             image = render_atlas(groups, tile, camera, progress=progress.advance)
         else:
             n = mesh_resolution or default_resolution(n_patches)
             progress.phase(f"tessellating {n_patches} patches at {n} x {n} for ray casting")
             mesh = patch_grid_mesh(groups, n)
-            camera = frame_camera(mesh.points, width, height, view, eye, target, up, projection, fov, zoom=zoom)
+            camera = place_camera(mesh.points)
             image = render(groups, camera, progress=progress.advance, mesh=mesh)
-    except ValueError as e:  # camera set-up: the surface behind the eye, zero-length directions
-        raise Failure(str(e)) from None
     if image.info.get("engine") == "trimesh" and not quiet:
-        click.echo("c1surf: note: embreex is not installed; ray casting used trimesh's slow fallback", err=True)
+        click.echo("c1surf: note: embreex is not installed (pip install embreex); ray casting used trimesh's "
+                   "fallback, about 1 ms per pixel", err=True)
     if not image.mask.any() and not quiet:
         click.echo("c1surf: note: the surface is not in the picture (check --eye, --target, --zoom)", err=True)
 

@@ -7,23 +7,24 @@ except at the mesh points labelled 0.0 and 0.5". c1surf supports both:
 - **first step**: the new point of corner (f, v) is ``(1 - a) V + a S_f`` with
   ``a`` the ratio of vertex v when v has one, else the ratio of cell f. So
   ``doo_sabin_matrix`` gets one ratio per corner (half-edge).
-- **second step**: every once-refined cell is made of input corners (a
-  once-refined vertex *is* an input corner), and takes the mean of their
-  first-step ratios, times ``1 - cos(2 pi / n)`` as in A1. Hence
-  - the cell made from input cell f (F-cell) keeps alpha_f when no corner of f
-    has a vertex ratio;
-  - the cell made at input vertex v (V-cell) takes v's ratio when v has one,
-    else the mean ratio of the cells around v;
-  - the quad made at an input edge (E-cell) takes the mean of the ratios of its
-    four corners: the mean of the two end points' ratios when both have one,
-    the mean of the two cells' ratios when neither has.
-  With one ratio everywhere this is the paper's rule. Every cell gets one
-  ratio in the second step, so a V-cell keeps its centroid (A1a needs that).
+- **second step**: a once-refined vertex *is* an input corner (f, v) and
+  keeps that corner's first-step ratio: every new point the second step makes
+  from it in an F-cell or E-cell uses it, times ``1 - cos(2 pi / n)`` as in
+  A1. V-cells (made at input vertex v) take one ratio, the minimum of their
+  corners' ratios: one ratio keeps the V-cell's centroid, which A1a needs,
+  and the minimum lets a zero ratio win, which Lemma 1.3.12 needs. Hence
+  - the F-cell of input cell f keeps alpha_f at the corners without a vertex ratio;
+  - an E-cell's points follow the cells (or vertices) they come from;
+  - the V-cell of v takes v's ratio when v has one, else the smallest ratio
+    of the cells around v.
+  With one ratio everywhere this is the paper's rule.
 
-Vertex ratio 0 makes every first-step point at v coincide with v and the V-cell
-shrink to v: the surface then passes through v (Lemma 1.3.12, proof). Cell
-ratio 0 on two neighbouring cells puts their common edge on the surface
-(Lemma 1.3.12).
+Zero ratios (Lemma 1.3.12 and its proof): cell ratio 0 makes the points A, B, C
+around the cell coalesce into its vertices, so a planar cell becomes a planar
+piece of surface bounded by its edges, and every edge of it lies on the
+surface; vertex ratio 0 coalesces all points around the vertex into it, so
+the surface passes through it. Coalesced points make patches degenerate
+there (zero derivatives: no normal), as in the paper.
 
 Ratios are data, not geometry: the construction stays linear in the points.
 """
@@ -75,7 +76,7 @@ def corner_ratios(mesh: HalfEdgeMesh, face_ratio: np.ndarray, vertex_ratio: np.n
 
 
 def refined_cell_ratios(face_sizes: np.ndarray, face_vertices: np.ndarray, corner_ratio: np.ndarray) -> np.ndarray:
-    """Blend ratio of each once-refined cell: the mean ratio of the input corners it is made of.
+    """Mean ratio of the input corners each once-refined cell is made of (a summary per cell).
 
     Parameters
     ----------
@@ -92,3 +93,24 @@ def refined_cell_ratios(face_sizes: np.ndarray, face_vertices: np.ndarray, corne
     mean = np.add.reduceat(values, offsets) / face_sizes
     low, high = np.minimum.reduceat(values, offsets), np.maximum.reduceat(values, offsets)
     return np.where(low == high, low, mean)
+
+
+def second_step_corner_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, corner_ratio: np.ndarray) -> np.ndarray:
+    """Ratio of every corner (half-edge) of the once-refined mesh in the second step.
+
+    Parameters
+    ----------
+    level1 : HalfEdgeMesh of the once-refined mesh (its vertices are input corners)
+    is_vertex_cell : (F',) bool, the V-cells
+    corner_ratio : (H,) float, first-step ratio of every input corner
+
+    Returns
+    -------
+    (H',) float: ``r (1 - cos(2 pi / n))`` with r the ratio of the corner's
+    vertex, or, in a V-cell, the minimum over the cell's vertices.
+    """
+    ratio = np.asarray(corner_ratio, dtype=np.float64)[level1.origin]
+    cell_min = np.minimum.reduceat(ratio, level1.face_offsets[:-1])
+    in_vertex_cell = is_vertex_cell[level1.face]
+    ratio = np.where(in_vertex_cell, cell_min[level1.face], ratio)
+    return ratio * (1.0 - np.cos(2.0 * np.pi / level1.face_sizes[level1.face]))

@@ -151,6 +151,8 @@ def frame_camera(points: np.ndarray, width: int, height: int, view: str = "iso",
     aspect = width / height
     if eye is not None:
         eye = np.asarray(eye, dtype=np.float64)
+        if not np.linalg.norm(centre - eye) > 0:
+            raise ValueError(f"the eye {tuple(eye.tolist())} is the point looked at: move --eye or give another --target")
         forward, right, up_v = _frame(centre - eye, up if up is not None else (0.0, 1.0, 0.0))
     else:
         direction, default_up = VIEWS[view]

@@ -21,7 +21,6 @@ import numpy as np
 
 from scipy.special import comb
 
-from .bezier import bernstein_basis  # noqa: F401  (the reference the columns are tested against)
 
 # Derivative orders (du, dv) evaluated by ``patch_derivatives``, in output order.
 _ORDERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))

@@ -10,13 +10,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin, second_step_ratio
+from .doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin
 from .errors import TopologyError
 from scipy.sparse import csr_matrix
 
-from .blend import check_ratios, corner_ratios, refined_cell_ratios
+from .blend import check_ratios, corner_ratios, second_step_corner_ratios
 from .boundary import add_ghost_layer
 from .interpolation import normal_constraint, vertex_interpolation_step
+from .refinement import check_refinements, fewer_refinement_sources, refinements_needed
 from .patches import biquadratic_stencil, bicubic_stencil, hole_neighbourhoods, patch_frames, perturbation_matrix
 from .repair import check_valence, prepare_topology
 from .topology import HalfEdgeMesh, build_halfedges
@@ -37,6 +38,8 @@ class SurfaceOptions:
     interpolate_vertices : bool, A1a: the surface passes through every input vertex (needs beta = 0)
     triangles : "g1" (A3 for every hole) or "parametric" (section 1.3.4 for 3-sided holes:
         parametrically C1 to the biquadratic patches around)
+    refinements : 2 (the paper's A1), 0 or 1 (closed meshes that already satisfy R1-R3 after
+        that many steps, Prop. 1.3.1), or "auto" (the fewest that work; ``core.refinement``)
     """
 
     blend: float = 0.5
@@ -45,6 +48,7 @@ class SurfaceOptions:
     tangent_rule: str = "symmetric"
     interpolate_vertices: bool = False
     triangles: str = "g1"
+    refinements: int | str = 2
 
 
 class Surface:
@@ -78,6 +82,10 @@ class Surface:
             raise ValueError(f"tangent rule must be one of {TANGENT_RULES}")
         if o.triangles not in TRIANGLE_RULES:
             raise ValueError(f"triangles must be one of {TRIANGLE_RULES}")
+        if o.refinements not in (0, 1, 2, "auto"):
+            raise ValueError("refinements must be 0, 1, 2 or 'auto'")
+        if o.interpolate_vertices and o.refinements == 0:
+            raise ValueError("vertex interpolation (A1a) needs at least one refinement step")
         if o.interpolate_vertices and o.beta != 0:
             raise ValueError("vertex interpolation (A1a) needs beta = 0: beta moves the cell centres off the vertices")
         if vertex_normals is not None and not o.interpolate_vertices:
@@ -149,33 +157,50 @@ class Surface:
             return np.concatenate([values[vertex_source], pad])
 
         # First step: a corner takes its vertex's ratio where one is given,
-        # else its cell's. Second step: every once-refined cell takes the mean
-        # ratio of the input corners it is made of (core.blend).
+        # else its cell's. Second step: a point made from once-refined vertex
+        # (= input corner) h takes h's ratio; V-cells the minimum of theirs (core.blend).
         corner = corner_ratios(coarse, blend, per_coarse_vertex(vertex_blend))
-        step1 = doo_sabin_matrix(coarse, corner, per_corner=True)
-        faces1 = refine_doo_sabin(coarse)
-        if self.options.interpolate_vertices:
-            step1 = vertex_interpolation_step(step1, coarse, faces1)  # A1a
-        level1 = build_halfedges(faces1.face_sizes, faces1.face_vertices, coarse.n_halfedges)
-        blend1 = refined_cell_ratios(faces1.face_sizes, faces1.face_vertices, corner)
-        step2 = doo_sabin_matrix(level1, second_step_ratio(level1.face_sizes, blend1))
-        faces2 = refine_doo_sabin(level1)
-        refined = build_halfedges(faces2.face_sizes, faces2.face_vertices, level1.n_halfedges)
-        # A refined vertex is a corner of a corner of a coarse face: real if that face is.
-        real_vertex = real_face[coarse.face[level1.origin[np.arange(refined.n_vertices)]]]
+        levels = self.options.refinements
+        closed = real_face.all() and not self.repairs["boundary_edges"]
+        if levels == "auto":
+            levels = refinements_needed(coarse, 1 if self.options.interpolate_vertices else 0) if closed else 2
+        elif levels < 2:
+            if not closed:
+                raise TopologyError(f"--refinements {levels} needs a closed, orientable mesh: use 2 or auto")
+            check_refinements(coarse, levels)  # fewer steps (Prop. 1.3.1), or a one-line error
+        self.refinements = levels
+        operators, faces1, level1 = [place], None, None
+        if levels >= 1:
+            step1 = doo_sabin_matrix(coarse, corner, per_corner=True)
+            faces1 = refine_doo_sabin(coarse)
+            if self.options.interpolate_vertices:
+                step1 = vertex_interpolation_step(step1, coarse, faces1)  # A1a
+            level1 = build_halfedges(faces1.face_sizes, faces1.face_vertices, coarse.n_halfedges)
+            operators.append(step1)
+        if levels == 2:
+            ratio2 = second_step_corner_ratios(level1, faces1.kind == FACE_FROM_VERTEX, corner)
+            step2 = doo_sabin_matrix(level1, ratio2, per_corner=True)
+            faces2 = refine_doo_sabin(level1)
+            refined = build_halfedges(faces2.face_sizes, faces2.face_vertices, level1.n_halfedges)
+            operators.append(step2)
+            # A refined vertex is a corner of a corner of a coarse face: real if that face is.
+            real_vertex = real_face[coarse.face[level1.origin[np.arange(refined.n_vertices)]]]
+        else:  # closed meshes only: every vertex is real
+            refined = level1 if levels == 1 else coarse
+            real_vertex = np.ones(refined.n_vertices, dtype=bool)
         holes = hole_neighbourhoods(refined, None if real_face.all() else real_vertex)
         quad_frames, cubic_frames = patch_frames(refined, holes, real_vertex)
 
         self.level1, self.faces1, self.refined, self.holes = level1, faces1, refined, holes
         self.quad_frames = quad_frames
-        self.operators = [place, step1, step2]
+        self.operators = operators
         perturb = perturbation_matrix(refined, holes)
         if perturb is not None:
             self.operators.append(perturb)
         o = self.options
         # Functions applied after the (linear, row-wise) operators: vertex normals (A1a).
         self.constraints = []
-        if vertex_normals is not None:
+        if vertex_normals is not None and faces1 is not None:
             constraint = normal_constraint(refined, faces1, per_coarse_vertex(vertex_normals), o.tangent_rule,
                                            o.triangles == "parametric", self.weights is not None)
             if constraint is not None:
@@ -255,6 +280,8 @@ class Surface:
         edge : (P, 2) int, the input edge's two vertices (-1 unless an edge)
         """
         centre = self.refined.origin[self.frames[:, 0]]
+        if self.refinements < 2:
+            return fewer_refinement_sources(self, centre)
         face1 = self.level1.face[centre]
         kind, parent = self.faces1.kind[face1], self.faces1.parent[face1]
         coarse = self.input

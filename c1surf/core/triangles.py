@@ -29,8 +29,8 @@ P_3k,i = P_k3,i+1 shared by p_i and p_i+1, t = 0 at M_i, t = 1 at S):
 
 The transcription prints
 P_22,i = (7 C_i + C_i+1 + C_i-1)/9 + C_i/6 - 1/12 sum_j (-1)^j (B_j,2 + B_j+1,1):
-that formula does not satisfy the join (measured normal jumps 1e-2 rad and
-more, see tests/test_extensions.py), another misprint; the one above is
+that formula does not satisfy the join (measured normal jumps 0.1 rad on the
+icosahedron to pi on the tetrahedron, tests/test_extensions.py), another misprint; the one above is
 derived from the join condition and measured G1 at machine precision.
 """
 from __future__ import annotations

@@ -15,7 +15,7 @@ import numpy as np
 
 __all__ = ["write_obj", "write_ply_plain", "format_fixed"]
 
-_BLOCK = 1 << 18  # lines per block: bounds the byte matrices to some tens of MB
+_BLOCK = 1 << 17  # lines per block: bounds the byte matrices to some MB
 _DIGITS = np.frombuffer(b"0123456789", dtype=np.uint8)
 _MINUS, _DOT, _NEWLINE = ord("-"), ord("."), ord("\n")
 
@@ -29,10 +29,16 @@ def _decimals(values: np.ndarray, relative_digits: int) -> int:
     return int(max(0, relative_digits - np.ceil(np.log10(largest))))
 
 
+_TABLE = np.array([list(f"{i:04d}".encode()) for i in range(10000)], dtype=np.uint8)  # "0000" .. "9999"
+_TABLE32 = _TABLE.view(np.uint32).ravel()  # the same, one 4-byte entry per number
+
+
 def format_fixed(values: np.ndarray, decimals: int):
     """Characters of ``values`` (m, k) in fixed point: a (m, k, width) uint8 array and its keep mask.
 
-    Non-finite values are written as 0. Negative zero is written as 0.
+    Four digits at a time from a table; leading zeros of the integer part and
+    trailing zeros of the fraction are masked out (the units digit stays).
+    Non-finite values are written as 0, and so is negative zero.
     """
     values = np.where(np.isfinite(values), values, 0.0)
     scale = 10.0 ** decimals
@@ -40,69 +46,67 @@ def format_fixed(values: np.ndarray, decimals: int):
     if scaled.size and scaled.max() >= 9e18:
         raise OverflowError("values too large for fixed-point text; use a binary format")
     scaled = scaled.astype(np.int64)
-    integer_digits = max(1, len(str(int(scaled.max() // int(scale))))) if scaled.size else 1
-    ndigits = integer_digits + decimals
-    width = 1 + integer_digits + (1 + decimals if decimals else 0)
     m, k = values.shape
+    largest = int(scaled.max()) if scaled.size else 0
+    groups = max(1, -(-max(len(str(largest)), decimals + 1) // 4))
+    packed = np.empty((m, k, groups), dtype=np.uint32)  # four characters per entry, most significant first
+    rest = scaled
+    for g in range(groups):
+        rest, chunk = np.divmod(rest, 10000)
+        packed[..., groups - 1 - g] = _TABLE32[chunk]
+    digits = packed.view(np.uint8)
+    integer = 4 * groups - decimals  # integer digit columns (with leading zeros)
+    width = 1 + integer + (1 + decimals if decimals else 0)
     chars = np.empty((m, k, width), dtype=np.uint8)
-    keep = np.ones((m, k, width), dtype=bool)
-    negative = (values < 0) & (scaled > 0)
+    keep = np.empty((m, k, width), dtype=bool)
     chars[..., 0] = _MINUS
-    keep[..., 0] = negative
-    # digit j (0 = least significant) goes to column width - 1 - j, skipping the dot
-    rest = scaled.copy()
-    significant = np.zeros((m, k), dtype=bool)  # a nonzero digit at or right of this one (fraction)
-    for j in range(ndigits):
-        digit = rest % 10
-        rest //= 10
-        column = width - 1 - j if j < decimals else width - 2 - j if decimals else width - 1 - j
-        chars[..., column] = _DIGITS[digit]
-        if j < decimals:  # trailing zeros of the fraction are dropped
-            significant |= digit != 0
-            keep[..., column] = significant
+    keep[..., 0] = (values < 0) & (scaled > 0)
+    chars[..., 1 : 1 + integer] = digits[..., :integer]
+    # digits of the integer part: 1 + number of powers of ten it reaches
+    powers = 10 ** np.arange(1, integer, dtype=np.int64)
+    whole = scaled // 10**decimals if decimals < 19 else np.zeros_like(scaled)  # scaled < 9e18 < 10**decimals
+    count = 1 + np.searchsorted(powers, whole, side="right")
+    keep[..., 1 : 1 + integer] = np.arange(integer) >= (integer - count)[..., None]
     if decimals:
-        chars[..., width - 1 - decimals] = _DOT
-        keep[..., width - 1 - decimals] = significant
-    # leading zeros of the integer part are dropped, the units digit is kept
-    first_integer_column = 1
-    units_column = width - 2 - decimals if decimals else width - 1
-    power = scaled // int(scale)
-    for column in range(first_integer_column, units_column):
-        digits_right = units_column - column  # this column holds 10**digits_right
-        keep[..., column] = power >= 10 ** digits_right
+        fraction = digits[..., integer:]
+        chars[..., 1 + integer] = _DOT
+        chars[..., 2 + integer :] = fraction
+        # a fraction digit stays when it or a digit right of it is not zero
+        significant = np.logical_or.accumulate(fraction[..., ::-1] != ord("0"), axis=-1)[..., ::-1]
+        keep[..., 2 + integer :] = significant
+        keep[..., 1 + integer] = significant[..., 0]
     return chars, keep
 
 
-def _lines(prefix: bytes, fields: list, separator: bytes = b" ") -> np.ndarray:
-    """Assemble lines ``prefix f1 sep f2 ... \\n`` from (chars, keep) fields of m rows; 1-D uint8."""
-    parts, masks = [], []
-    m = fields[0][0].shape[0]
-    if prefix:
-        p = np.frombuffer(prefix, dtype=np.uint8)
-        parts.append(np.broadcast_to(p, (m, p.size)))
-        masks.append(np.ones((m, p.size), dtype=bool))
-    for i, (chars, keep) in enumerate(fields):
-        if i:
-            s = np.frombuffer(separator, dtype=np.uint8)
-            parts.append(np.broadcast_to(s, (m, s.size)))
-            masks.append(np.ones((m, s.size), dtype=bool))
-        parts.append(chars.reshape(m, -1))
-        masks.append(keep.reshape(m, -1))
-    parts.append(np.full((m, 1), _NEWLINE, dtype=np.uint8))
-    masks.append(np.ones((m, 1), dtype=bool))
-    return np.concatenate(parts, axis=1)[np.concatenate(masks, axis=1)]
+def _lines(prefix: bytes, fields, separator: bytes = b" ") -> bytes:
+    """Lines ``prefix f_1 sep f_2 ... f_k\n`` from the (chars, keep) of (m, k, w) fields, as bytes.
+
+    ``fields`` is a list of (chars, keep) pairs written one after the other
+    (without separator) in each of the k slots, e.g. ``a``, ``//``, ``a``.
+    """
+    m, k = fields[0][0].shape[:2]
+    widths = [c.shape[2] for c, _ in fields]
+    slot = sum(widths) + len(separator)
+    line = len(prefix) + k * slot - len(separator) + 1
+    chars = np.empty((m, line), dtype=np.uint8)
+    keep = np.ones((m, line), dtype=bool)
+    chars[:, : len(prefix)] = np.frombuffer(prefix, dtype=np.uint8)
+    for j in range(k):
+        at = len(prefix) + j * slot
+        for (c, kp), w in zip(fields, widths):
+            chars[:, at : at + w] = c[:, j]
+            keep[:, at : at + w] = kp[:, j]
+            at += w
+        if j < k - 1:
+            chars[:, at : at + len(separator)] = np.frombuffer(separator, dtype=np.uint8)
+    chars[:, -1] = _NEWLINE
+    return chars[keep].tobytes()
 
 
-def _interleave(chars: np.ndarray, keep: np.ndarray, between: bytes):
-    """Join the k fields of each row (m, k, w) with ``between``: one (m, 1, w') field."""
-    m, k, w = chars.shape
-    b = np.frombuffer(between, dtype=np.uint8)
-    out = np.empty((m, k, w + b.size), dtype=np.uint8)
-    mask = np.ones((m, k, w + b.size), dtype=bool)
-    out[..., :w], mask[..., :w] = chars, keep
-    out[..., w:] = b
-    mask[:, -1, w:] = False  # no separator after the last field
-    return out.reshape(m, 1, -1), mask.reshape(m, 1, -1)
+def _constant(text: bytes, m: int, k: int):
+    """(chars, keep) of the same short text in every slot."""
+    c = np.broadcast_to(np.frombuffer(text, dtype=np.uint8), (m, k, len(text)))
+    return c, np.ones((m, k, len(text)), dtype=bool)
 
 
 def write_obj(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None,
@@ -115,7 +119,7 @@ def write_obj(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarr
     normals : (V, 3) float or None, per-vertex unit normals (non-finite ones written as 0 0 0)
     float32 : write float32 precision (fewer digits, smaller file)
     """
-    points = np.asarray(points, dtype=np.float64)[:, :3]
+    points = np.asarray(points)[:, :3]
     triangles = np.asarray(triangles)
     digits = 8 if float32 else 15
     with open(path, "wb") as f:
@@ -123,20 +127,14 @@ def write_obj(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarr
         for array, prefix in ((points, b"v "), (normals, b"vn ")):
             if array is None:
                 continue
-            array = np.asarray(array, dtype=np.float64)[:, :3]
+            array = np.asarray(array)[:, :3]
             decimals = _decimals(array, digits)
             for a in range(0, array.shape[0], _BLOCK):
-                chars, keep = format_fixed(array[a : a + _BLOCK], decimals)
-                f.write(_lines(prefix, [_interleave(chars, keep, b" ")]).tobytes())
+                f.write(_lines(prefix, [format_fixed(np.asarray(array[a : a + _BLOCK], dtype=np.float64), decimals)]))
         for a in range(0, triangles.shape[0], _BLOCK):
-            block = triangles[a : a + _BLOCK].astype(np.int64) + 1
-            chars, keep = format_fixed(block.astype(np.float64), 0)
-            if normals is not None:  # a//a: the vertex's own normal
-                m, k, w = chars.shape
-                both = np.concatenate([chars, np.broadcast_to(np.frombuffer(b"//", np.uint8), (m, k, 2)), chars], axis=2)
-                mask = np.concatenate([keep, np.ones((m, k, 2), dtype=bool), keep], axis=2)
-                chars, keep = both, mask
-            f.write(_lines(b"f ", [_interleave(chars, keep, b" ")]).tobytes())
+            index = format_fixed(triangles[a : a + _BLOCK].astype(np.float64) + 1.0, 0)
+            fields = [index] if normals is None else [index, _constant(b"//", *index[0].shape[:2]), index]
+            f.write(_lines(b"f ", fields))
 
 
 def write_ply_plain(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None,

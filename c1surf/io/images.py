@@ -87,8 +87,10 @@ def add_colorbar(image, lo: float, hi: float, name: str, label: str):
     margin = max(4, int(0.02 * w))
     x1 = w - margin - int(text_w) - 4 - bar_w
     y0 = h - margin - bar_h
+    label_y = y0 - font_size // 2 - 6  # baseline of the label, clear of the top value
     # Panel behind the bar so it reads on any background.
-    draw.rectangle([x1 - 4, y0 - font_size - 10, w - margin + 2, h - margin + 4], fill=(255, 255, 255))
+    draw.rectangle([x1 - 4, label_y - font_size - 4, w - margin + 2, min(h - 1, h - margin + font_size // 2 + 2)],
+                   fill=(255, 255, 255))
     ramp = colormap(np.linspace(hi, lo, bar_h), lo, hi, name)
     strip = (np.repeat(ramp[:, None, :], bar_w, axis=1) * 255 + 0.5).astype(np.uint8)
     from PIL import Image
@@ -99,7 +101,7 @@ def add_colorbar(image, lo: float, hi: float, name: str, label: str):
     for frac, text in zip((0.0, 0.5, 1.0), texts):
         y = y0 + frac * (bar_h - 1)
         draw.text((tx, y), text, fill=(0, 0, 0), font=font, anchor="lm")
-    draw.text((x1, y0 - 4), label, fill=(0, 0, 0), font=font, anchor="ls")
+    draw.text((x1, label_y), label, fill=(0, 0, 0), font=font, anchor="ls")
     return image
 
 

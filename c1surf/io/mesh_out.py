@@ -1,4 +1,9 @@
-"""Writing tessellated triangle meshes (trimesh does the formats)."""
+"""Writing tessellated triangle meshes.
+
+OBJ and plain PLY (positions and normals) go through the vectorized writers of
+``fast_out`` (float64 by default, float32 on request; PLY binary); STL, GLB and
+OFF through trimesh (STL and GLB store float32 by definition).
+"""
 from __future__ import annotations
 
 from pathlib import Path
@@ -25,7 +30,8 @@ def mesh_format(path) -> str:
 
 
 def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None, suffix: str | None = None,
-                        vertex_properties: dict | None = None, vertex_colors: np.ndarray | None = None) -> None:
+                        vertex_properties: dict | None = None, vertex_colors: np.ndarray | None = None,
+                        float32: bool = False) -> None:
     """Write a triangle mesh; the format comes from ``suffix`` (default: the path's).
 
     Parameters
@@ -36,6 +42,7 @@ def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals
     vertex_properties : dict name -> (V,) float, or None: extra per-vertex scalars
         (PLY only, written by ``ply_out.write_ply``)
     vertex_colors : (V, 3) uint8 or None, with ``vertex_properties`` (PLY only)
+    float32 : write coordinates and normals as float32 (PLY ``float``, fewer OBJ digits)
     """
     suffix = suffix or mesh_format(path)
     if vertex_properties is not None or vertex_colors is not None:
@@ -43,7 +50,13 @@ def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals
             raise ValueError(f"per-vertex properties need a .ply output, not {suffix}")
         from .ply_out import write_ply
 
-        write_ply(path, points[:, :3], triangles, normals, vertex_properties, vertex_colors, comments=["c1surf"])
+        write_ply(path, points[:, :3], triangles, normals, vertex_properties, vertex_colors, comments=["c1surf"],
+                  float32=float32)
+        return
+    if suffix in (".obj", ".ply"):
+        from .fast_out import write_obj, write_ply_plain
+
+        (write_obj if suffix == ".obj" else write_ply_plain)(path, points[:, :3], triangles, normals, float32=float32)
         return
     file_type, kwargs = MESH_FORMATS[suffix]
     mesh = trimesh.Trimesh(vertices=points[:, :3], faces=triangles, vertex_normals=normals, process=False, validate=False)

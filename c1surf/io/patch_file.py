@@ -53,13 +53,37 @@ def patch_set_document(patch_set: PatchSet) -> dict:
     return {**patch_set.header, "patches": patches}
 
 
-def write_patches_json(path, surface, input_path: str | None = None, adjacency=None, **_options) -> None:
+def write_patches_json(path, surface, input_path: str | None = None, adjacency=None, merged=None, **_options) -> None:
     """Write ``surface``'s patches to ``path`` as c1surf-patches JSON.
 
     ``adjacency``: the surface's ``PatchAdjacency`` when already computed;
-    other keyword options (IGES units, ...) do not apply to JSON.
+    ``merged``: ``core.merge.MergedPiece`` list (``convert --merge``), written under
+    the key "merged" (every patch stays in "patches"); other keyword options
+    (IGES units, ...) do not apply to JSON.
     """
-    write_patch_set_json(path, surface_patch_set(surface, input_path, adjacency))
+    patch_set = surface_patch_set(surface, input_path, adjacency)
+    if not merged:
+        write_patch_set_json(path, patch_set)
+        return
+    doc = patch_set_document(patch_set)
+    doc["merged"] = [merged_piece_document(piece) for piece in merged]
+    text = json.dumps(doc, separators=(",", ":"))
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(text)
+        f.write("\n")
+
+
+def merged_piece_document(piece) -> dict:
+    """JSON of a B-spline surface made of biquadratic patches: knots, control points
+    (m+2, n+2, 3), weights when rational, and the patches (indices into "patches",
+    with the quarter turns taking each patch's (u, v) to the piece's) of its m x n spans."""
+    out = {"kind": "bspline", "degree": [2, 2], "knots_u": piece.knots_u.tolist(), "knots_v": piece.knots_v.tolist(),
+           "points": piece.points[..., :3].tolist()}
+    if piece.weights is not None:
+        out["weights"] = piece.weights.tolist()
+    out["patches"] = piece.patches.tolist()
+    out["rotation"] = piece.rotation.tolist()
+    return out
 
 
 def write_patch_set_json(path, patch_set: PatchSet) -> None:

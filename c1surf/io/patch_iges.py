@@ -27,7 +27,7 @@ DEFAULT_UNITS = "mm"
 
 
 def write_patches_iges(path, surface, input_path: str | None = None, *, units: str = DEFAULT_UNITS, group: bool = True,
-                       file_name: str | None = None, **_options) -> None:
+                       file_name: str | None = None, merged=None, **_options) -> None:
     """Write ``surface``'s patches as IGES 5.3.
 
     Parameters
@@ -38,10 +38,21 @@ def write_patches_iges(path, surface, input_path: str | None = None, *, units: s
     units : a key of ``io.iges.UNITS`` (coordinates are written unscaled; this labels them)
     group : collect the surfaces in one group entity (402 form 7)
     file_name : the name recorded in the Global section (default: basename of ``path``)
+    merged : ``core.merge.MergedPiece`` list (``convert --merge``): those B-spline surfaces
+        first, then the patches they do not cover
     """
     surfaces = []
     weights = getattr(surface, "patch_weights", None) or [None, None]  # rational surfaces (A2a): IGES weights
-    for g, w in zip((surface.biquadratic, surface.bicubic), weights):
+    keep = np.ones(len(surface.biquadratic), dtype=bool)
+    if merged:
+        from ..core.merge import piece_dicts
+
+        surfaces.extend(piece_dicts(merged))
+        for piece in merged:
+            keep[piece.patches.ravel()] = False
+    for g, w, mask in zip((surface.biquadratic, surface.bicubic), weights, (keep, None)):
+        if mask is not None:
+            g, w = g[mask], (None if w is None else w[mask])
         if len(g):
             surfaces.extend(bezier_patches_to_surfaces(np.ascontiguousarray(g[..., :3]), w))
     o = surface.options

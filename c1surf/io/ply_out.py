@@ -13,7 +13,7 @@ __all__ = ["write_ply"]
 
 
 def write_ply(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None,
-              properties: dict | None = None, colors: np.ndarray | None = None, comments=()) -> None:
+              properties: dict | None = None, colors: np.ndarray | None = None, comments=(), float32: bool = False) -> None:
     """Write a binary little-endian PLY file.
 
     Parameters
@@ -22,13 +22,15 @@ def write_ply(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarr
     properties : dict name -> (V,) float, written as float32 vertex properties, in order
     colors : (V, 3) uint8 or None, written as ``red green blue``
     comments : iterable of str, header comment lines
+    float32 : positions and normals as ``float`` (default ``double``, like the plain PLY writer)
     """
     points = np.asarray(points)
     triangles = np.asarray(triangles)
     v = points.shape[0]
-    fields = [("x", "<f4"), ("y", "<f4"), ("z", "<f4")]
+    real = "<f4" if float32 else "<f8"
+    fields = [("x", real), ("y", real), ("z", real)]
     if normals is not None:
-        fields += [("nx", "<f4"), ("ny", "<f4"), ("nz", "<f4")]
+        fields += [("nx", real), ("ny", real), ("nz", real)]
     properties = dict(properties or {})
     for name in properties:
         if not name.isidentifier():
@@ -50,7 +52,7 @@ def write_ply(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarr
     face = np.empty(triangles.shape[0], dtype=[("n", "u1"), ("i", "<i4", (3,))])
     face["n"] = 3
     face["i"] = triangles
-    type_names = {"<f4": "float", "u1": "uchar"}
+    type_names = {"<f4": "float", "<f8": "double", "u1": "uchar"}
     header = ["ply", "format binary_little_endian 1.0"]
     header += [f"comment {c}" for c in comments]
     header.append(f"element vertex {v}")
