@@ -8,6 +8,7 @@ import sys
 import time
 
 import pytest
+import trimesh
 from click.testing import CliRunner
 
 from c1surf.cli.main import main
@@ -44,9 +45,12 @@ def test_signal_while_writing_leaves_nothing_partial(tmp_path, sig):
         if proc.returncode == 0:
             continue
         assert proc.returncode == 1
-        assert stderr.strip().splitlines() == ["c1surf: error: interrupted; no output was written"]
-        assert out.read_bytes() == b"earlier output"
+        assert stderr.strip().splitlines() == ["c1surf: error: interrupted; no partial output was left behind"]
         assert temp_files(tmp_path) == []
+        if out.read_bytes() != b"earlier output":
+            # the signal landed after the atomic rename: the new output is then complete
+            assert len(trimesh.load(out, force="mesh", process=False).faces) > 0
+            continue
         return
     pytest.fail("the conversion always finished before it could be interrupted")
 

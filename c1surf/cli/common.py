@@ -85,7 +85,7 @@ def friendly_errors(command):
                 traceback.print_exc()
             raise Failure("out of memory: lower --resolution or convert a smaller mesh") from None
         except KeyboardInterrupt:
-            raise Failure("interrupted; no output was written") from None
+            raise Failure("interrupted; no partial output was left behind") from None
 
     return wrapper
 

@@ -195,7 +195,7 @@ def tessellate_patches(patch_groups, adjacency: PatchAdjacency, resolution: int 
 
 # -- evaluation straight into the welded arrays ------------------------------------------
 
-_CHUNK_BYTES = 1 << 21  # temporaries per block of patches: about the size of an L2 cache
+_CHUNK_BYTES = 1 << 23  # temporaries per block of patches (large enough to amortize BLAS threading)
 
 
 def _last_owner(ids: np.ndarray, count: int) -> np.ndarray:
@@ -270,8 +270,9 @@ def _evaluate_welded(patch_groups, adjacency: PatchAdjacency, n: int, points: np
                 continue
             p = patch[mine] - starts[k]
             # the side's control polygon (increasing parameter) and the row next to it, pointing inwards
-            row, nxt = {0: (g[p, :, 0], g[p, :, 1]), 1: (g[p, d], g[p, d - 1]),
-                        2: (g[p, :, d], g[p, :, d - 1]), 3: (g[p, 0], g[p, 1])}[s]
+            row, nxt = {0: (g[:, :, 0], g[:, :, 1]), 1: (g[:, d], g[:, d - 1]),
+                        2: (g[:, :, d], g[:, :, d - 1]), 3: (g[:, 0], g[:, 1])}[s]
+            row, nxt = np.take(row, p, axis=0), np.take(nxt, p, axis=0)  # take: faster than g[p, :, 0]
             # columns: positions (sample, coordinate), then along and across the side (coordinate, sample)
             basis = np.zeros((2, d + 1, dim, inner * dim + 6 * inner))
             basis[0, :, :, : inner * dim] = np.kron(b, np.eye(dim)).T.reshape(d + 1, dim, inner * dim)
@@ -281,11 +282,13 @@ def _evaluate_welded(patch_groups, adjacency: PatchAdjacency, n: int, points: np
                 basis[0, :, c, inner * dim + (3 + c) * inner : inner * dim + (4 + c) * inner] = -b.T
             values = np.concatenate([row.reshape(p.size, -1), nxt.reshape(p.size, -1)], axis=1) @ basis.reshape(-1, basis.shape[-1])
             position = values[:, : inner * dim].reshape(p.size, inner, dim)
-            along, across = values[:, inner * dim :].reshape(p.size, 2, 3, inner).transpose(1, 0, 3, 2)
+            derivatives = values[:, inner * dim :].reshape(p.size, 2, 3, inner)  # (edge, along/across, coordinate, sample)
             # across points inwards: +x_v on side 0, -x_u on side 1, -x_v on side 2, +x_u on side 3,
             # so x_u x x_v is along x across on sides 0 and 1, across x along on sides 2 and 3
+            a, c = (derivatives[:, 0], derivatives[:, 1]) if s < 2 else (derivatives[:, 1], derivatives[:, 0])
             unit = np.empty((p.size, inner, 3))
-            _unit_into(unit, *(_cross_components(along, across) if s < 2 else _cross_components(across, along)))
+            _unit_into(unit, a[:, 1] * c[:, 2] - a[:, 2] * c[:, 1], a[:, 2] * c[:, 0] - a[:, 0] * c[:, 2],
+                       a[:, 0] * c[:, 1] - a[:, 1] * c[:, 0])
             back = flip[mine]
             position[back], unit[back] = position[back, ::-1], unit[back, ::-1]
             edge_points[edges.ravel()[owner[mine]]] = position
