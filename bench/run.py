@@ -46,7 +46,7 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parent
-SHARED = ROOT.parent / "shared" / "meshes"
+SHARED = Path(os.environ.get("C1SURF_SHARED_MESHES", ROOT.parent / "shared" / "meshes"))
 REAL_MESHES = {
     "sword": SHARED / "odedstein-meshes" / "sword-quad-dominant.obj",
     "spot": SHARED / "spot" / "spot_quadrangulated.obj",

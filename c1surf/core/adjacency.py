@@ -106,10 +106,18 @@ def _first_appearance(labels: np.ndarray) -> np.ndarray:
     flat = labels.ravel()
     if flat.size == 0:
         return np.zeros(labels.shape, dtype=np.int64)
-    _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
-    rank = np.empty(first.size, dtype=np.int64)
-    rank[np.argsort(first, kind="stable")] = np.arange(first.size)
-    return rank[inverse.ravel()].reshape(labels.shape)
+    if flat.min() < 0 or flat.max() >= 4 * flat.size + 1024:  # sparse or negative labels: sort
+        _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
+        rank = np.empty(first.size, dtype=np.int64)
+        rank[np.argsort(first, kind="stable")] = np.arange(first.size)
+        return rank[inverse.ravel()].reshape(labels.shape)
+    # dense labels: one reverse scatter finds each label's first position, a cumsum ranks them
+    first = np.full(int(flat.max()) + 1, flat.size, dtype=np.int64)
+    first[flat[::-1]] = np.arange(flat.size)[::-1]
+    is_first = np.zeros(flat.size + 1, dtype=bool)
+    is_first[first] = True
+    rank_at = np.cumsum(is_first[:-1]) - 1
+    return rank_at[first[flat]].reshape(labels.shape)
 
 
 def _canonical(corner_labels: np.ndarray, edge_labels: np.ndarray, forward_key: np.ndarray) -> PatchAdjacency:

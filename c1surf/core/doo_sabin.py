@@ -97,19 +97,18 @@ def doo_sabin_matrix(mesh: HalfEdgeMesh, ratio: np.ndarray, per_corner: bool = F
     """
     ratio = np.asarray(ratio, dtype=np.float64)
     corner_ratio = ratio if per_corner else ratio[mesh.face]
-    rows, cols, vals = [mesh.origin * 0 + np.arange(mesh.n_halfedges)], [mesh.origin], [1.0 - corner_ratio]
+    # Row h holds the n vertices of its face (a/n each) and 1 - a more at its own
+    # corner; written straight into CSR arrays, faces grouped by size.
+    indptr = np.concatenate([[0], np.cumsum(mesh.face_sizes[mesh.face])])
+    indices = np.empty(indptr[-1], dtype=np.int64)
+    data = np.empty(indptr[-1])
     for n, faces, halfedges in mesh.faces_by_size():
-        # Each corner of an n-gon takes a/n of every vertex of the n-gon.
-        corner_vertices = mesh.origin[halfedges]
-        rows.append(np.repeat(halfedges, n, axis=1).ravel())
-        cols.append(np.tile(corner_vertices, (1, n)).ravel())
-        vals.append(np.repeat(corner_ratio[halfedges] / n, n, axis=1).ravel())
-    matrix = csr_matrix(
-        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-        shape=(mesh.n_halfedges, mesh.n_vertices),
-    )
-    matrix.sum_duplicates()
-    return matrix
+        start = indptr[halfedges][..., None] + np.arange(n)  # (Fn, n rows, n entries)
+        indices[start] = mesh.origin[halfedges][:, None, :]
+        weights = np.broadcast_to((corner_ratio[halfedges] / n)[..., None], start.shape).copy()
+        weights[:, np.arange(n), np.arange(n)] += 1.0 - corner_ratio[halfedges]  # row i's own corner is entry i
+        data[start] = weights
+    return csr_matrix((data, indices, indptr), shape=(mesh.n_halfedges, mesh.n_vertices))
 
 
 def second_step_ratio(face_sizes: np.ndarray, blend: np.ndarray) -> np.ndarray:

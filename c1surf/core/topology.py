@@ -78,7 +78,7 @@ class HalfEdgeMesh:
 
 
 def build_halfedges(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices: int) -> HalfEdgeMesh:
-    """Half-edge structure of a polygon mesh (twins found by sorting edge keys).
+    """Half-edge structure of a polygon mesh (twins found by one sort of edge keys).
 
     Parameters
     ----------
@@ -97,30 +97,27 @@ def build_halfedges(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertice
     n_half = origin.size
     face = np.repeat(np.arange(face_sizes.size, dtype=np.int64), face_sizes)
     h = np.arange(n_half, dtype=np.int64)
-    local = h - offsets[face]
-    nxt = np.where(local == face_sizes[face] - 1, offsets[face], h + 1)
-    prv = np.where(local == 0, offsets[face] + face_sizes[face] - 1, h - 1)
+    nxt = h + 1
+    last = offsets[1:] - 1
+    nxt[last] = offsets[:-1]
+    prv = h - 1
+    prv[offsets[:-1]] = last
     dest = origin[nxt]
-
-    # Twin of (a -> b) is (b -> a): look its key up among the sorted keys.
-    # Only pair when the directed key is unique (duplicates mean a
-    # non-manifold edge or flipped faces, diagnosed by validation).
-    key = origin * n_vertices + dest
-    order = np.argsort(key, kind="stable")
-    sorted_key = key[order]
-    unique_key = np.ones(n_half, dtype=bool)
-    if n_half > 1:
-        dup = sorted_key[1:] == sorted_key[:-1]
-        unique_key[order[1:][dup]] = False
-        unique_key[order[:-1][dup]] = False
-    want = dest * n_vertices + origin
-    pos = np.clip(np.searchsorted(sorted_key, want), 0, max(n_half - 1, 0))
+    # Twins: the two half-edges of an undirected edge, if there are exactly two
+    # and they run in opposite directions (more, or the same direction, means a
+    # non-manifold edge or flipped faces, which repair.prepare_topology handles).
+    key = np.minimum(origin, dest) * n_vertices + np.maximum(origin, dest)
+    order = np.argsort(key)
+    key = key[order]
     twin = np.full(n_half, -1, dtype=np.int64)
-    if n_half:
-        found = (sorted_key[pos] == want) & unique_key
-        candidate = order[pos]
-        found &= unique_key[candidate]
-        twin[found] = candidate[found]
+    if n_half > 1:
+        same = key[1:] == key[:-1]
+        run = np.zeros(n_half + 1, dtype=bool)
+        run[1:-1] = same
+        pair = same & ~run[:-2] & ~run[2:]
+        a, b = order[:-1][pair], order[1:][pair]
+        opposite = origin[a] == dest[b]
+        twin[a[opposite]], twin[b[opposite]] = b[opposite], a[opposite]
     return HalfEdgeMesh(int(n_vertices), face_sizes, offsets, origin, face, nxt, prv, twin)
 
 
