@@ -88,3 +88,20 @@ def surface_of(path, **options) -> Surface:
 def polygon_mesh(faces, points):
     """(face_sizes, face_vertices, points) from a list of faces."""
     return np.array([len(f) for f in faces]), np.concatenate([np.asarray(f) for f in faces]), np.asarray(points, float)
+
+
+def misprinted_bicubic(surface: Surface) -> np.ndarray:
+    """``surface.bicubic`` with the transcription's misprinted P_12 (NOTES item 1) in every patch."""
+    x = surface.refined_points
+    bad = surface.bicubic.copy()
+    start = 0
+    for g in surface.holes:
+        A, B1, B2, C = (x[idx] for idx in (g.A, g.B1, g.B2, g.C))
+        c = np.cos(2 * np.pi / g.n)
+        a = c / (1 - c)
+        B2_prev, C_prev = np.roll(B2, 1, axis=1), np.roll(C, 1, axis=1)
+        misprint = (5 * B1 + 5 * C_prev + B2_prev + 25 * C) / 36 + a / 36 * (-11 * B1 + 3 * B2_prev + 3 * C_prev + 5 * C)
+        count = g.cells.size * g.n
+        bad[start : start + count, 1, 2] = misprint.reshape(-1, 3)
+        start += count
+    return bad

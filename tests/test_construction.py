@@ -18,7 +18,7 @@ from c1surf.core.surface import Surface, SurfaceOptions
 from c1surf.core.tessellate import tessellate
 from c1surf.io.obj import read_obj
 
-from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, polygon_mesh, shared_mesh, surface_of
+from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, misprinted_bicubic, polygon_mesh, shared_mesh, surface_of
 
 MAX_JUMP = 1e-10  # radians
 MAX_GAP = 1e-12  # relative to the bounding-box diagonal
@@ -52,19 +52,7 @@ def test_g1_on_shared_closed_meshes(relative):
 def test_checker_catches_the_misprinted_p12():
     """The transcription's P_12 (NOTES item 1) must show as a normal jump."""
     surface = surface_of(SAMPLES / "twisted.obj")
-    x = surface.refined_points
-    bad = surface.bicubic.copy()
-    start = 0
-    for g in surface.holes:
-        A, B1, B2, C = (x[idx] for idx in (g.A, g.B1, g.B2, g.C))
-        n = g.n
-        c = np.cos(2 * np.pi / n)
-        a = c / (1 - c)
-        B2_prev, C_prev = np.roll(B2, 1, axis=1), np.roll(C, 1, axis=1)
-        misprint = (5 * B1 + 5 * C_prev + B2_prev + 25 * C) / 36 + a / 36 * (-11 * B1 + 3 * B2_prev + 3 * C_prev + 5 * C)
-        count = g.cells.size * n
-        bad[start : start + count, 1, 2] = misprint.reshape(-1, 3)
-        start += count
+    bad = misprinted_bicubic(surface)
     good = measure_smoothness([surface.biquadratic, surface.bicubic]).max_normal_jump
     broken = measure_smoothness([surface.biquadratic, bad]).max_normal_jump
     assert good < MAX_JUMP and broken > 1e-3

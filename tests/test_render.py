@@ -18,7 +18,7 @@ from c1surf.core.smoothness import measure_smoothness
 from c1surf.io.exr import write_exr
 from c1surf.io.patch_formats import load_patch_set
 
-from conftest import SAMPLES, surface_of
+from conftest import SAMPLES, misprinted_bicubic, surface_of
 from test_curvature import rational_sphere_patch
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
@@ -183,18 +183,7 @@ def test_default_camera_frames_the_whole_surface(projection):
 def misprinted_surface():
     """twisted.obj with the transcription's misprinted P_12 (as in test_construction)."""
     surface = surface_of(SAMPLES / "twisted.obj")
-    x = surface.refined_points
-    bad = surface.bicubic.copy()
-    start = 0
-    for g in surface.holes:
-        A, B1, B2, C = (x[idx] for idx in (g.A, g.B1, g.B2, g.C))
-        c = np.cos(2 * np.pi / g.n)
-        a = c / (1 - c)
-        B2_prev, C_prev = np.roll(B2, 1, axis=1), np.roll(C, 1, axis=1)
-        misprint = (5 * B1 + 5 * C_prev + B2_prev + 25 * C) / 36 + a / 36 * (-11 * B1 + 3 * B2_prev + 3 * C_prev + 5 * C)
-        count = g.cells.size * g.n
-        bad[start : start + count, 1, 2] = misprint.reshape(-1, 3)
-        start += count
+    bad = misprinted_bicubic(surface)
     return [surface.biquadratic, surface.bicubic], [surface.biquadratic, bad]
 
 
