@@ -71,13 +71,13 @@ def extension_setup(mesh, output_suffix_: str | None, blend, alpha, beta, tangen
     return options, data
 
 
-def check_tessellation_size(surface: Surface, resolution: int, force: bool) -> None:
-    """Refuse a tessellation that would not fit in memory, with the estimate."""
-    needed = surface.n_patches * resolution * resolution * BYTES_PER_SAMPLE
+def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> None:
+    """Refuse a tessellation of ``n_patches`` that would not fit in memory, with the estimate."""
+    needed = n_patches * resolution * resolution * BYTES_PER_SAMPLE
     available = available_memory()
     if needed > 0.8 * available and not force:
         raise Failure(
-            f"the tessellation would need about {needed / 2**30:.1f} GiB ({surface.n_patches} patches at "
+            f"the tessellation would need about {needed / 2**30:.1f} GiB ({n_patches} patches at "
             f"--resolution {resolution}) but about {available / 2**30:.1f} GiB is available: lower --resolution, "
             "or pass --force to try anyway"
         )
@@ -137,7 +137,7 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     if not quiet:
         for note in repair_notes(surface, mesh):
             click.echo(f"c1surf: note: {note}", err=True)
-    check_tessellation_size(surface, resolution, force)
+    check_tessellation_size(surface.n_patches, resolution, force)
     progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
     # the same welding `c1surf tessellate` reads from the patch file: identical meshes
     adjacency = patch_adjacency(surface.refined, surface.frames)

@@ -8,7 +8,7 @@ from ..io.atomic import atomic_output
 from ..io.mesh_out import MESH_FORMATS, write_triangle_mesh
 from ..io.patch_formats import PATCH_LOADERS
 from .common import Failure, Progress, friendly_errors, output_suffix
-from .convert import BYTES_PER_SAMPLE, available_memory
+from .convert import check_tessellation_size
 
 
 @click.command()
@@ -40,14 +40,7 @@ def tessellate(patches_path, output, resolution, force, quiet):
     dims = {g.shape[1:3] for g in patch_set.groups}
     if any(max(d) > 4 for d in dims):
         raise Failure(f"{patches_path}: patches of degree above 3 are not supported")
-    needed = patch_set.n_patches * resolution * resolution * BYTES_PER_SAMPLE
-    available = available_memory()
-    if needed > 0.8 * available and not force:
-        raise Failure(
-            f"the tessellation would need about {needed / 2**30:.1f} GiB ({patch_set.n_patches} patches at "
-            f"--resolution {resolution}) but about {available / 2**30:.1f} GiB is available: lower --resolution, "
-            "or pass --force to try anyway"
-        )
+    check_tessellation_size(patch_set.n_patches, resolution, force)
     if patch_set.adjacency is None:
         progress.phase("finding shared corners and sides from the geometry")
     adjacency = patch_set.welding()

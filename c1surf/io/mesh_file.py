@@ -6,6 +6,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from .errors import MeshInputError
+
 __all__ = ["MeshFile"]
 
 
@@ -127,6 +129,25 @@ def collapse_repeated_corners(face_sizes: np.ndarray, face_vertices: np.ndarray)
         return face_sizes, face_vertices, keep
     sizes = np.bincount(face[keep], minlength=face_sizes.size).astype(np.int64)
     return sizes, face_vertices[keep], keep
+
+
+def collapse_repeated_corners_or_refuse(face_sizes, face_vertices, path, line_of_face):
+    """``collapse_repeated_corners``, refusing a face left with fewer than 3 vertices.
+
+    Parameters
+    ----------
+    line_of_face : callable, face index -> 1-based line (or None) for the error
+
+    Returns
+    -------
+    face_sizes, face_vertices, keep, collapsed : as ``collapse_repeated_corners``, plus the count dropped
+    """
+    sizes, vertices, keep = collapse_repeated_corners(face_sizes, face_vertices)
+    collapsed = int(keep.size - keep.sum())
+    if collapsed and np.any(sizes < 3):
+        f = int(np.argmax(sizes < 3))
+        raise MeshInputError(path, "face has fewer than 3 distinct vertices: a polygon needs at least 3 (remove this face)", line_of_face(f))
+    return sizes, vertices, keep, collapsed
 
 
 def find_repeated_vertex(face_sizes: np.ndarray, face_vertices: np.ndarray):

@@ -22,7 +22,7 @@ import warnings
 import numpy as np
 
 from .errors import MeshInputError
-from .mesh_file import MeshFile, collapse_repeated_corners, find_repeated_vertex
+from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, find_repeated_vertex
 
 __all__ = ["read_obj", "parse_obj"]
 
@@ -158,13 +158,7 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
 
     face_vertices = _resolve(raw_v, n_vert, lambda: before(_V), "vertex",
                              "v", line_of_corner, path)
-    sizes, face_vertices, kept = collapse_repeated_corners(sizes, face_vertices)
-    collapsed = int(kept.size - kept.sum())
-    if collapsed and np.any(sizes < 3):
-        f = int(np.argmax(sizes < 3))
-        raise MeshInputError(
-            path, f"face has fewer than 3 distinct vertices: a polygon needs at least 3 "
-            "(remove this face)", int(f_lines[f]) + 1)
+    sizes, face_vertices, kept, collapsed = collapse_repeated_corners_or_refuse(sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1)
     rep = find_repeated_vertex(sizes, face_vertices)
     if rep is not None:
         face, vert, p1, p2 = rep

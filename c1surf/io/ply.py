@@ -17,7 +17,7 @@ from plyfile import (PlyData, PlyElementParseError, PlyHeaderParseError,
                      PlyListProperty, PlyParseError)
 
 from .errors import MeshInputError
-from .mesh_file import MeshFile, collapse_repeated_corners, find_repeated_vertex
+from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, find_repeated_vertex
 
 __all__ = ["read_ply"]
 
@@ -149,13 +149,7 @@ def read_ply(path) -> MeshFile:
             path, f"face {f} refers to vertex {int(face_vertices[c])} but "
             f"the file has {n_vert} vertices (valid: 0..{n_vert - 1}): fix "
             "the index", row_line("face", f))
-    sizes, face_vertices, kept = collapse_repeated_corners(sizes, face_vertices)
-    collapsed = int(kept.size - kept.sum())
-    if collapsed and np.any(sizes < 3):
-        f = int(np.argmax(sizes < 3))
-        raise MeshInputError(
-            path, f"face has fewer than 3 distinct vertices: a polygon needs at least 3 "
-            "(remove this face)", row_line("face", f))
+    sizes, face_vertices, _, collapsed = collapse_repeated_corners_or_refuse(sizes, face_vertices, path, lambda f: row_line("face", f))
     rep = find_repeated_vertex(sizes, face_vertices)
     if rep is not None:
         f, v, p1, p2 = rep
