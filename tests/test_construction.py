@@ -5,6 +5,8 @@ shared patch edges from geometry alone.
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 import trimesh
@@ -264,3 +266,38 @@ def test_degree_raising_keeps_the_surface():
     quad = rng.normal(size=(4, 3, 3, 3))
     t = np.linspace(0, 1, 7)
     np.testing.assert_allclose(evaluate_patches(raise_degree(quad, 3, 3), t, t), evaluate_patches(quad, t, t), atol=1e-14)
+
+
+OPEN_SHARED = ["opensubdiv/catmark_edgecorner.obj", "opensubdiv/catmark_tent.obj", "opensubdiv/catmark_hole_test2.obj",
+               "opensubdiv/catmark_flap2.obj"]
+
+
+@pytest.mark.parametrize("path", [SAMPLES / p.name for p in sorted(SAMPLES.glob("*.obj"))] + OPEN_SHARED, ids=str)
+def test_refined_halfedges_by_arithmetic_match_a_fresh_sort(path):
+    """The refined half-edges (twins by index arithmetic) are those a sort of edge keys finds."""
+    from c1surf.core.boundary import add_ghost_layer
+    from c1surf.core.doo_sabin import refine_doo_sabin, refined_halfedges
+    from c1surf.core.repair import prepare_topology
+    from c1surf.core.topology import build_halfedges
+    from c1surf.io.read import read_mesh
+
+    mesh = read_mesh(path if isinstance(path, Path) else shared_mesh(path))
+    coarse, source, report = prepare_topology(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices)
+    if report["boundary_edges"]:
+        coarse = add_ghost_layer(coarse, mesh.points[source][:, :3]).mesh
+    for _ in range(2):
+        faces = refine_doo_sabin(coarse)
+        fast = refined_halfedges(coarse, faces)
+        sorted_ = build_halfedges(faces.face_sizes, faces.face_vertices, coarse.n_halfedges)
+        for field in ("face_sizes", "face_offsets", "origin", "face", "next", "prev", "twin"):
+            np.testing.assert_array_equal(getattr(fast, field), getattr(sorted_, field), err_msg=field)
+        coarse = fast
+
+
+@pytest.mark.parametrize("path", [SAMPLES / "twisted.obj", SAMPLES / "high_valence.obj"] + OPEN_SHARED[:2], ids=str)
+def test_biquadratic_gather_matches_the_25_entry_stencil(path):
+    """A2 by gathers of centroids and midpoints equals the plain per-patch stencil."""
+    surface = surface_of(path if isinstance(path, Path) else shared_mesh(path))
+    x = surface.refined_points
+    direct = (surface.quad_stencil @ x).reshape(-1, 3, 3, x.shape[1])
+    np.testing.assert_allclose(surface.biquadratic, direct, rtol=0, atol=1e-14 * np.abs(x).max())

@@ -22,7 +22,7 @@ from scipy.sparse import coo_matrix, csr_matrix, identity
 from scipy.sparse.csgraph import connected_components
 
 from .errors import TopologyError
-from .topology import HalfEdgeMesh
+from .topology import HalfEdgeMesh, halfedge_edges
 from .triangles import triangle_hole_coefficients
 
 
@@ -106,6 +106,17 @@ def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:
     return frames
 
 
+def first_outgoing(mesh: HalfEdgeMesh) -> np.ndarray:
+    """(V,) int: an outgoing half-edge of every vertex, -1 for unused vertices."""
+    v = mesh.n_vertices
+    if mesh.n_halfedges >= v and np.array_equal(mesh.origin[:v], np.arange(v)):
+        # a Doo-Sabin refined mesh: its F-faces come first and list every vertex once, in order
+        return np.arange(v, dtype=mesh.origin.dtype)
+    first = np.full(v, -1, dtype=np.int64)
+    first[mesh.origin[::-1]] = np.arange(mesh.n_halfedges)[::-1]
+    return first
+
+
 def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None):
     """Frames (e0..e3) of all biquadratic and all bicubic patches.
 
@@ -118,8 +129,7 @@ def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None)
     quad_frames : (Nq, 4) int, one per regular (wanted) refined vertex, in vertex order
     cubic_frames : (Nc, 4) int, for the holes in ``holes`` order, corner by corner
     """
-    first = np.full(mesh.n_vertices, -1, dtype=np.int64)
-    first[mesh.origin[::-1]] = np.arange(mesh.n_halfedges)[::-1]
+    first = first_outgoing(mesh)
     irregular = np.zeros(mesh.n_vertices, dtype=bool)
     for g in holes:
         irregular[g.C.ravel()] = True
@@ -181,6 +191,72 @@ def biquadratic_stencil(mesh: HalfEdgeMesh, frames: np.ndarray) -> csr_matrix:
     indptr[:-1].reshape(n, 9)[:] = (25 * np.arange(n, dtype=index))[:, None] + prefix
     indptr[-1] = 25 * n
     return csr_matrix((np.tile(vals, n), cols.ravel().astype(index), indptr), shape=(9 * n, mesh.n_vertices))
+
+
+@dataclass(frozen=True)
+class BiquadraticLayout:
+    """Step A2 as one gather from the refined points, face centroids and edge midpoints.
+
+    Coefficient Q[i, j] of the patch at refined vertex c with frame e0..e3 is
+    the centroid S(e) of face(e) (corners), the midpoint M(e) of the refined
+    edge of e (edge coefficients) or c itself (centre):
+
+        Q00 = S(e2)  Q01 = M(e2)  Q02 = S(e1)
+        Q10 = M(e3)  Q11 = c      Q12 = M(e1)
+        Q20 = S(e3)  Q21 = M(e0)  Q22 = S(e0)
+
+    Every centroid and midpoint is computed once and shared by the patches
+    around it; the coefficients are then one gather of contiguous rows. (A
+    25-entries-per-patch matrix costs several times more to build, store and
+    apply, and filling the edge coefficients by strided arithmetic does too.)
+
+    Attributes
+    ----------
+    centroids : (F, V) csr_matrix, face centroids of the refined mesh
+    edge_ends : (E, 2) int, the two refined vertices of every edge
+    index : (Nq, 3, 3) int, row of [points; centroids; midpoints] (V + F + E rows) that is Q[i, j]
+    """
+
+    centroids: csr_matrix
+    edge_ends: np.ndarray
+    index: np.ndarray
+
+
+def biquadratic_layout(mesh: HalfEdgeMesh, frames: np.ndarray) -> BiquadraticLayout:
+    """Step A2 for the patches with ``frames`` (Nq, 4) (see ``BiquadraticLayout``)."""
+    v, f = mesh.n_vertices, mesh.n_faces
+    edge_of, edges = halfedge_edges(mesh)
+    index_type = np.int32 if max(v + f + edges.size, mesh.n_halfedges) < 2**31 else np.int64
+    weights = np.repeat(1.0 / mesh.face_sizes, mesh.face_sizes)  # half-edges are stored face by face
+    centroids = csr_matrix((weights, mesh.origin.astype(index_type, copy=False),
+                            mesh.face_offsets.astype(index_type)), shape=(f, v))
+    edge_ends = np.stack([mesh.origin[edges], mesh.origin[mesh.next[edges]]], axis=1).astype(index_type, copy=False)
+    index = np.empty((frames.shape[0], 3, 3), dtype=index_type)
+    index[:, 2, 2], index[:, 0, 2], index[:, 0, 0], index[:, 2, 0] = (mesh.face[frames] + index_type(v)).T
+    index[:, 2, 1], index[:, 1, 2], index[:, 0, 1], index[:, 1, 0] = (edge_of[frames] + index_type(v + f)).T
+    index[:, 1, 1] = mesh.origin[frames[:, 0]]
+    return BiquadraticLayout(centroids, edge_ends, index)
+
+
+def biquadratic_patches(layout: BiquadraticLayout, points: np.ndarray) -> np.ndarray:
+    """Step A2: (Nq, 3, 3, d) Bezier coefficients from refined ``points`` (V, d)."""
+    v, f, e = layout.centroids.shape[1], layout.centroids.shape[0], layout.edge_ends.shape[0]
+    d = points.shape[1]
+    rows = np.empty((v + f + e, d))
+    rows[:v] = points
+    rows[v : v + f] = layout.centroids @ points
+    midpoints = rows[v + f :]
+    np.take(points, layout.edge_ends[:, 0], axis=0, out=midpoints, mode="clip")
+    midpoints += np.take(points, layout.edge_ends[:, 1], axis=0, mode="clip")
+    midpoints *= 0.5
+    index = layout.index.reshape(-1)
+    out = np.empty((index.size, d))
+    # In blocks, so the int32 -> intp index copies stay small and in cache;
+    # mode="clip": no bounds check, no buffering (the indices are valid by construction).
+    step = 1 << 18
+    for start in range(0, index.size, step):
+        np.take(rows, index[start : start + step], axis=0, out=out[start : start + step], mode="clip")
+    return out.reshape(layout.index.shape + (d,))
 
 
 def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric"):

@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .doo_sabin import refine_doo_sabin
+from .doo_sabin import refine_doo_sabin, refined_halfedges
 from .errors import TopologyError
 from .patches import hole_neighbourhoods
-from .topology import HalfEdgeMesh, build_halfedges
+from .topology import HalfEdgeMesh
 
 
 def structure_problem(mesh: HalfEdgeMesh) -> str | None:
@@ -55,7 +55,7 @@ def structure_problem(mesh: HalfEdgeMesh) -> str | None:
 def once_refined(mesh: HalfEdgeMesh) -> HalfEdgeMesh:
     """The topology after one Doo-Sabin step."""
     faces = refine_doo_sabin(mesh)
-    return build_halfedges(faces.face_sizes, faces.face_vertices, mesh.n_halfedges)
+    return refined_halfedges(mesh, faces)
 
 
 def refinements_needed(mesh: HalfEdgeMesh, at_least: int = 0) -> int:

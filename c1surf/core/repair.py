@@ -194,7 +194,9 @@ def prepare_topology(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertic
             face_vertices = reverse_faces(face_sizes, face_vertices, flip)
             raw = build_halfedges(face_sizes, face_vertices, n_vertices)
         split_vertices, vertex_source, n_split = split_pinched_vertices(raw)
-        mesh = build_halfedges(face_sizes, split_vertices, vertex_source.size)
+        # nothing split or renumbered: the half-edges are already those of the final mesh
+        same = vertex_source.size == n_vertices and np.array_equal(split_vertices, raw.origin)
+        mesh = raw if same else build_halfedges(face_sizes, split_vertices, vertex_source.size)
         sheet = np.zeros(raw.n_faces, bool)
     used = np.zeros(n_vertices, dtype=bool)
     used[face_vertices] = True

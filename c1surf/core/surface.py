@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin
+from .doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin, refined_halfedges
 from .errors import TopologyError
 from scipy.sparse import csr_matrix
 
@@ -18,9 +18,10 @@ from .blend import check_ratios, corner_ratios, second_step_corner_ratios
 from .boundary import add_ghost_layer
 from .interpolation import normal_constraint, vertex_interpolation_step
 from .refinement import check_refinements, fewer_refinement_sources, refinements_needed
-from .patches import biquadratic_stencil, bicubic_stencil, hole_neighbourhoods, patch_frames, perturbation_matrix
+from .patches import (biquadratic_layout, biquadratic_patches, biquadratic_stencil, bicubic_stencil,
+                      hole_neighbourhoods, patch_frames, perturbation_matrix)
 from .repair import check_valence, prepare_topology
-from .topology import HalfEdgeMesh, build_halfedges
+from .topology import HalfEdgeMesh
 
 SOURCE_NAMES = {FACE_FROM_FACE: "face", FACE_FROM_EDGE: "edge", FACE_FROM_VERTEX: "vertex"}
 TANGENT_RULES = ("symmetric", "corners")
@@ -175,13 +176,13 @@ class Surface:
             faces1 = refine_doo_sabin(coarse)
             if self.options.interpolate_vertices:
                 step1 = vertex_interpolation_step(step1, coarse, faces1)  # A1a
-            level1 = build_halfedges(faces1.face_sizes, faces1.face_vertices, coarse.n_halfedges)
+            level1 = refined_halfedges(coarse, faces1)
             operators.append(step1)
         if levels == 2:
             ratio2 = second_step_corner_ratios(level1, faces1.kind == FACE_FROM_VERTEX, corner)
             step2 = doo_sabin_matrix(level1, ratio2, per_corner=True)
             faces2 = refine_doo_sabin(level1)
-            refined = build_halfedges(faces2.face_sizes, faces2.face_vertices, level1.n_halfedges)
+            refined = refined_halfedges(level1, faces2)
             operators.append(step2)
             # A refined vertex is a corner of a corner of a coarse face: real if that face is.
             real_vertex = real_face[coarse.face[level1.origin[np.arange(refined.n_vertices)]]]
@@ -205,7 +206,7 @@ class Surface:
                                            o.triangles == "parametric", self.weights is not None)
             if constraint is not None:
                 self.constraints.append(constraint)
-        self.quad_stencil = biquadratic_stencil(refined, quad_frames)
+        self.quad_layout = biquadratic_layout(refined, quad_frames)
         cubic_stencil = bicubic_stencil(refined, holes, o.alpha, o.beta, o.tangent_rule, o.triangles)
         # keep the bicubic patches at real corners only (all of them on a closed mesh)
         real_cubic = real_vertex[refined.origin[cubic_frames[:, 0]]]
@@ -246,7 +247,7 @@ class Surface:
         self.points = points
         self.refined_points = x
         d = x.shape[1]
-        biquadratic = (self.quad_stencil @ x).reshape(-1, 3, 3, d)
+        biquadratic = biquadratic_patches(self.quad_layout, x)
         bicubic = (self.cubic_stencil @ x).reshape(-1, 4, 4, d)
         if self.weights is None:
             self.biquadratic, self.bicubic = biquadratic, bicubic
@@ -260,6 +261,11 @@ class Surface:
         return self
 
     # -- bookkeeping ------------------------------------------------------------------
+
+    @property
+    def quad_stencil(self):
+        """(Nq * 9, V2) csr_matrix of step A2 (built on demand; ``update_points`` uses ``quad_layout``)."""
+        return biquadratic_stencil(self.refined, self.quad_frames)
 
     @property
     def n_patches(self) -> int:

@@ -24,10 +24,14 @@ class HalfEdgeMesh:
     n_vertices : int
     face_sizes : (F,) int64
     face_offsets : (F+1,) int64, half-edges of face f are face_offsets[f]:face_offsets[f+1]
-    origin : (H,) int64, vertex each half-edge starts at
-    face : (H,) int64, face each half-edge belongs to
-    next, prev : (H,) int64, following / preceding half-edge in the same face
-    twin : (H,) int64, opposite half-edge in the neighbouring face, -1 on a boundary
+    origin : (H,) int, vertex each half-edge starts at
+    face : (H,) int, face each half-edge belongs to
+    next, prev : (H,) int, following / preceding half-edge in the same face
+    twin : (H,) int, opposite half-edge in the neighbouring face, -1 on a boundary
+
+    The per-half-edge arrays are int64 for input meshes and int32 for refined
+    meshes small enough (``doo_sabin.refined_halfedges``: half the memory
+    traffic on the largest arrays); products of them are formed in int64.
     """
 
     n_vertices: int
@@ -77,6 +81,30 @@ class HalfEdgeMesh:
             yield int(n), faces, halfedges
 
 
+def face_cycles(face_sizes: np.ndarray, index=np.int64):
+    """Half-edge bookkeeping that depends on the face sizes alone.
+
+    Parameters
+    ----------
+    face_sizes : (F,) int64
+    index : integer dtype of the per-half-edge arrays
+
+    Returns
+    -------
+    offsets : (F+1,) int64; face : (H,) index; next, prev : (H,) index
+    """
+    offsets = np.zeros(face_sizes.size + 1, dtype=np.int64)
+    np.cumsum(face_sizes, out=offsets[1:])
+    n_half = int(offsets[-1])
+    face = np.repeat(np.arange(face_sizes.size, dtype=index), face_sizes)
+    nxt = np.arange(1, n_half + 1, dtype=index)
+    last = offsets[1:] - 1
+    nxt[last] = offsets[:-1]
+    prv = np.arange(-1, n_half - 1, dtype=index)
+    prv[offsets[:-1]] = last
+    return offsets, face, nxt, prv
+
+
 def build_halfedges(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices: int) -> HalfEdgeMesh:
     """Half-edge structure of a polygon mesh (twins found by one sort of edge keys).
 
@@ -93,15 +121,8 @@ def build_halfedges(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertice
     """
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     origin = np.asarray(face_vertices, dtype=np.int64)
-    offsets = np.concatenate([[0], np.cumsum(face_sizes)])
+    offsets, face, nxt, prv = face_cycles(face_sizes)
     n_half = origin.size
-    face = np.repeat(np.arange(face_sizes.size, dtype=np.int64), face_sizes)
-    h = np.arange(n_half, dtype=np.int64)
-    nxt = h + 1
-    last = offsets[1:] - 1
-    nxt[last] = offsets[:-1]
-    prv = h - 1
-    prv[offsets[:-1]] = last
     dest = origin[nxt]
     # Twins: the two half-edges of an undirected edge, if there are exactly two
     # and they run in opposite directions (more, or the same direction, means a
@@ -130,12 +151,29 @@ def undirected_edges(mesh: HalfEdgeMesh):
     edge_of_halfedge : (H,) int
     counts : (E,) int, half-edges per edge (2 for an interior manifold edge)
     """
-    a, b = mesh.origin, mesh.dest
+    a, b = mesh.origin.astype(np.int64, copy=False), mesh.dest.astype(np.int64, copy=False)
     lo, hi = np.minimum(a, b), np.maximum(a, b)
     key = lo * mesh.n_vertices + hi
     unique, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
     edges = np.stack([unique // mesh.n_vertices, unique % mesh.n_vertices], axis=1)
     return edges, inverse.ravel(), counts
+
+
+def halfedge_edges(mesh: HalfEdgeMesh):
+    """Undirected edges numbered without sorting: one representative half-edge each.
+
+    Returns
+    -------
+    edge_of : (H,) int, edge index of every half-edge (a half-edge and its twin share one)
+    representatives : (E,) int, the half-edge of each edge (the smaller of the pair, or
+        the boundary half-edge)
+    """
+    h = np.arange(mesh.n_halfedges, dtype=mesh.twin.dtype)
+    representative = (mesh.twin < 0) | (h < mesh.twin)
+    number = np.cumsum(representative, dtype=mesh.twin.dtype)
+    number -= 1
+    edge_of = np.where(representative, number, number[np.maximum(mesh.twin, 0)])
+    return edge_of, h[representative]
 
 
 def vertex_valences(mesh: HalfEdgeMesh) -> np.ndarray:
