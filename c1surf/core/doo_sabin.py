@@ -18,7 +18,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import csr_matrix
+from scipy.sparse import csr_matrix, issparse
 
 from .topology import HalfEdgeMesh, face_cycles, outgoing_rings
 
@@ -193,6 +193,47 @@ def doo_sabin_matrix(mesh: HalfEdgeMesh, ratio: np.ndarray, per_corner: bool = F
         weights[:, np.arange(n), np.arange(n)] += 1.0 - a  # row i's own corner is entry i
         data[entries] = weights.ravel()
     return csr_matrix((data, indices, indptr), shape=(mesh.n_halfedges, mesh.n_vertices))
+
+
+class DooSabinStep:
+    """One Doo-Sabin step kept factored: ``fine = (1 - a) x[origin] + a centroid(face)``.
+
+    The same linear map as ``doo_sabin_matrix(mesh, ratio, per_corner=True)``,
+    applied from the mesh's own arrays: no matrix with n entries per fine
+    point is built or stored (for the second step that matrix is the largest
+    object of the construction). ``step @ points`` applies it, ``tocsr()``
+    gives the matrix, and ``matrix @ step`` / ``step @ matrix`` compose it
+    with sparse matrices like any operator of ``Surface.operators``.
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh with V vertices and H half-edges
+    ratio : (H,) float, the ratio of every corner
+    """
+
+    def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray):
+        self.mesh = mesh
+        self.ratio = np.asarray(ratio, dtype=np.float64)
+        self.shape = (mesh.n_halfedges, mesh.n_vertices)
+
+    def __matmul__(self, x):
+        if issparse(x):
+            return self.tocsr() @ x
+        x = np.asarray(x, dtype=np.float64)
+        flat = x.reshape(x.shape[0], -1)
+        mesh = self.mesh
+        corners = np.take(flat, mesh.origin, axis=0)  # (H, d): x at every corner, face by face
+        centroids = np.add.reduceat(corners, mesh.face_offsets[:-1], axis=0)
+        centroids /= mesh.face_sizes[:, None]
+        corners *= (1.0 - self.ratio)[:, None]
+        corners += self.ratio[:, None] * np.take(centroids, mesh.face, axis=0)
+        return corners.reshape((mesh.n_halfedges,) + x.shape[1:])
+
+    def __rmatmul__(self, other):
+        return other @ self.tocsr()
+
+    def tocsr(self) -> csr_matrix:
+        return doo_sabin_matrix(self.mesh, self.ratio, per_corner=True)
 
 
 def second_step_ratio(face_sizes: np.ndarray, blend: np.ndarray) -> np.ndarray:

@@ -22,7 +22,7 @@ from scipy.sparse import coo_matrix, csr_matrix, identity
 from scipy.sparse.csgraph import connected_components
 
 from .errors import TopologyError
-from .topology import HalfEdgeMesh, halfedge_edges
+from .topology import HalfEdgeMesh
 from .triangles import triangle_hole_coefficients
 
 
@@ -193,70 +193,68 @@ def biquadratic_stencil(mesh: HalfEdgeMesh, frames: np.ndarray) -> csr_matrix:
     return csr_matrix((np.tile(vals, n), cols.ravel().astype(index), indptr), shape=(9 * n, mesh.n_vertices))
 
 
+# A2 on the 3 x 3 refined points G around a regular vertex: Q = M G M^T, that is
+# corners are quad centroids, edge coefficients midpoints and the centre the vertex.
+_AVERAGE = np.array([[0.5, 0.5, 0.0], [0.0, 1.0, 0.0], [0.0, 0.5, 0.5]])
+BIQUADRATIC_FROM_GRID = np.kron(_AVERAGE, _AVERAGE)  # (9, 9): Q.ravel() = this @ G.ravel()
+
+
 @dataclass(frozen=True)
 class BiquadraticLayout:
-    """Step A2 as one gather from the refined points, face centroids and edge midpoints.
+    """Step A2 as a gather of 3 x 3 refined points and one small dense product.
 
-    Coefficient Q[i, j] of the patch at refined vertex c with frame e0..e3 is
-    the centroid S(e) of face(e) (corners), the midpoint M(e) of the refined
-    edge of e (edge coefficients) or c itself (centre):
+    The patch at refined vertex c with frame e0..e3 reads the grid
 
-        Q00 = S(e2)  Q01 = M(e2)  Q02 = S(e1)
-        Q10 = M(e3)  Q11 = c      Q12 = M(e1)
-        Q20 = S(e3)  Q21 = M(e0)  Q22 = S(e0)
+        G = [[diag(e2), dest(e2), diag(e1)],
+             [dest(e3), c,        dest(e1)],
+             [diag(e3), dest(e0), diag(e0)]]
 
-    Every centroid and midpoint is computed once and shared by the patches
-    around it; the coefficients are then one gather of contiguous rows. (A
-    25-entries-per-patch matrix costs several times more to build, store and
-    apply, and filling the edge coefficients by strided arithmetic does too.)
+    (diag(e): the vertex of face(e) opposite c) and has coefficients
+    Q = M G M^T (``BIQUADRATIC_FROM_GRID``): Q00 is the centroid of face(e2),
+    Q01 the midpoint of c and dest(e2), Q11 = c, and so on. Nine indices per
+    patch replace a 25-entries-per-patch matrix, and nothing but the output
+    is allocated at full size.
 
     Attributes
     ----------
-    centroids : (F, V) csr_matrix, face centroids of the refined mesh
-    edge_ends : (E, 2) int, the two refined vertices of every edge
-    index : (Nq, 3, 3) int, row of [points; centroids; midpoints] (V + F + E rows) that is Q[i, j]
+    grid : (9, Nq) int, refined vertex of G.ravel()[k] of every patch (slot-major, so
+        each slot gathers into a contiguous block)
     """
 
-    centroids: csr_matrix
-    edge_ends: np.ndarray
-    index: np.ndarray
+    grid: np.ndarray
 
 
 def biquadratic_layout(mesh: HalfEdgeMesh, frames: np.ndarray) -> BiquadraticLayout:
     """Step A2 for the patches with ``frames`` (Nq, 4) (see ``BiquadraticLayout``)."""
-    v, f = mesh.n_vertices, mesh.n_faces
-    edge_of, edges = halfedge_edges(mesh)
-    index_type = np.int32 if max(v + f + edges.size, mesh.n_halfedges) < 2**31 else np.int64
-    weights = np.repeat(1.0 / mesh.face_sizes, mesh.face_sizes)  # half-edges are stored face by face
-    centroids = csr_matrix((weights, mesh.origin.astype(index_type, copy=False),
-                            mesh.face_offsets.astype(index_type)), shape=(f, v))
-    edge_ends = np.stack([mesh.origin[edges], mesh.origin[mesh.next[edges]]], axis=1).astype(index_type, copy=False)
-    index = np.empty((frames.shape[0], 3, 3), dtype=index_type)
-    index[:, 2, 2], index[:, 0, 2], index[:, 0, 0], index[:, 2, 0] = (mesh.face[frames] + index_type(v)).T
-    index[:, 2, 1], index[:, 1, 2], index[:, 0, 1], index[:, 1, 0] = (edge_of[frames] + index_type(v + f)).T
-    index[:, 1, 1] = mesh.origin[frames[:, 0]]
-    return BiquadraticLayout(centroids, edge_ends, index)
+    index_type = np.int32 if mesh.n_vertices < 2**31 else np.int64
+    dest = mesh.origin[mesh.next[frames]]  # (Nq, 4)
+    diagonal = mesh.origin[mesh.next[mesh.next[frames]]]
+    grid = np.empty((9, frames.shape[0]), dtype=index_type)
+    grid[0], grid[1], grid[2] = diagonal[:, 2], dest[:, 2], diagonal[:, 1]
+    grid[3], grid[4], grid[5] = dest[:, 3], mesh.origin[frames[:, 0]], dest[:, 1]
+    grid[6], grid[7], grid[8] = diagonal[:, 3], dest[:, 0], diagonal[:, 0]
+    return BiquadraticLayout(grid)
 
 
 def biquadratic_patches(layout: BiquadraticLayout, points: np.ndarray) -> np.ndarray:
     """Step A2: (Nq, 3, 3, d) Bezier coefficients from refined ``points`` (V, d)."""
-    v, f, e = layout.centroids.shape[1], layout.centroids.shape[0], layout.edge_ends.shape[0]
-    d = points.shape[1]
-    rows = np.empty((v + f + e, d))
-    rows[:v] = points
-    rows[v : v + f] = layout.centroids @ points
-    midpoints = rows[v + f :]
-    np.take(points, layout.edge_ends[:, 0], axis=0, out=midpoints, mode="clip")
-    midpoints += np.take(points, layout.edge_ends[:, 1], axis=0, mode="clip")
-    midpoints *= 0.5
-    index = layout.index.reshape(-1)
-    out = np.empty((index.size, d))
-    # In blocks, so the int32 -> intp index copies stay small and in cache;
+    points = np.ascontiguousarray(points)
+    d, n = points.shape[1], layout.grid.shape[1]
+    out = np.empty((n, 3, 3, d))
+    # Blocks of patches that stay in cache: gather G slot by slot (contiguous),
+    # one (9 x 9) @ (9 x block d) product, then one strided copy into the output.
     # mode="clip": no bounds check, no buffering (the indices are valid by construction).
-    step = 1 << 18
-    for start in range(0, index.size, step):
-        np.take(rows, index[start : start + step], axis=0, out=out[start : start + step], mode="clip")
-    return out.reshape(layout.index.shape + (d,))
+    step = 1 << 12
+    grid = np.empty((9, min(step, n), d))
+    product = np.empty((9, min(step, n) * d))
+    for start in range(0, n, step):
+        stop = min(n, start + step)
+        g = grid[:, : stop - start]
+        for k in range(9):
+            np.take(points, layout.grid[k, start:stop], axis=0, out=g[k], mode="clip")
+        q = np.matmul(BIQUADRATIC_FROM_GRID, g.reshape(9, -1), out=product[:, : (stop - start) * d])
+        out[start:stop].reshape(-1, 9, d)[:] = q.reshape(9, -1, d).transpose(1, 0, 2)
+    return out
 
 
 def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric"):

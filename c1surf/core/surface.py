@@ -10,7 +10,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin, refined_halfedges
+from .doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX, DooSabinStep, doo_sabin_matrix, refine_doo_sabin, refined_halfedges
 from .errors import TopologyError
 from scipy.sparse import csr_matrix
 
@@ -180,7 +180,7 @@ class Surface:
             operators.append(step1)
         if levels == 2:
             ratio2 = second_step_corner_ratios(level1, faces1.kind == FACE_FROM_VERTEX, corner)
-            step2 = doo_sabin_matrix(level1, ratio2, per_corner=True)
+            step2 = DooSabinStep(level1, ratio2)  # factored: its matrix would be the largest object here
             faces2 = refine_doo_sabin(level1)
             refined = refined_halfedges(level1, faces2)
             operators.append(step2)

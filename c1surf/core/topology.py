@@ -159,23 +159,6 @@ def undirected_edges(mesh: HalfEdgeMesh):
     return edges, inverse.ravel(), counts
 
 
-def halfedge_edges(mesh: HalfEdgeMesh):
-    """Undirected edges numbered without sorting: one representative half-edge each.
-
-    Returns
-    -------
-    edge_of : (H,) int, edge index of every half-edge (a half-edge and its twin share one)
-    representatives : (E,) int, the half-edge of each edge (the smaller of the pair, or
-        the boundary half-edge)
-    """
-    h = np.arange(mesh.n_halfedges, dtype=mesh.twin.dtype)
-    representative = (mesh.twin < 0) | (h < mesh.twin)
-    number = np.cumsum(representative, dtype=mesh.twin.dtype)
-    number -= 1
-    edge_of = np.where(representative, number, number[np.maximum(mesh.twin, 0)])
-    return edge_of, h[representative]
-
-
 def vertex_valences(mesh: HalfEdgeMesh) -> np.ndarray:
     """(V,) int: number of faces around each vertex (0 for unused vertices)."""
     return np.bincount(mesh.origin, minlength=mesh.n_vertices)
