@@ -301,3 +301,21 @@ def test_biquadratic_gather_matches_the_25_entry_stencil(path):
     x = surface.refined_points
     direct = (surface.quad_stencil @ x).reshape(-1, 3, 3, x.shape[1])
     np.testing.assert_allclose(surface.biquadratic, direct, rtol=0, atol=1e-14 * np.abs(x).max())
+
+
+def test_factored_doo_sabin_step_is_its_matrix():
+    """The second refinement step applied factored, as a matrix, and composed, gives one map."""
+    from c1surf.core.doo_sabin import DooSabinStep
+
+    surface = surface_of(SAMPLES / "high_valence.obj")
+    step = surface.operators[2]
+    assert isinstance(step, DooSabinStep)
+    x = np.random.default_rng(3).normal(size=(step.shape[1], 3))
+    matrix = step.tocsr()
+    results = [step @ x for _ in range(4)]  # factored first, then the cached matrix
+    for y in results:
+        np.testing.assert_allclose(y, matrix @ x, rtol=0, atol=1e-14)
+    before = surface.operators[1] @ surface.operators[0]
+    np.testing.assert_allclose((step @ before).toarray(),
+                               (matrix @ before).toarray(), atol=1e-15)
+    np.testing.assert_allclose((surface.quad_stencil @ step).toarray(), (surface.quad_stencil @ matrix).toarray(), atol=1e-15)

@@ -215,10 +215,20 @@ class DooSabinStep:
         self.mesh = mesh
         self.ratio = np.asarray(ratio, dtype=np.float64)
         self.shape = (mesh.n_halfedges, mesh.n_vertices)
+        self._applied = 0
+        self._matrix = None
 
     def __matmul__(self, x):
         if issparse(x):
             return self.tocsr() @ x
+        # The factored form is cheapest to set up, the matrix ~3x faster to apply:
+        # a surface built once uses the first, ``update_points`` called again
+        # and again (animation, optimisation) builds and keeps the second.
+        self._applied += 1
+        if self._matrix is None and self._applied > 2:
+            self._matrix = self.tocsr()
+        if self._matrix is not None:
+            return self._matrix @ x
         x = np.asarray(x, dtype=np.float64)
         flat = x.reshape(x.shape[0], -1)
         mesh = self.mesh
@@ -233,6 +243,8 @@ class DooSabinStep:
         return other @ self.tocsr()
 
     def tocsr(self) -> csr_matrix:
+        if self._matrix is not None:
+            return self._matrix
         return doo_sabin_matrix(self.mesh, self.ratio, per_corner=True)
 
 

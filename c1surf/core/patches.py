@@ -22,6 +22,7 @@ from scipy.sparse import coo_matrix, csr_matrix, identity
 from scipy.sparse.csgraph import connected_components
 
 from .errors import TopologyError
+from .parallel import for_each_range
 from .topology import HalfEdgeMesh
 from .triangles import triangle_hole_coefficients
 
@@ -135,9 +136,11 @@ def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None)
         irregular[g.C.ravel()] = True
     wanted = (first >= 0) if wanted_vertex is None else (first >= 0) & wanted_vertex
     regular = np.flatnonzero(wanted & ~irregular)
-    quad_frames = vertex_frames(mesh, first[regular])
-    if np.any(mesh.face_sizes[mesh.face[quad_frames]] != 4):
+    # Every corner of a kept hole is irregular, so a regular vertex has four quads
+    # around it as long as no vertex is a corner of two holes (R3):
+    if irregular.sum() != sum(g.C.size for g in holes):
         raise TopologyError("internal: a refined vertex touches two holes")
+    quad_frames = vertex_frames(mesh, first[regular])
     if holes:
         cubic_frames = vertex_frames(mesh, np.concatenate([g.halfedges.ravel() for g in holes]))
     else:
@@ -241,19 +244,23 @@ def biquadratic_patches(layout: BiquadraticLayout, points: np.ndarray) -> np.nda
     points = np.ascontiguousarray(points)
     d, n = points.shape[1], layout.grid.shape[1]
     out = np.empty((n, 3, 3, d))
-    # Blocks of patches that stay in cache: gather G slot by slot (contiguous),
-    # one (9 x 9) @ (9 x block d) product, then one strided copy into the output.
-    # mode="clip": no bounds check, no buffering (the indices are valid by construction).
-    step = 1 << 12
-    grid = np.empty((9, min(step, n), d))
-    product = np.empty((9, min(step, n) * d))
-    for start in range(0, n, step):
-        stop = min(n, start + step)
-        g = grid[:, : stop - start]
-        for k in range(9):
-            np.take(points, layout.grid[k, start:stop], axis=0, out=g[k], mode="clip")
-        q = np.matmul(BIQUADRATIC_FROM_GRID, g.reshape(9, -1), out=product[:, : (stop - start) * d])
-        out[start:stop].reshape(-1, 9, d)[:] = q.reshape(9, -1, d).transpose(1, 0, 2)
+
+    def fill(first: int, last: int) -> None:
+        # Blocks of patches that stay in cache: gather G slot by slot (contiguous),
+        # one (9 x 9) @ (9 x block d) product, then one strided copy into the output.
+        # mode="clip": no bounds check, no buffering (the indices are valid by construction).
+        step = 1 << 12
+        grid = np.empty((9, min(step, last - first), d))
+        product = np.empty((9, min(step, last - first) * d))
+        for start in range(first, last, step):
+            stop = min(last, start + step)
+            g = grid[:, : stop - start]
+            for k in range(9):
+                np.take(points, layout.grid[k, start:stop], axis=0, out=g[k], mode="clip")
+            q = np.matmul(BIQUADRATIC_FROM_GRID, g.reshape(9, -1), out=product[:, : (stop - start) * d])
+            out[start:stop].reshape(-1, 9, d)[:] = q.reshape(9, -1, d).transpose(1, 0, 2)
+
+    for_each_range(n, fill)
     return out
 
 
