@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import csr_matrix, issparse
 
+from .parallel import for_each_range
 from .topology import HalfEdgeMesh, face_cycles, outgoing_rings
 
 FACE_FROM_FACE, FACE_FROM_EDGE, FACE_FROM_VERTEX = 0, 1, 2
@@ -230,14 +231,24 @@ class DooSabinStep:
         if self._matrix is not None:
             return self._matrix @ x
         x = np.asarray(x, dtype=np.float64)
-        flat = x.reshape(x.shape[0], -1)
-        mesh = self.mesh
-        corners = np.take(flat, mesh.origin, axis=0)  # (H, d): x at every corner, face by face
-        centroids = np.add.reduceat(corners, mesh.face_offsets[:-1], axis=0)
-        centroids /= mesh.face_sizes[:, None]
-        corners *= (1.0 - self.ratio)[:, None]
-        corners += self.ratio[:, None] * np.take(centroids, mesh.face, axis=0)
-        return corners.reshape((mesh.n_halfedges,) + x.shape[1:])
+        flat = np.ascontiguousarray(x.reshape(x.shape[0], -1))
+        mesh, ratio = self.mesh, self.ratio
+        offsets = mesh.face_offsets
+        out = np.empty((mesh.n_halfedges, flat.shape[1]))
+
+        def faces(first: int, last: int) -> None:  # faces first:last, by blocks that stay in cache
+            for f0 in range(first, last, 1 << 14):
+                f1 = min(last, f0 + (1 << 14))
+                h0, h1 = offsets[f0], offsets[f1]
+                corners = np.take(flat, mesh.origin[h0:h1], axis=0, mode="clip")  # x at every corner, face by face
+                centroids = np.add.reduceat(corners, offsets[f0:f1] - h0, axis=0)
+                centroids /= mesh.face_sizes[f0:f1, None]
+                block = out[h0:h1]
+                np.multiply(corners, (1.0 - ratio[h0:h1])[:, None], out=block)
+                block += ratio[h0:h1, None] * np.take(centroids, mesh.face[h0:h1] - f0, axis=0, mode="clip")
+
+        for_each_range(mesh.n_faces, faces, minimum=1 << 14)
+        return out.reshape((mesh.n_halfedges,) + x.shape[1:])
 
     def __rmatmul__(self, other):
         return other @ self.tocsr()

@@ -230,12 +230,20 @@ class BiquadraticLayout:
 def biquadratic_layout(mesh: HalfEdgeMesh, frames: np.ndarray) -> BiquadraticLayout:
     """Step A2 for the patches with ``frames`` (Nq, 4) (see ``BiquadraticLayout``)."""
     index_type = np.int32 if mesh.n_vertices < 2**31 else np.int64
-    dest = mesh.origin[mesh.next[frames]]  # (Nq, 4)
-    diagonal = mesh.origin[mesh.next[mesh.next[frames]]]
     grid = np.empty((9, frames.shape[0]), dtype=index_type)
-    grid[0], grid[1], grid[2] = diagonal[:, 2], dest[:, 2], diagonal[:, 1]
-    grid[3], grid[4], grid[5] = dest[:, 3], mesh.origin[frames[:, 0]], dest[:, 1]
-    grid[6], grid[7], grid[8] = diagonal[:, 3], dest[:, 0], diagonal[:, 0]
+    origin, nxt = mesh.origin, mesh.next
+
+    def fill(start: int, stop: int) -> None:  # random-access gathers: in threads, by blocks
+        f = frames[start:stop]
+        after = np.take(nxt, f, mode="clip")
+        dest = np.take(origin, after, mode="clip")  # (k, 4)
+        diagonal = np.take(origin, np.take(nxt, after, mode="clip"), mode="clip")
+        g = grid[:, start:stop]
+        g[0], g[1], g[2] = diagonal[:, 2], dest[:, 2], diagonal[:, 1]
+        g[3], g[4], g[5] = dest[:, 3], np.take(origin, f[:, 0], mode="clip"), dest[:, 1]
+        g[6], g[7], g[8] = diagonal[:, 3], dest[:, 0], diagonal[:, 0]
+
+    for_each_range(frames.shape[0], lambda a, b: [fill(s, min(b, s + (1 << 16))) for s in range(a, b, 1 << 16)])
     return BiquadraticLayout(grid)
 
 
