@@ -33,11 +33,10 @@ from .errors import MeshInputError
 from .patch_set import FORMAT_NAME, FORMAT_VERSION, PatchSet, surface_patch_set
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
-_ORDER = ("header", "biquadratic", "bicubic", "source_kind", "source", "corners", "edges", "reversed", "neighbours")
 
 
-def patch_set_arrays(patch_set: PatchSet) -> dict:
-    """The NPZ members of a PatchSet (c1surf surfaces: degrees (2, 2) and (3, 3) only)."""
+def _patch_groups(patch_set: PatchSet):
+    """(biquadratic groups, bicubic groups) of a PatchSet; refuses other degrees or orders."""
     quad, cubic = [], []
     seen_cubic = False
     for g in patch_set.groups:
@@ -49,35 +48,51 @@ def patch_set_arrays(patch_set: PatchSet) -> dict:
             seen_cubic = True
         else:
             raise ValueError("the NPZ patch format holds biquadratic patches followed by bicubic ones only")
-    arrays = {
-        "header": np.array(json.dumps(patch_set.header, separators=(",", ":"))),
-        "biquadratic": np.concatenate(quad) if quad else np.zeros((0, 3, 3, 3)),
-        "bicubic": np.concatenate(cubic) if cubic else np.zeros((0, 4, 4, 3)),
-    }
+    return quad, cubic
+
+
+def _joined(groups, empty_shape) -> np.ndarray:
+    """One array of the groups (no copy for a single group)."""
+    if not groups:
+        return np.zeros(empty_shape)
+    return groups[0] if len(groups) == 1 else np.concatenate(groups)
+
+
+def _members(patch_set: PatchSet):
+    """Yield (name, array) of the NPZ members in file order, each made when needed.
+
+    One member at a time: a large surface never holds all of them as copies at once.
+    """
+    quad, cubic = _patch_groups(patch_set)
+    yield "header", np.array(json.dumps(patch_set.header, separators=(",", ":")))
+    yield "biquadratic", _joined(quad, (0, 3, 3, 3))
+    yield "bicubic", _joined(cubic, (0, 4, 4, 3))
     if patch_set.source_kind is not None:
-        arrays["source_kind"] = np.asarray(patch_set.source_kind, dtype="<U6")
-        arrays["source"] = np.asarray(patch_set.source, dtype=np.int64)
+        yield "source_kind", np.asarray(patch_set.source_kind, dtype="<U6")
+        yield "source", np.asarray(patch_set.source, dtype=np.int64)
     if patch_set.adjacency is not None:
         a = patch_set.adjacency
-        arrays["corners"] = a.corners.astype(np.int64)
-        arrays["edges"] = a.edges.astype(np.int64)
-        arrays["reversed"] = a.reversed.astype(bool)
-        arrays["neighbours"] = a.neighbours()
-    return arrays
+        yield "corners", a.corners.astype(np.int64, copy=False)
+        yield "edges", a.edges.astype(np.int64, copy=False)
+        yield "reversed", a.reversed.astype(bool, copy=False)
+        yield "neighbours", a.neighbours()
+
+
+def patch_set_arrays(patch_set: PatchSet) -> dict:
+    """The NPZ members of a PatchSet (c1surf surfaces: degrees (2, 2) and (3, 3) only)."""
+    return dict(_members(patch_set))
 
 
 def write_patch_set_npz(path, patch_set: PatchSet) -> None:
     """Write a PatchSet as an uncompressed, byte-reproducible ``.npz``."""
-    arrays = patch_set_arrays(patch_set)
     with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
-        for name in _ORDER:
-            if name not in arrays:
-                continue
+        for name, array in _members(patch_set):
             info = zipfile.ZipInfo(name + ".npy", date_time=_DATE)
             info.compress_type = zipfile.ZIP_STORED
             info.external_attr = 0o644 << 16
             with zf.open(info, "w", force_zip64=True) as f:
-                np.lib.format.write_array(f, np.ascontiguousarray(arrays[name]), allow_pickle=False)
+                np.lib.format.write_array(f, np.ascontiguousarray(array), allow_pickle=False)
+            del array
 
 
 def write_patches_npz(path, surface, input_path: str | None = None, adjacency=None, **_options) -> None:
