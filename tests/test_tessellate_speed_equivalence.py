@@ -279,4 +279,5 @@ def test_patch_adjacency_matches_reference(name):
     s = surface(name)
     got = patch_adjacency(s.refined, s.frames)
     assert got == reference_patch_adjacency(s.refined, s.frames)
-    assert got.corners.dtype == np.int64 and got.edges.dtype == np.int64 and got.reversed.dtype == bool
+    # ids are int32 while 4 P < 2^31 (half the memory of the largest arrays), else int64
+    assert got.corners.dtype == np.int32 and got.edges.dtype == np.int32 and got.reversed.dtype == bool

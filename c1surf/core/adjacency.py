@@ -38,8 +38,8 @@ SIDE_CORNERS = np.array([[0, 1], [1, 2], [3, 2], [0, 3]])
 class PatchAdjacency:
     """Shared corners and sides of P patches.
 
-    corners : (P, 4) int64, corner ids, dense 0..n_corners-1
-    edges : (P, 4) int64, edge ids, dense 0..n_edges-1
+    corners : (P, 4) int (int32 from the construction while it fits), corner ids, dense 0..n_corners-1
+    edges : (P, 4) int (as corners), edge ids, dense 0..n_edges-1
     reversed : (P, 4) bool
     """
 
@@ -114,6 +114,8 @@ def _first_appearances(labels: np.ndarray):
     flat = labels.ravel()
     if flat.size == 0:
         return np.zeros(labels.shape, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    # int32 ids and positions when they fit: these arrays are 4 entries per patch
+    index = np.int32 if flat.size < 2**31 else np.int64
     if flat.min() < 0 or flat.max() >= 4 * flat.size + 1024:  # sparse or negative labels: sort
         _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
         order = np.argsort(first, kind="stable")
@@ -122,13 +124,13 @@ def _first_appearances(labels: np.ndarray):
         return rank[inverse.ravel()].reshape(labels.shape), first[order]
     # dense labels: a reverse scatter finds each label's first position; those positions, in
     # order, name the new ids (a scatter and gather of k labels instead of a cumsum over all)
-    first_at = np.full(int(flat.max()) + 1, flat.size, dtype=np.int64)
-    first_at[flat[::-1]] = np.arange(flat.size)[::-1]
+    first_at = np.full(int(flat.max()) + 1, flat.size, dtype=index)
+    first_at[flat[::-1]] = np.arange(flat.size, dtype=index)[::-1]
     is_first = np.zeros(flat.size + 1, dtype=bool)
     is_first[first_at] = True
     first = np.flatnonzero(is_first[:-1])
     new_id = first_at  # reused: only entries of labels that occur are read back
-    new_id[np.take(flat, first)] = np.arange(first.size)
+    new_id[np.take(flat, first)] = np.arange(first.size, dtype=index)
     return np.take(new_id, flat).reshape(labels.shape), first
 
 
@@ -180,14 +182,14 @@ def patch_adjacency(refined, frames: np.ndarray) -> PatchAdjacency:
     -------
     PatchAdjacency (canonical numbering, see the module docstring)
     """
-    frames = np.asarray(frames, dtype=np.int64).reshape(-1, 4)
+    frames = np.asarray(frames).reshape(-1, 4)  # int32 for refined meshes that fit (doo_sabin.refined_halfedges)
     face, twin = np.asarray(refined.face), np.asarray(refined.twin)
 
     def corners():  # face(e2), face(e3), face(e0), face(e1): one take, several times faster than four gathers
         return _first_appearance(np.take(face, frames)[:, [2, 3, 0, 1]])
 
     def edges():  # side s, run in increasing parameter, goes from face(x) to face(twin x)
-        x = np.empty_like(frames)
+        x = np.empty(frames.shape, dtype=np.result_type(frames, twin))
         x[:, :2] = np.take(twin, frames[:, [3, 0]])  # x = twin e3, twin e0, e1, e2
         x[:, 2:] = frames[:, 1:3]
         label = np.minimum(x, np.take(twin, x))

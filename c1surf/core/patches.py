@@ -142,9 +142,9 @@ def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None)
         raise TopologyError("internal: a refined vertex touches two holes")
     quad_frames = vertex_frames(mesh, first[regular])
     if holes:
-        cubic_frames = vertex_frames(mesh, np.concatenate([g.halfedges.ravel() for g in holes]))
+        cubic_frames = vertex_frames(mesh, np.concatenate([g.halfedges.ravel() for g in holes]).astype(mesh.twin.dtype))
     else:
-        cubic_frames = np.zeros((0, 4), dtype=np.int64)
+        cubic_frames = np.zeros((0, 4), dtype=quad_frames.dtype)
     return quad_frames, cubic_frames
 
 
