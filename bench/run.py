@@ -162,13 +162,13 @@ def _instrumented_build(surface_module, build):
     Functions that surface.py calls by name are wrapped: the refinement
     operators (doo_sabin_matrix, second_step_corner_ratios,
     perturbation_matrix; the second step is kept factored and costs nothing
-    to set up), the patch layouts (biquadratic_layout, bicubic_stencil) and
+    to set up), the patch layouts (biquadratic_layout, bicubic_layout) and
     update_points (geometry: the sparse products and gathers); everything else
     in the constructor is topology (half-edges, refinement connectivity,
     neighbourhoods, frames).
     """
     groups = {"doo_sabin_matrix": "refinement", "second_step_corner_ratios": "refinement", "perturbation_matrix": "refinement",
-              "biquadratic_layout": "patches", "bicubic_stencil": "patches"}
+              "biquadratic_layout": "patches", "bicubic_layout": "patches"}
     spent = {"refinement": 0.0, "patches": 0.0, "geometry": 0.0}
     depth = [0]
 

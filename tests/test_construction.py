@@ -295,12 +295,15 @@ def test_refined_halfedges_by_arithmetic_match_a_fresh_sort(path):
 
 
 @pytest.mark.parametrize("path", [SAMPLES / "twisted.obj", SAMPLES / "high_valence.obj"] + OPEN_SHARED[:2], ids=str)
-def test_biquadratic_gather_matches_the_25_entry_stencil(path):
-    """A2 by gathers of centroids and midpoints equals the plain per-patch stencil."""
+def test_patch_gathers_match_the_sparse_stencils(path):
+    """A2 and A3 by gathers and dense products per block equal the plain per-patch sparse stencils."""
     surface = surface_of(path if isinstance(path, Path) else shared_mesh(path))
     x = surface.refined_points
     direct = (surface.quad_stencil @ x).reshape(-1, 3, 3, x.shape[1])
     np.testing.assert_allclose(surface.biquadratic, direct, rtol=0, atol=1e-14 * np.abs(x).max())
+    assert surface.bicubic.shape[0] > 0
+    direct = (surface.cubic_stencil @ x).reshape(-1, 4, 4, x.shape[1])
+    np.testing.assert_allclose(surface.bicubic, direct, rtol=0, atol=1e-13 * np.abs(x).max())
 
 
 def test_factored_doo_sabin_step_is_its_matrix():

@@ -113,4 +113,5 @@ def second_step_corner_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, 
     cell_min = np.minimum.reduceat(ratio, level1.face_offsets[:-1])
     in_vertex_cell = is_vertex_cell[level1.face]
     ratio = np.where(in_vertex_cell, cell_min[level1.face], ratio)
-    return ratio * (1.0 - np.cos(2.0 * np.pi / level1.face_sizes[level1.face]))
+    per_face = 1.0 - np.cos(2.0 * np.pi / level1.face_sizes)  # per face, then spread to its corners
+    return ratio * np.take(per_face, level1.face)

@@ -23,7 +23,7 @@ from scipy.sparse.csgraph import connected_components
 
 from .errors import TopologyError
 from .parallel import for_each_range
-from .topology import HalfEdgeMesh
+from .topology import HalfEdgeMesh, first_outgoing
 from .triangles import triangle_hole_coefficients
 
 
@@ -105,17 +105,6 @@ def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:
     if np.any(frames < 0) or np.any(mesh.rotate(frames[:, 3]) != first):
         raise TopologyError("internal: a refined vertex is not 4-valent")
     return frames
-
-
-def first_outgoing(mesh: HalfEdgeMesh) -> np.ndarray:
-    """(V,) int: an outgoing half-edge of every vertex, -1 for unused vertices."""
-    v = mesh.n_vertices
-    if mesh.n_halfedges >= v and np.array_equal(mesh.origin[:v], np.arange(v)):
-        # a Doo-Sabin refined mesh: its F-faces come first and list every vertex once, in order
-        return np.arange(v, dtype=mesh.origin.dtype)
-    first = np.full(v, -1, dtype=np.int64)
-    first[mesh.origin[::-1]] = np.arange(mesh.n_halfedges)[::-1]
-    return first
 
 
 def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None):
@@ -349,6 +338,65 @@ def _local_bicubic_weights(n: int, alpha: float, beta: float, tangent_rule: str,
     W[np.abs(W) < 1e-15] = 0.0  # exact cancellations (e.g. a = 0 terms) left as round-off
     i, r, c = np.nonzero(W)
     return i, r, c, W[i, r, c]
+
+
+@lru_cache(maxsize=64)
+def _dense_bicubic_weights(n: int, alpha: float, beta: float, tangent_rule: str, triangles: str = "g1") -> np.ndarray:
+    """(16 n, 4 n) float: row 16 i + 4 k + l is coefficient P_{kl} of patch p_i, columns [A, B1, B2, C]."""
+    i, r, c, w = _local_bicubic_weights(n, alpha, beta, tangent_rule, triangles)
+    weights = np.zeros((16 * n, 4 * n))
+    weights[16 * i + r, c] = w
+    return weights
+
+
+@dataclass(frozen=True)
+class BicubicLayout:
+    """Step A3 as gathers of each hole's 4n points and one dense product per hole size.
+
+    Attributes
+    ----------
+    groups : tuple of (local, weights): local (k, 4n) int, the refined points [A, B1, B2, C]
+        of every n-sided hole; weights (16 n, 4 n) float (``_dense_bicubic_weights``)
+    keep : (Nc,) bool or None, the patches kept (open meshes: those at real corners)
+    """
+
+    groups: tuple
+    keep: np.ndarray | None
+
+
+def bicubic_layout(holes: list[HoleGroup], alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric",
+                   triangles: str = "g1", keep=None) -> BicubicLayout:
+    """Step A3 for all holes, patches numbered hole by hole (``holes`` order), corner i within a hole."""
+    groups = tuple((np.concatenate([g.A, g.B1, g.B2, g.C], axis=1),
+                    _dense_bicubic_weights(g.n, float(alpha), float(beta), tangent_rule, triangles)) for g in holes)
+    return BicubicLayout(groups, None if keep is None or np.all(keep) else np.asarray(keep, dtype=bool))
+
+
+def bicubic_patches(layout: BicubicLayout, points: np.ndarray) -> np.ndarray:
+    """Step A3: (Nc, 4, 4, d) Bezier coefficients from refined ``points`` (V, d)."""
+    points = np.ascontiguousarray(points)
+    d = points.shape[1]
+    parts = []
+    for local, weights in layout.groups:
+        k, m = local.shape  # m = 4 n local points, 16 n coefficients per hole
+        out = np.empty((k, weights.shape[0], d))
+
+        def fill(first: int, last: int, local=local, weights=weights, out=out, m=m) -> None:
+            # as biquadratic_patches: gather slot by slot, one product per block, one strided copy
+            step = max(1, (1 << 15) // m)
+            grid = np.empty((m, min(step, last - first), d))
+            for start in range(first, last, step):
+                stop = min(last, start + step)
+                g = grid[:, : stop - start]
+                for c in range(m):
+                    np.take(points, local[start:stop, c], axis=0, out=g[c], mode="clip")
+                product = weights @ g.reshape(m, -1)
+                out[start:stop] = product.reshape(weights.shape[0], -1, d).transpose(1, 0, 2)
+
+        for_each_range(k, fill, minimum=max(1, (1 << 16) // m))
+        parts.append(out.reshape(-1, 4, 4, d))
+    patches = np.concatenate(parts) if parts else np.zeros((0, 4, 4, d))
+    return patches if layout.keep is None else patches[layout.keep]
 
 
 def bicubic_stencil(mesh: HalfEdgeMesh, holes: list[HoleGroup], alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric",

@@ -179,8 +179,13 @@ def prepare_topology(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertic
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     face_vertices = np.asarray(face_vertices, dtype=np.int64)
     raw = build_halfedges(face_sizes, face_vertices, n_vertices)
-    check_edge_manifold(raw)
-    flip, non_orientable = orientation_flips(raw)
+    if raw.n_faces and np.all(raw.twin >= 0) and np.all(raw.face_sizes >= 3):
+        # every edge has exactly two half-edges running opposite ways (that is what pairs
+        # twins): closed, manifold edges, consistently oriented; nothing to check or flip
+        flip, non_orientable = np.zeros(raw.n_faces, dtype=bool), np.zeros(0, dtype=np.int64)
+    else:
+        check_edge_manifold(raw)
+        flip, non_orientable = orientation_flips(raw)
     if non_orientable.size:
         # Work on the orientation double cover; the caller keeps sheet 0 only.
         cover_sizes, cover_vertices, cover_source = orientation_double_cover(raw)

@@ -18,7 +18,8 @@ from .blend import check_ratios, corner_ratios, second_step_corner_ratios
 from .boundary import add_ghost_layer
 from .interpolation import normal_constraint, vertex_interpolation_step
 from .refinement import check_refinements, fewer_refinement_sources, refinements_needed
-from .patches import (biquadratic_layout, biquadratic_patches, biquadratic_stencil, bicubic_stencil,
+from .patches import (biquadratic_layout, biquadratic_patches, biquadratic_stencil, bicubic_layout, bicubic_patches,
+                      bicubic_stencil,
                       hole_neighbourhoods, patch_frames, perturbation_matrix)
 from .repair import check_valence, prepare_topology
 from .topology import HalfEdgeMesh
@@ -207,13 +208,12 @@ class Surface:
             if constraint is not None:
                 self.constraints.append(constraint)
         self.quad_layout = biquadratic_layout(refined, quad_frames)
-        cubic_stencil = bicubic_stencil(refined, holes, o.alpha, o.beta, o.tangent_rule, o.triangles)
         # keep the bicubic patches at real corners only (all of them on a closed mesh)
         real_cubic = real_vertex[refined.origin[cubic_frames[:, 0]]]
         self.cubic_frames = cubic_frames[real_cubic]
-        rows = (np.flatnonzero(real_cubic)[:, None] * 16 + np.arange(16)).ravel()
-        self.cubic_stencil = cubic_stencil[rows] if not real_cubic.all() else cubic_stencil
-        self.cubic_hole = np.repeat(np.arange(sum(g.cells.size for g in holes)), [g.n for g in holes for _ in range(g.cells.size)])[real_cubic]
+        self.cubic_layout = bicubic_layout(holes, o.alpha, o.beta, o.tangent_rule, o.triangles, keep=real_cubic)
+        sizes = np.concatenate([np.full(g.cells.size, g.n) for g in holes]) if holes else np.zeros(0, dtype=np.int64)
+        self.cubic_hole = np.repeat(np.arange(sizes.size), sizes)[real_cubic]
 
     # -- geometry ---------------------------------------------------------------------
 
@@ -248,7 +248,7 @@ class Surface:
         self.refined_points = x
         d = x.shape[1]
         biquadratic = biquadratic_patches(self.quad_layout, x)
-        bicubic = (self.cubic_stencil @ x).reshape(-1, 4, 4, d)
+        bicubic = bicubic_patches(self.cubic_layout, x)
         if self.weights is None:
             self.biquadratic, self.bicubic = biquadratic, bicubic
             self.biquadratic_weights = self.bicubic_weights = None
@@ -261,6 +261,16 @@ class Surface:
         return self
 
     # -- bookkeeping ------------------------------------------------------------------
+
+    @property
+    def cubic_stencil(self):
+        """(Nc * 16, V2) csr_matrix of step A3 (built on demand; ``update_points`` uses ``cubic_layout``)."""
+        o = self.options
+        stencil = bicubic_stencil(self.refined, self.holes, o.alpha, o.beta, o.tangent_rule, o.triangles)
+        keep = self.cubic_layout.keep
+        if keep is None:
+            return stencil
+        return stencil[(np.flatnonzero(keep)[:, None] * 16 + np.arange(16)).ravel()]
 
     @property
     def quad_stencil(self):

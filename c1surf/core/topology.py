@@ -189,6 +189,17 @@ def interior_vertices(mesh: HalfEdgeMesh) -> np.ndarray:
     return interior
 
 
+def first_outgoing(mesh: HalfEdgeMesh) -> np.ndarray:
+    """(V,) int: an outgoing half-edge of every vertex, -1 for unused vertices."""
+    v = mesh.n_vertices
+    if mesh.n_halfedges >= v and np.array_equal(mesh.origin[:v], np.arange(v)):
+        # a Doo-Sabin refined mesh: its F-faces come first and list every vertex once, in order
+        return np.arange(v, dtype=mesh.origin.dtype)
+    first = np.full(v, -1, dtype=np.int64)
+    first[mesh.origin[::-1]] = np.arange(mesh.n_halfedges)[::-1]
+    return first
+
+
 def outgoing_rings(mesh: HalfEdgeMesh):
     """Outgoing half-edges of every interior vertex in counter-clockwise order.
 
@@ -205,8 +216,7 @@ def outgoing_rings(mesh: HalfEdgeMesh):
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     # Start each ring at the vertex's first half-edge, then walk the rotation:
     # one vectorized step per ring position, over the rings still that long.
-    first = np.full(mesh.n_vertices, -1, dtype=np.int64)
-    first[mesh.origin[::-1]] = np.arange(mesh.n_halfedges)[::-1]
+    first = first_outgoing(mesh)
     ring = np.empty(offsets[-1], dtype=np.int64)
     current = first[vertices]
     active = np.arange(vertices.size)
