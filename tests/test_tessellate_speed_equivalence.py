@@ -209,7 +209,7 @@ def test_blocks_and_threads_change_nothing(monkeypatch, n):
         monkeypatch.setattr(tessellate_module, "_GRID_BLOCK_SAMPLES", grid_samples)
         runs = []
         for workers in (1, 2, 3):
-            monkeypatch.setattr(tessellate_module, "_WORKERS", workers)
+            monkeypatch.setenv("C1SURF_THREADS", str(workers))
             runs.append(tessellate_patches(groups, adjacency, n))
         for got in runs[1:]:
             for key in ("points", "normals", "triangles", "grid"):

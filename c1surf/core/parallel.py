@@ -12,7 +12,9 @@ may use, at most 8; 1 turns threading off).
 from __future__ import annotations
 
 import os
+import threading
 from concurrent.futures import ThreadPoolExecutor
+from contextlib import contextmanager
 
 _pool: ThreadPoolExecutor | None = None
 
@@ -46,6 +48,59 @@ def for_each_range(n: int, work, minimum: int = 1 << 16) -> None:
     if _pool is None or _pool._max_workers < threads:
         _pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="c1surf")
     bounds = [n * k // threads for k in range(threads + 1)]
-    futures = [_pool.submit(work, bounds[k], bounds[k + 1]) for k in range(threads)]
-    for future in futures:
-        future.result()  # re-raises a worker's exception here
+    # the blocks' matrix products are small: BLAS threads would only spin against ours
+    with _single_threaded_blas(_blas_threads()):
+        futures = [_pool.submit(work, bounds[k], bounds[k + 1]) for k in range(threads)]
+        for future in futures:
+            future.result()  # re-raises a worker's exception here
+_blas_lock = threading.Lock()
+_blas_users = [0, None]  # calls inside _single_threaded_blas, BLAS threads before the first of them
+
+
+@contextmanager
+def _single_threaded_blas(blas):
+    """BLAS on one thread inside; the count before is restored when the last concurrent user leaves."""
+    if blas is None:
+        yield
+        return
+    with _blas_lock:
+        if _blas_users[0] == 0:
+            _blas_users[1] = blas[0]()
+            blas[1](1)
+        _blas_users[0] += 1
+    try:
+        yield
+    finally:
+        with _blas_lock:
+            _blas_users[0] -= 1
+            if _blas_users[0] == 0:
+                blas[1](_blas_users[1])
+
+
+_BLAS_SYMBOLS = [("scipy_openblas_get_num_threads64_", "scipy_openblas_set_num_threads64_"),
+                 ("scipy_openblas_get_num_threads", "scipy_openblas_set_num_threads"),
+                 ("openblas_get_num_threads64_", "openblas_set_num_threads64_"),
+                 ("openblas_get_num_threads", "openblas_set_num_threads")]
+_blas_cache: list = []
+
+
+def _blas_threads():
+    """(get, set) of the number of threads of the OpenBLAS numpy has loaded, or None (other BLAS, not Linux)."""
+    if not _blas_cache:
+        _blas_cache.append(None)
+        try:
+            import ctypes
+
+            with open("/proc/self/maps", encoding="utf-8", errors="replace") as maps:
+                paths = sorted({line.split()[-1] for line in maps if "openblas" in line.lower() and "/" in line})
+            for path in paths:
+                lib = ctypes.CDLL(path)  # the loaded library again (dlopen of a loaded path does not reload it)
+                for get_name, set_name in _BLAS_SYMBOLS:
+                    if hasattr(lib, get_name) and hasattr(lib, set_name):
+                        get, set_ = getattr(lib, get_name), getattr(lib, set_name)
+                        get.restype, set_.argtypes = ctypes.c_int, [ctypes.c_int]
+                        _blas_cache[0] = (get, set_)
+                        return _blas_cache[0]
+        except (OSError, AttributeError):
+            pass
+    return _blas_cache[0]

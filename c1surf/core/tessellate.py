@@ -17,16 +17,15 @@ int32 while they fit.
 from __future__ import annotations
 
 import math
-import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
 from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 
 from .bezier import bernstein_basis, unit_normals
+from .parallel import _blas_threads, _single_threaded_blas, thread_count
 from .adjacency import PatchAdjacency, adjacency_from_geometry, patch_adjacency  # noqa: F401 (re-exported)
 
 
@@ -193,7 +192,6 @@ def tessellate_patches(patch_groups, adjacency: PatchAdjacency, resolution: int 
 
 _BLOCK_SAMPLES = 1 << 15  # samples evaluated per block: its ~20 float work arrays stay in a core's cache
 _GRID_BLOCK_SAMPLES = 1 << 18  # grid samples per block of patches (int32 ids and their triangles)
-_WORKERS = max(1, min(len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1, 16))
 
 
 @dataclass(frozen=True)
@@ -302,7 +300,7 @@ def _grid_block(welding: _Welding, a: int, z: int, grid: np.ndarray) -> None:
 
 
 def _run(tasks) -> None:
-    """Call the independent ``tasks`` (blocks writing disjoint rows) on up to _WORKERS threads.
+    """Call the independent ``tasks`` (blocks writing disjoint rows) on up to ``parallel.thread_count()`` threads.
 
     The matrix products of a block are small: BLAS threads would only spin
     against ours (measured: 5x slower when the other core is busy), so BLAS
@@ -310,7 +308,7 @@ def _run(tasks) -> None:
     at a time.
     """
     blas = _blas_threads()
-    workers = min(_WORKERS if blas else 1, len(tasks))
+    workers = min(thread_count() if blas else 1, len(tasks))
     with _single_threaded_blas(blas):
         if workers <= 1:
             for task in tasks:
@@ -322,59 +320,6 @@ def _run(tasks) -> None:
                 future.result()
         finally:
             pool.shutdown(wait=True, cancel_futures=True)  # on an error or an interrupt, skip the blocks not started
-
-
-_blas_lock = threading.Lock()
-_blas_users = [0, None]  # calls inside _single_threaded_blas, BLAS threads before the first of them
-
-
-@contextmanager
-def _single_threaded_blas(blas):
-    """BLAS on one thread inside; the count before is restored when the last concurrent user leaves."""
-    if blas is None:
-        yield
-        return
-    with _blas_lock:
-        if _blas_users[0] == 0:
-            _blas_users[1] = blas[0]()
-            blas[1](1)
-        _blas_users[0] += 1
-    try:
-        yield
-    finally:
-        with _blas_lock:
-            _blas_users[0] -= 1
-            if _blas_users[0] == 0:
-                blas[1](_blas_users[1])
-
-
-_BLAS_SYMBOLS = [("scipy_openblas_get_num_threads64_", "scipy_openblas_set_num_threads64_"),
-                 ("scipy_openblas_get_num_threads", "scipy_openblas_set_num_threads"),
-                 ("openblas_get_num_threads64_", "openblas_set_num_threads64_"),
-                 ("openblas_get_num_threads", "openblas_set_num_threads")]
-_blas_cache: list = []
-
-
-def _blas_threads():
-    """(get, set) of the number of threads of the OpenBLAS numpy has loaded, or None (other BLAS, not Linux)."""
-    if not _blas_cache:
-        _blas_cache.append(None)
-        try:
-            import ctypes
-
-            with open("/proc/self/maps", encoding="utf-8", errors="replace") as maps:
-                paths = sorted({line.split()[-1] for line in maps if "openblas" in line.lower() and "/" in line})
-            for path in paths:
-                lib = ctypes.CDLL(path)  # the loaded library again (dlopen of a loaded path does not reload it)
-                for get_name, set_name in _BLAS_SYMBOLS:
-                    if hasattr(lib, get_name) and hasattr(lib, set_name):
-                        get, set_ = getattr(lib, get_name), getattr(lib, set_name)
-                        get.restype, set_.argtypes = ctypes.c_int, [ctypes.c_int]
-                        _blas_cache[0] = (get, set_)
-                        return _blas_cache[0]
-        except (OSError, AttributeError):
-            pass
-    return _blas_cache[0]
 
 
 _local = threading.local()
