@@ -90,6 +90,32 @@ def polygon_mesh(faces, points):
     return np.array([len(f) for f in faces]), np.concatenate([np.asarray(f) for f in faces]), np.asarray(points, float)
 
 
+# -- small open meshes (tests of boundaries) ----------------------------------------------
+
+
+def grid(n, height=lambda x, y: 0.0 * x):
+    """An n x n quad grid, open."""
+    x, y = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0), indexing="ij")
+    points = np.c_[x.ravel(), y.ravel(), height(x, y).ravel()]
+    k = lambda i, j: i * (n + 1) + j  # noqa: E731
+    faces = [[k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1)] for i in range(n) for j in range(n)]
+    return polygon_mesh(faces, points)
+
+
+def fan(n, apex=0.4):
+    """n triangles around a centre vertex of valence n (a disk)."""
+    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    points = np.r_[[[0, 0, apex]], np.c_[np.cos(a), np.sin(a), 0.1 * np.sin(3 * a)]]
+    return polygon_mesh([[0, 1 + i, 1 + (i + 1) % n] for i in range(n)], points)
+
+
+def open_cylinder(n=10, rows=3):
+    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    points = np.concatenate([np.c_[np.cos(a), np.sin(a), np.full(n, z)] for z in range(rows + 1)])
+    faces = [[r * n + i, r * n + (i + 1) % n, (r + 1) * n + (i + 1) % n, (r + 1) * n + i] for r in range(rows) for i in range(n)]
+    return polygon_mesh(faces, points)
+
+
 def misprinted_bicubic(surface: Surface) -> np.ndarray:
     """``surface.bicubic`` with the transcription's misprinted P_12 (NOTES item 1) in every patch."""
     x = surface.refined_points

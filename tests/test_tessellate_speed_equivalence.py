@@ -24,7 +24,7 @@ from c1surf.core.surface import Surface
 from c1surf.core.tessellate import Tessellation, tessellate_patches, welded_grid_from_ids
 from c1surf.io.obj import read_obj
 
-from conftest import SAMPLES, polygon_mesh, surface_of
+from conftest import SAMPLES, fan, grid, open_cylinder, surface_of
 
 RESOLUTIONS = [2, 3, 8]
 MIXED = ["twisted", "high_valence", "hexagon_all_six_valent", "double_torus", "triangular_prism"]
@@ -33,29 +33,7 @@ MIXED = ["twisted", "high_valence", "hexagon_all_six_valent", "double_torus", "t
 # -- open meshes -----------------------------------------------------------------------
 
 
-def open_grid(n=4):
-    """An n x n quad grid with a bump, open."""
-    x, y = np.meshgrid(np.arange(n + 1.0), np.arange(n + 1.0), indexing="ij")
-    points = np.c_[x.ravel(), y.ravel(), (0.3 * np.sin(x) * np.cos(y)).ravel()]
-    k = lambda i, j: i * (n + 1) + j  # noqa: E731
-    return polygon_mesh([[k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1)] for i in range(n) for j in range(n)], points)
-
-
-def open_fan(n=5):
-    """n triangles around a vertex of valence n (a disk)."""
-    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    points = np.r_[[[0, 0, 0.4]], np.c_[np.cos(a), np.sin(a), 0.1 * np.sin(3 * a)]]
-    return polygon_mesh([[0, 1 + i, 1 + (i + 1) % n] for i in range(n)], points)
-
-
-def open_cylinder(n=7, rows=2):
-    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    points = np.concatenate([np.c_[np.cos(a), np.sin(a), np.full(n, z)] for z in range(rows + 1)])
-    faces = [[r * n + i, r * n + (i + 1) % n, (r + 1) * n + (i + 1) % n, (r + 1) * n + i] for r in range(rows) for i in range(n)]
-    return polygon_mesh(faces, points)
-
-
-OPEN = {"grid": open_grid, "fan": open_fan, "cylinder": open_cylinder}
+OPEN = {"grid": lambda: grid(4, lambda x, y: 0.3 * np.sin(x) * np.cos(y)), "fan": lambda: fan(5), "cylinder": lambda: open_cylinder(7, 2)}
 _SURFACES: dict = {}
 
 
