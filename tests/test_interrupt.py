@@ -20,11 +20,18 @@ def temp_files(directory):
     return [p for p in directory.iterdir() if p.name.startswith(".tmp-c1surf")]
 
 
+def _interruptible():
+    """In the child: SIGINT at its default, as from a terminal. A test run started in the
+    background (``cmd &``, some CI runners) hands its children SIGINT ignored, and Python keeps
+    an ignored SIGINT ignored: Ctrl-C would not reach the conversion at all."""
+    signal.signal(signal.SIGINT, signal.SIG_DFL)
+
+
 def convert_until_writing(mesh, out):
     """Start a conversion and return it once its temporary output exists (it is writing)."""
     resolution = "8" if out.suffix == ".obj" else "12"
     proc = subprocess.Popen([sys.executable, "-m", "c1surf.cli.main", "convert", str(mesh), "-o", str(out), "-r", resolution, "-q"],
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True, preexec_fn=_interruptible)
     deadline = time.time() + 120
     while not temp_files(out.parent) and proc.poll() is None and time.time() < deadline:
         time.sleep(0.002)
