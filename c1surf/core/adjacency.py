@@ -24,11 +24,11 @@ exactly as ``convert`` does.
 """
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
+
+from .parallel import run_tasks
 
 # Corner (start, end) of each side, in increasing parameter.
 SIDE_CORNERS = np.array([[0, 1], [1, 2], [3, 2], [0, 3]])
@@ -143,26 +143,13 @@ def _edge_ids(edge_labels: np.ndarray, forward_key: np.ndarray):
     return edges, reversed_
 
 
-def _concurrently(first, second):
-    """(first(), second()), on two threads when there are two cores (numpy releases the GIL in both)."""
-    if (len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1) < 2:
-        return first(), second()
-    pool = ThreadPoolExecutor(1)
-    try:
-        a = pool.submit(first)
-        b = second()
-        return a.result(), b
-    finally:
-        pool.shutdown(wait=True, cancel_futures=True)
-
-
 def _canonical(corner_labels: np.ndarray, edge_labels: np.ndarray, forward_key: np.ndarray) -> PatchAdjacency:
     """Canonical adjacency from arbitrary labels.
 
     forward_key : (P, 4) int; two sides of one edge run the same way iff their keys are equal.
     """
-    corners, (edges, reversed_) = _concurrently(lambda: _first_appearance(corner_labels),
-                                                lambda: _edge_ids(edge_labels, forward_key))
+    corners, (edges, reversed_) = run_tasks([lambda: _first_appearance(corner_labels),
+                                             lambda: _edge_ids(edge_labels, forward_key)])
     return PatchAdjacency(corners, edges, reversed_)
 
 
@@ -197,7 +184,7 @@ def patch_adjacency(refined, frames: np.ndarray) -> PatchAdjacency:
             raise ValueError("internal: a patch side crosses a boundary half-edge")
         return _edge_ids(label, x)
 
-    corner_ids, (edge_ids, reversed_) = _concurrently(corners, edges)  # independent
+    corner_ids, (edge_ids, reversed_) = run_tasks([corners, edges])  # independent: two threads
     return PatchAdjacency(corner_ids, edge_ids, reversed_)
 
 

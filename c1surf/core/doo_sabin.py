@@ -257,18 +257,3 @@ class DooSabinStep:
         if self._matrix is not None:
             return self._matrix
         return doo_sabin_matrix(self.mesh, self.ratio, per_corner=True)
-
-
-def second_step_ratio(face_sizes: np.ndarray, blend: np.ndarray) -> np.ndarray:
-    """Ratio of the second refinement step, ``alpha_f (1 - cos(2 pi / n))`` (A1).
-
-    Parameters
-    ----------
-    face_sizes : (F,) int, sizes of the once-refined faces
-    blend : (F,) float, their blend ratios alpha_f
-
-    Returns
-    -------
-    (F,) float
-    """
-    return blend * (1.0 - np.cos(2.0 * np.pi / face_sizes))

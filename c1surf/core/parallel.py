@@ -1,10 +1,11 @@
 """Threads over blocks of rows, for the loops whose numpy calls release the GIL.
 
 Gathers (``np.take``), BLAS products and elementwise arithmetic on large
-arrays run without the GIL, so the blocked loops of the construction and the
-tessellation split their blocks between a few threads. Each thread gets one
-contiguous range of blocks and its own scratch buffers; results go to
-disjoint slices of a preallocated output, so no locking is needed.
+arrays run without the GIL, so the blocked loops of the construction, the
+adjacency and the tessellation share one pool of threads: ``run_tasks`` for
+independent tasks, ``for_each_range`` for one contiguous range of rows per
+thread. Tasks write disjoint slices of preallocated outputs, so no locking is
+needed.
 
 ``C1SURF_THREADS`` sets the number of threads (default: the CPUs this process
 may use, at most 8; 1 turns threading off).
@@ -15,8 +16,9 @@ import os
 import threading
 from concurrent.futures import ThreadPoolExecutor
 from contextlib import contextmanager
+from functools import partial
 
-_pool: ThreadPoolExecutor | None = None
+_PREFIX = "c1surf"
 
 
 def thread_count() -> int:
@@ -31,28 +33,51 @@ def thread_count() -> int:
     return max(1, min(cpus, 8))
 
 
-def for_each_range(n: int, work, minimum: int = 1 << 16) -> None:
-    """Call ``work(start, stop)`` on consecutive ranges covering 0..n, in threads.
+def run_tasks(tasks, uses_blas: bool = False) -> list:
+    """Call independent ``tasks`` (each writes only its own rows) on the shared pool.
+
+    Parameters
+    ----------
+    tasks : list of callables without arguments
+    uses_blas : bool, the tasks make (small) matrix products: BLAS is held to one
+        thread meanwhile, since its threads would only spin against ours (measured
+        5x slower when the other core is busy); where that cannot be done (not
+        OpenBLAS) the tasks run one after another
+
+    Returns
+    -------
+    list, the tasks' results in order
+    """
+    blas = _blas_threads() if uses_blas else None
+    workers = min(thread_count(), len(tasks))
+    if (uses_blas and blas is None) or threading.current_thread().name.startswith(_PREFIX):
+        workers = 1  # no BLAS control, or already on one of our threads (no oversubscription)
+    if workers <= 1:
+        return [task() for task in tasks]
+    # a pool per call: its threads, and the work arrays they keep (tessellate._work), end with it
+    pool = ThreadPoolExecutor(max_workers=workers, thread_name_prefix=_PREFIX)
+    try:
+        with _single_threaded_blas(blas):
+            return [future.result() for future in [pool.submit(task) for task in tasks]]  # re-raises errors
+    finally:
+        pool.shutdown(wait=True, cancel_futures=True)  # after an error or an interrupt, skip the tasks not started
+
+
+def for_each_range(n: int, work, minimum: int = 1 << 16, uses_blas: bool = False) -> None:
+    """Call ``work(start, stop)`` on consecutive ranges covering 0..n, one per thread.
 
     Parameters
     ----------
     n : int, rows to cover
     work : callable(start, stop), fills rows start:stop of some output (and only those)
     minimum : int, fewer rows than this per thread are not worth a thread
+    uses_blas : bool, as for ``run_tasks``
     """
-    global _pool
     threads = min(thread_count(), max(1, n // minimum))
-    if threads == 1:
-        work(0, n)
-        return
-    if _pool is None or _pool._max_workers < threads:
-        _pool = ThreadPoolExecutor(max_workers=threads, thread_name_prefix="c1surf")
     bounds = [n * k // threads for k in range(threads + 1)]
-    # the blocks' matrix products are small: BLAS threads would only spin against ours
-    with _single_threaded_blas(_blas_threads()):
-        futures = [_pool.submit(work, bounds[k], bounds[k + 1]) for k in range(threads)]
-        for future in futures:
-            future.result()  # re-raises a worker's exception here
+    run_tasks([partial(work, bounds[k], bounds[k + 1]) for k in range(threads)], uses_blas)
+
+
 _blas_lock = threading.Lock()
 _blas_users = [0, None]  # calls inside _single_threaded_blas, BLAS threads before the first of them
 
@@ -86,8 +111,7 @@ _blas_cache: list = []
 
 def _blas_threads():
     """(get, set) of the number of threads of the OpenBLAS numpy has loaded, or None (other BLAS, not Linux)."""
-    if not _blas_cache:
-        _blas_cache.append(None)
+    if not _blas_cache:  # only a found library is remembered: numpy may load OpenBLAS after a first call
         try:
             import ctypes
 
@@ -99,8 +123,9 @@ def _blas_threads():
                     if hasattr(lib, get_name) and hasattr(lib, set_name):
                         get, set_ = getattr(lib, get_name), getattr(lib, set_name)
                         get.restype, set_.argtypes = ctypes.c_int, [ctypes.c_int]
-                        _blas_cache[0] = (get, set_)
+                        _blas_cache.append((get, set_))
                         return _blas_cache[0]
         except (OSError, AttributeError):
             pass
+        return None
     return _blas_cache[0]

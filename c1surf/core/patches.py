@@ -236,29 +236,45 @@ def biquadratic_layout(mesh: HalfEdgeMesh, frames: np.ndarray) -> BiquadraticLay
     return BiquadraticLayout(grid)
 
 
-def biquadratic_patches(layout: BiquadraticLayout, points: np.ndarray) -> np.ndarray:
-    """Step A2: (Nq, 3, 3, d) Bezier coefficients from refined ``points`` (V, d)."""
+def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """out[p] = weights @ points[slots[:, p]] for every patch p: a small stencil applied to gathered rows.
+
+    Blocks of patches that stay in cache, on the thread pool: gather slot by slot
+    (each into a contiguous row of the block), one (r x m) @ (m x block d) product,
+    one strided copy into the output. mode="clip": no bounds check, no buffering
+    (the indices are valid by construction).
+
+    Parameters
+    ----------
+    points : (V, d) float
+    slots : (m, k) int, slots[j, p] is the row of points that is input j of patch p
+    weights : (r, m) float
+    out : (k, r, d) float, filled and returned
+    """
     points = np.ascontiguousarray(points)
-    d, n = points.shape[1], layout.grid.shape[1]
-    out = np.empty((n, 3, 3, d))
+    m, k = slots.shape
+    d = points.shape[1]
+    step = max(1, (1 << 15) // m)
 
     def fill(first: int, last: int) -> None:
-        # Blocks of patches that stay in cache: gather G slot by slot (contiguous),
-        # one (9 x 9) @ (9 x block d) product, then one strided copy into the output.
-        # mode="clip": no bounds check, no buffering (the indices are valid by construction).
-        step = 1 << 12
-        grid = np.empty((9, min(step, last - first), d))
-        product = np.empty((9, min(step, last - first) * d))
+        gathered = np.empty((m, min(step, last - first), d))
+        product = np.empty((weights.shape[0], gathered.shape[1] * d))
         for start in range(first, last, step):
             stop = min(last, start + step)
-            g = grid[:, : stop - start]
-            for k in range(9):
-                np.take(points, layout.grid[k, start:stop], axis=0, out=g[k], mode="clip")
-            q = np.matmul(BIQUADRATIC_FROM_GRID, g.reshape(9, -1), out=product[:, : (stop - start) * d])
-            out[start:stop].reshape(-1, 9, d)[:] = q.reshape(9, -1, d).transpose(1, 0, 2)
+            g = gathered[:, : stop - start]
+            for j in range(m):
+                np.take(points, slots[j, start:stop], axis=0, out=g[j], mode="clip")
+            q = np.matmul(weights, g.reshape(m, -1), out=product[:, : (stop - start) * d])
+            out[start:stop] = q.reshape(weights.shape[0], -1, d).transpose(1, 0, 2)
 
-    for_each_range(n, fill)
+    for_each_range(k, fill, minimum=max(1, (1 << 19) // m), uses_blas=True)
     return out
+
+
+def biquadratic_patches(layout: BiquadraticLayout, points: np.ndarray) -> np.ndarray:
+    """Step A2: (Nq, 3, 3, d) Bezier coefficients from refined ``points`` (V, d)."""
+    n, d = layout.grid.shape[1], points.shape[1]
+    return gathered_products(points, layout.grid, BIQUADRATIC_FROM_GRID, np.empty((n, 9, d))).reshape(n, 3, 3, d)
 
 
 def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric"):
@@ -374,27 +390,9 @@ def bicubic_layout(holes: list[HoleGroup], alpha: float = 1.0, beta: float = 0.0
 
 def bicubic_patches(layout: BicubicLayout, points: np.ndarray) -> np.ndarray:
     """Step A3: (Nc, 4, 4, d) Bezier coefficients from refined ``points`` (V, d)."""
-    points = np.ascontiguousarray(points)
     d = points.shape[1]
-    parts = []
-    for local, weights in layout.groups:
-        k, m = local.shape  # m = 4 n local points, 16 n coefficients per hole
-        out = np.empty((k, weights.shape[0], d))
-
-        def fill(first: int, last: int, local=local, weights=weights, out=out, m=m) -> None:
-            # as biquadratic_patches: gather slot by slot, one product per block, one strided copy
-            step = max(1, (1 << 15) // m)
-            grid = np.empty((m, min(step, last - first), d))
-            for start in range(first, last, step):
-                stop = min(last, start + step)
-                g = grid[:, : stop - start]
-                for c in range(m):
-                    np.take(points, local[start:stop, c], axis=0, out=g[c], mode="clip")
-                product = weights @ g.reshape(m, -1)
-                out[start:stop] = product.reshape(weights.shape[0], -1, d).transpose(1, 0, 2)
-
-        for_each_range(k, fill, minimum=max(1, (1 << 16) // m))
-        parts.append(out.reshape(-1, 4, 4, d))
+    parts = [gathered_products(points, local.T, weights, np.empty((local.shape[0], weights.shape[0], d))).reshape(-1, 4, 4, d)
+             for local, weights in layout.groups]  # per hole size n: 4n points in, 16n coefficients out
     patches = np.concatenate(parts) if parts else np.zeros((0, 4, 4, d))
     return patches if layout.keep is None else patches[layout.keep]
 

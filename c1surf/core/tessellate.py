@@ -18,14 +18,13 @@ from __future__ import annotations
 
 import math
 import threading
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from functools import partial
 
 import numpy as np
 
 from .bezier import bernstein_basis, unit_normals
-from .parallel import _blas_threads, _single_threaded_blas, thread_count
+from .parallel import run_tasks
 from .adjacency import PatchAdjacency, adjacency_from_geometry, patch_adjacency  # noqa: F401 (re-exported)
 
 
@@ -113,7 +112,7 @@ def welded_grid_from_ids(adjacency: PatchAdjacency, n: int) -> np.ndarray:
     welding = _Welding.of(adjacency, n)
     grid = np.empty((welding.n_patches, n, n), dtype=welding.dtype)
     step = welding.patch_block
-    _run([partial(_grid_block, welding, a, min(a + step, welding.n_patches), grid) for a in range(0, welding.n_patches, step)])
+    run_tasks([partial(_grid_block, welding, a, min(a + step, welding.n_patches), grid) for a in range(0, welding.n_patches, step)])
     return grid
 
 
@@ -297,29 +296,6 @@ def _grid_block(welding: _Welding, a: int, z: int, grid: np.ndarray) -> None:
         np.add(first[:, s, None], np.take(pattern, back[:, s], axis=0), out=side)
     interior = np.arange(a * inner * inner, z * inner * inner, dtype=grid.dtype).reshape(z - a, inner, inner)
     np.add(interior, welding.patch_base, out=out[:, 1:-1, 1:-1])
-
-
-def _run(tasks) -> None:
-    """Call the independent ``tasks`` (blocks writing disjoint rows) on up to ``parallel.thread_count()`` threads.
-
-    The matrix products of a block are small: BLAS threads would only spin
-    against ours (measured: 5x slower when the other core is busy), so BLAS
-    runs single-threaded meanwhile. Without a way to tell it, blocks run one
-    at a time.
-    """
-    blas = _blas_threads()
-    workers = min(thread_count() if blas else 1, len(tasks))
-    with _single_threaded_blas(blas):
-        if workers <= 1:
-            for task in tasks:
-                task()
-            return
-        pool = ThreadPoolExecutor(workers)
-        try:
-            for future in [pool.submit(task) for task in tasks]:
-                future.result()
-        finally:
-            pool.shutdown(wait=True, cancel_futures=True)  # on an error or an interrupt, skip the blocks not started
 
 
 _local = threading.local()
@@ -553,4 +529,4 @@ def _evaluate_welded(groups, welding: _Welding, points, normals, grid, local, tr
             rows = slice(welding.n_corners + a * inner, welding.n_corners + z * inner)
             tasks.append(partial(_owned_block, side, groups, starts, welding.edge_owner[a:z], inner,
                                  points[rows].reshape(z - a, inner * dim), normals[rows]))
-    _run(tasks)
+    run_tasks(tasks, uses_blas=True)
