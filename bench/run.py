@@ -121,7 +121,7 @@ def make_inputs(directory: Path, tori, real: bool, max_faces: int):
     if real:
         for name, path in REAL_MESHES.items():
             if path.exists():
-                from c1surf.io.read import read_mesh
+                from c1surf.io.meshes.read import read_mesh
 
                 mesh = read_mesh(path)
                 inputs.append({"name": name, "kind": "real mesh", "path": str(path), "faces": mesh.n_faces,
@@ -138,7 +138,7 @@ def _maxrss_mb() -> float:
 
 
 def _load(path):
-    from c1surf.io.read import read_mesh
+    from c1surf.io.meshes.read import read_mesh
 
     return read_mesh(path)
 
@@ -205,14 +205,14 @@ def _instrumented_build(surface_module, build):
 
 
 def work_c1surf(job):
-    from c1surf import runtime
+    from c1surf.cli import runtime
 
     runtime.tune_allocator()
-    import c1surf.core.surface as surface_module
-    from c1surf.core.adjacency import patch_adjacency
-    from c1surf.core.tessellate import tessellate_patches
-    from c1surf.io.mesh_out import write_triangle_mesh
-    from c1surf.io.patch_formats import PATCH_WRITERS
+    import c1surf.construction.surface as surface_module
+    from c1surf.evaluation.adjacency import patch_adjacency
+    from c1surf.evaluation.tessellate import tessellate_patches
+    from c1surf.io.meshes.write import write_triangle_mesh
+    from c1surf.io.patches.formats import PATCH_WRITERS
 
     seconds, peak = {}, {}
     start = time.perf_counter()
@@ -262,12 +262,12 @@ def work_c1surf(job):
 
 def work_throughput(job):
     """c1surf tessellation at resolution N (default 8): samples per second."""
-    from c1surf import runtime
+    from c1surf.cli import runtime
 
     runtime.tune_allocator()
-    from c1surf.core.adjacency import patch_adjacency
-    from c1surf.core.surface import Surface
-    from c1surf.core.tessellate import tessellate_patches
+    from c1surf.evaluation.adjacency import patch_adjacency
+    from c1surf.construction.surface import Surface
+    from c1surf.evaluation.tessellate import tessellate_patches
 
     points, sizes, verts = torus(*job["grid"])
     surface = Surface(sizes, verts, points)
@@ -293,7 +293,7 @@ def work_limit(job):
     """The numpy limit: bicubic patches on an 8 x 8 grid as one dense product (positions only)."""
     from scipy.special import comb
 
-    from c1surf import runtime
+    from c1surf.cli import runtime
 
     runtime.tune_allocator()  # the same allocator setting as the c1surf workers
     patches, n = job["patches"], 8

@@ -7,11 +7,11 @@
 """
 from __future__ import annotations
 
-from .core.smoothness import measure_smoothness
-from .core.surface import Surface, SurfaceOptions, build_surface
-from .core.tessellate import tessellate
-from .io.read import read_mesh
-from .io.surface_data import surface_data
+from .evaluation.smoothness import measure_smoothness
+from .construction.surface import Surface, SurfaceOptions, build_surface
+from .evaluation.tessellate import tessellate
+from .io.meshes.read import read_mesh
+from .io.meshes.surface_data import surface_data
 
 
 def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False, **options):

@@ -11,11 +11,11 @@ import matplotlib.pyplot as plt  # noqa: E402
 import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
-from c1surf.core.bezier import bernstein_basis, raise_degree  # noqa: E402
-from c1surf.core.boundary import add_ghost_layer  # noqa: E402
-from c1surf.core.repair import prepare_topology  # noqa: E402
-from c1surf.core.smoothness import match_patch_sides  # noqa: E402
-from c1surf.core.surface import Surface  # noqa: E402
+from c1surf.evaluation.bezier import bernstein_basis, raise_degree  # noqa: E402
+from c1surf.mesh.ghost_layer import add_ghost_layer  # noqa: E402
+from c1surf.mesh.repair import prepare_topology  # noqa: E402
+from c1surf.evaluation.smoothness import match_patch_sides  # noqa: E402
+from c1surf.construction.surface import Surface  # noqa: E402
 
 # an L-shaped patch of quads with one triangle pair: straight runs, a reflex and convex corners
 cells = [(i, j) for i in range(4) for j in range(3) if not (i >= 2 and j >= 2)]

@@ -6,8 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from c1surf.core.surface import Surface, SurfaceOptions
-from c1surf.io.obj import read_obj
+from c1surf.construction.surface import Surface, SurfaceOptions
+from c1surf.io.meshes.obj import read_obj
 
 ROOT = Path(__file__).resolve().parents[1]
 SAMPLES = ROOT / "sample_meshes"

@@ -18,7 +18,7 @@ from scipy.spatial import cKDTree
 from click.testing import CliRunner
 
 from c1surf.cli.main import main
-from c1surf.core.bezier import evaluate_patches
+from c1surf.evaluation.bezier import evaluate_patches
 
 from conftest import CLOSED_SAMPLES, SAMPLES, shared_mesh, surface_of
 

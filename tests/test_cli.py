@@ -13,7 +13,7 @@ import trimesh
 from click.testing import CliRunner
 
 from c1surf.cli.main import main
-from c1surf.io.patch_file import read_patches_json
+from c1surf.io.patches.json_patches import read_patches_json
 
 from conftest import SAMPLES, shared_mesh
 
@@ -80,8 +80,8 @@ def test_check_converts_a_mesh_first():
 
 
 def test_patch_file_floats_round_trip_exactly(tmp_path):
-    from c1surf.core.surface import Surface
-    from c1surf.io.obj import read_obj
+    from c1surf.construction.surface import Surface
+    from c1surf.io.meshes.obj import read_obj
 
     patches = tmp_path / "p.json"
     assert run("convert", SAMPLES / "icosahedron.obj", "-o", tmp_path / "x.obj", "--patches", patches).exit_code == 0

@@ -13,12 +13,12 @@ import trimesh
 from scipy.interpolate import BSpline
 from scipy.spatial import cKDTree
 
-from c1surf.core.bezier import evaluate_patches, raise_degree
-from c1surf.core.patches import bicubic_hole_coefficients
-from c1surf.core.smoothness import measure_smoothness
-from c1surf.core.surface import Surface, SurfaceOptions
-from c1surf.core.tessellate import tessellate
-from c1surf.io.obj import read_obj
+from c1surf.evaluation.bezier import evaluate_patches, raise_degree
+from c1surf.construction.stencils.patches import bicubic_hole_coefficients
+from c1surf.evaluation.smoothness import measure_smoothness
+from c1surf.construction.surface import Surface, SurfaceOptions
+from c1surf.evaluation.tessellate import tessellate
+from c1surf.io.meshes.obj import read_obj
 
 from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, misprinted_bicubic, polygon_mesh, shared_mesh, surface_of
 
@@ -275,11 +275,11 @@ OPEN_SHARED = ["opensubdiv/catmark_edgecorner.obj", "opensubdiv/catmark_tent.obj
 @pytest.mark.parametrize("path", [SAMPLES / p.name for p in sorted(SAMPLES.glob("*.obj"))] + OPEN_SHARED, ids=str)
 def test_refined_halfedges_by_arithmetic_match_a_fresh_sort(path):
     """The refined half-edges (twins by index arithmetic) are those a sort of edge keys finds."""
-    from c1surf.core.boundary import add_ghost_layer
-    from c1surf.core.doo_sabin import refine_doo_sabin, refined_halfedges
-    from c1surf.core.repair import prepare_topology
-    from c1surf.core.topology import build_halfedges
-    from c1surf.io.read import read_mesh
+    from c1surf.mesh.ghost_layer import add_ghost_layer
+    from c1surf.construction.refine.doo_sabin import refine_doo_sabin, refined_halfedges
+    from c1surf.mesh.repair import prepare_topology
+    from c1surf.mesh.halfedges import build_halfedges
+    from c1surf.io.meshes.read import read_mesh
 
     mesh = read_mesh(path if isinstance(path, Path) else shared_mesh(path))
     coarse, source, report = prepare_topology(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices)
@@ -308,7 +308,7 @@ def test_patch_gathers_match_the_sparse_stencils(path):
 
 def test_factored_doo_sabin_step_is_its_matrix():
     """The second refinement step applied factored, as a matrix, and composed, gives one map."""
-    from c1surf.core.doo_sabin import DooSabinStep
+    from c1surf.construction.refine.doo_sabin import DooSabinStep
 
     surface = surface_of(SAMPLES / "high_valence.obj")
     step = surface.operators[2]

@@ -7,9 +7,9 @@ import trimesh
 from click.testing import CliRunner
 
 from c1surf.cli.main import main
-from c1surf.core.smoothness import measure_smoothness
-from c1surf.core.surface import Surface
-from c1surf.io.read import read_mesh
+from c1surf.evaluation.smoothness import measure_smoothness
+from c1surf.construction.surface import Surface
+from c1surf.io.meshes.read import read_mesh
 
 from conftest import SHARED_MESHES
 

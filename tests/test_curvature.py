@@ -6,14 +6,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from c1surf.core.bezier import bernstein_basis, evaluate_patches_at, raise_degree
-from c1surf.core.curvature import (
+from c1surf.evaluation.bezier import bernstein_basis, evaluate_patches_at, raise_degree
+from c1surf.evaluation.curvature import (
     bernstein_columns,
     patch_curvature,
     surface_curvature,
     tessellation_curvature,
 )
-from c1surf.io.patch_formats import PATCH_LOADERS
+from c1surf.io.patches.formats import PATCH_LOADERS
 
 GOLDEN = Path(__file__).resolve().parent / "golden"
 RNG = np.random.default_rng(20240611)
@@ -203,8 +203,8 @@ def test_invariant_under_rigid_motion_scaling_and_reparametrization():
 def test_global_patch_index_and_tessellation_vertices():
     """``surface_curvature`` indexes biquadratic then bicubic; a welded tessellation's interior
     vertices carry exactly their patch's curvature, shared ones the mean over their patches."""
-    from c1surf.core.tessellate import tessellate_patches
-    from c1surf.io.patch_formats import load_patch_set
+    from c1surf.evaluation.tessellate import tessellate_patches
+    from c1surf.io.patches.formats import load_patch_set
 
     patch_set = load_patch_set(GOLDEN / "twisted.json")
     groups = patch_set.groups

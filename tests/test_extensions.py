@@ -22,19 +22,19 @@ from plyfile import PlyData
 from scipy.spatial import cKDTree
 
 from c1surf.cli.main import main
-from c1surf.core.bezier import bernstein_basis, evaluate_patches, raise_degree, unit_normals
-from c1surf.core.blend import corner_ratios, second_step_corner_ratios
-from c1surf.core.doo_sabin import FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin
-from c1surf.core.rational import evaluate_rational
-from c1surf.core.smoothness import match_patch_sides, measure_smoothness
-from c1surf.core.surface import Surface, SurfaceOptions
-from c1surf.core.tessellate import tessellate
-from c1surf.core.topology import build_halfedges
-from c1surf.core.triangles import triangle_hole_coefficients
-from c1surf.io.obj import read_obj
-from c1surf.io.patch_file import read_patch_set_json
-from c1surf.io.read import read_mesh
-from c1surf.io.surface_data import surface_data
+from c1surf.evaluation.bezier import bernstein_basis, evaluate_patches, raise_degree, unit_normals
+from c1surf.construction.stencils.blend import corner_ratios, second_step_corner_ratios
+from c1surf.construction.refine.doo_sabin import FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin
+from c1surf.evaluation.rational import evaluate_rational
+from c1surf.evaluation.smoothness import match_patch_sides, measure_smoothness
+from c1surf.construction.surface import Surface, SurfaceOptions
+from c1surf.evaluation.tessellate import tessellate
+from c1surf.mesh.halfedges import build_halfedges
+from c1surf.construction.stencils.triangles import triangle_hole_coefficients
+from c1surf.io.meshes.obj import read_obj
+from c1surf.io.patches.json_patches import read_patch_set_json
+from c1surf.io.meshes.read import read_mesh
+from c1surf.io.meshes.surface_data import surface_data
 
 from conftest import CLOSED_SAMPLES, SAMPLES, polygon_mesh
 from test_construction import slab_with_polygons
@@ -915,7 +915,7 @@ def test_fewer_refinements_on_shared_meshes(relative, levels):
 
 
 def test_too_few_refinements_are_refused(tmp_path):
-    from c1surf.core.errors import TopologyError
+    from c1surf.mesh.errors import TopologyError
 
     cube = read_obj(SAMPLES / "cube.obj")
     for levels in (0, 1):
@@ -963,7 +963,7 @@ def bspline_values(piece, s):
 
 @pytest.mark.parametrize("case", ["torus", "torus0", "twisted", "rational", "split_cube"])
 def test_merged_bsplines_are_the_biquadratic_patches(case):
-    from c1surf.core.merge import merge_biquadratic
+    from c1surf.evaluation.merge import merge_biquadratic
 
     if case.startswith("torus"):
         surface = Surface(*regular_torus(), SurfaceOptions(refinements=0 if case == "torus0" else 2))
@@ -1023,7 +1023,7 @@ def test_merge_writes_bsplines_to_json_and_iges(tmp_path):
     reader.TransferRoots()
     face = TopoDS.Face(TopExp_Explorer(reader.OneShape(), TopAbs_FACE).Current())
     geom = BRep_Tool.Surface_s(face)
-    from c1surf.core.merge import MergedPiece
+    from c1surf.evaluation.merge import MergedPiece
 
     piece = MergedPiece(np.asarray(first["points"]), None, np.asarray(first["knots_u"]), np.asarray(first["knots_v"]),
                         np.asarray(first["patches"]), np.asarray(first["rotation"]))

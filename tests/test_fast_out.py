@@ -5,9 +5,9 @@ import numpy as np
 import pytest
 from plyfile import PlyData
 
-from c1surf.io.fast_out import format_fixed, write_obj, write_ply_plain
-from c1surf.io.mesh_out import write_triangle_mesh
-from c1surf.io.obj import read_obj
+from c1surf.io.meshes.fast_out import format_fixed, write_obj, write_ply_plain
+from c1surf.io.meshes.write import write_triangle_mesh
+from c1surf.io.meshes.obj import read_obj
 
 
 def _mesh(scale=1.0, v=500):

@@ -7,10 +7,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from c1surf.cli.main import main
-from c1surf.core.errors import TopologyError
-from c1surf.core.smoothness import measure_smoothness
-from c1surf.core.surface import Surface
-from c1surf.core.tessellate import tessellate
+from c1surf.mesh.errors import TopologyError
+from c1surf.evaluation.smoothness import measure_smoothness
+from c1surf.construction.surface import Surface
+from c1surf.evaluation.tessellate import tessellate
 
 FUZZ = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 

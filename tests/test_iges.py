@@ -1,4 +1,4 @@
-"""Tests of the IGES 5.3 writer (c1surf.io.iges).
+"""Tests of the IGES 5.3 writer (c1surf.io.patches.iges_writer).
 
 Record structure and entity contents are checked by a small independent
 parser; geometry is checked by reading the files back with Open CASCADE
@@ -15,7 +15,7 @@ import time
 import numpy as np
 import pytest
 
-from c1surf.io.iges import (
+from c1surf.io.patches.iges_writer import (
     UNITS,
     _format_reals,
     bezier_patches_to_surfaces,

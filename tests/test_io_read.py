@@ -14,10 +14,10 @@ from plyfile import PlyData, PlyElement
 
 from c1surf.io.atomic import atomic_output
 from c1surf.io.errors import MeshInputError, OutputError
-from c1surf.io.mesh_file import MeshFile, find_repeated_vertex
-from c1surf.io.obj import parse_obj, read_obj
-from c1surf.io.ply import read_ply
-from c1surf.io.read import read_mesh
+from c1surf.io.meshes.mesh_file import MeshFile, find_repeated_vertex
+from c1surf.io.meshes.obj import parse_obj, read_obj
+from c1surf.io.meshes.ply import read_ply
+from c1surf.io.meshes.read import read_mesh
 
 SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
 
@@ -626,7 +626,7 @@ def test_random_meshes_roundtrip(tmp_path, mesh, style, relative, crlf, order):
                                              max_size=12))
 def test_random_obj_slow_path_agrees(mesh, forms):
     """The corner-by-corner fallback gives what the bulk parse gives."""
-    import c1surf.io.obj as obj_module
+    import c1surf.io.meshes.obj as obj_module
     points, faces = mesh
     lines = ["v " + " ".join(repr(float(c)) for c in p) for p in points]
     lines += ["vt 0.5 0.25", "vn 0 0 1"]

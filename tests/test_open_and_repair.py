@@ -6,13 +6,13 @@ import pytest
 import trimesh
 from scipy.spatial import cKDTree
 
-from c1surf.core.bezier import bernstein_basis, raise_degree
-from c1surf.core.errors import TopologyError
-from c1surf.core.smoothness import match_patch_sides, measure_smoothness
-from c1surf.core.surface import Surface
-from c1surf.core.tessellate import tessellate
-from c1surf.core.topology import build_halfedges
-from c1surf.io.read import read_mesh
+from c1surf.evaluation.bezier import bernstein_basis, raise_degree
+from c1surf.mesh.errors import TopologyError
+from c1surf.evaluation.smoothness import match_patch_sides, measure_smoothness
+from c1surf.construction.surface import Surface
+from c1surf.evaluation.tessellate import tessellate
+from c1surf.mesh.halfedges import build_halfedges
+from c1surf.io.meshes.read import read_mesh
 
 from conftest import SAMPLES, fan, grid, open_cylinder, polygon_mesh, shared_mesh
 
@@ -141,7 +141,7 @@ def test_boundary_corners_stay_corners():
 
 
 def flipped(sizes, vertices, which):
-    from c1surf.core.repair import reverse_faces
+    from c1surf.mesh.repair import reverse_faces
 
     flip = np.zeros(sizes.size, dtype=bool)
     flip[which] = True

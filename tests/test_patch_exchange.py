@@ -24,15 +24,15 @@ import pytest
 from click.testing import CliRunner
 
 from c1surf.cli.main import main
-from c1surf.core.adjacency import PatchAdjacency, SIDE_CORNERS, adjacency_from_geometry, patch_adjacency
-from c1surf.core.bezier import bernstein_basis, evaluate_patches
-from c1surf.core.surface import SurfaceOptions
-from c1surf.core.tessellate import tessellate, tessellate_patches
-from c1surf.io.iges import write_iges
-from c1surf.io.patch_file import read_patch_set_json
-from c1surf.io.patch_formats import PATCH_LOADERS, PATCH_READERS, load_patch_set
-from c1surf.io.patch_npz import read_patch_set_npz, write_patch_set_npz
-from c1surf.io.patch_set import PatchSet
+from c1surf.evaluation.adjacency import PatchAdjacency, SIDE_CORNERS, adjacency_from_geometry, patch_adjacency
+from c1surf.evaluation.bezier import bernstein_basis, evaluate_patches
+from c1surf.construction.surface import SurfaceOptions
+from c1surf.evaluation.tessellate import tessellate, tessellate_patches
+from c1surf.io.patches.iges_writer import write_iges
+from c1surf.io.patches.json_patches import read_patch_set_json
+from c1surf.io.patches.formats import PATCH_LOADERS, PATCH_READERS, load_patch_set
+from c1surf.io.patches.npz import read_patch_set_npz, write_patch_set_npz
+from c1surf.evaluation.patch_set import PatchSet
 
 from conftest import CLOSED_SAMPLES, SAMPLES, shared_mesh, surface_of
 

@@ -11,12 +11,12 @@ from click.testing import CliRunner
 from PIL import Image as PILImage
 
 from c1surf.cli.main import main
-from c1surf.core.camera import VIEWS, frame_camera
-from c1surf.core.curvature import patch_tangents, surface_curvature, tessellation_curvature
-from c1surf.core.render import edge_discontinuity, patch_grid_mesh, reflection_phase, render, stripes
-from c1surf.core.smoothness import measure_smoothness
-from c1surf.io.exr import write_exr
-from c1surf.io.patch_formats import load_patch_set
+from c1surf.render.camera import VIEWS, frame_camera
+from c1surf.evaluation.curvature import patch_tangents, surface_curvature, tessellation_curvature
+from c1surf.render.raycast import edge_discontinuity, patch_grid_mesh, reflection_phase, render, stripes
+from c1surf.evaluation.smoothness import measure_smoothness
+from c1surf.io.images.exr import write_exr
+from c1surf.io.patches.formats import load_patch_set
 
 from conftest import SAMPLES, misprinted_bicubic, surface_of
 from test_curvature import rational_sphere_patch
@@ -270,7 +270,7 @@ def test_convert_curvature_ply_readable_by_plyfile_and_trimesh(tmp_path):
     np.testing.assert_array_equal(mesh.faces, reference.faces)
     np.testing.assert_array_equal(mesh.vertices, reference.vertices)
     assert mesh.is_watertight
-    from c1surf.core.tessellate import patch_adjacency, tessellate_patches
+    from c1surf.evaluation.tessellate import patch_adjacency, tessellate_patches
 
     surface = surface_of(SAMPLES / "twisted.obj")
     groups = [surface.biquadratic, surface.bicubic]

@@ -16,13 +16,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-import c1surf.core.tessellate as tessellate_module
-from c1surf.core.adjacency import PatchAdjacency, _first_appearance, _first_appearances, patch_adjacency
-from c1surf.core.bezier import bernstein_basis
-from c1surf.core.rational import evaluate_rational, homogeneous
-from c1surf.core.surface import Surface
-from c1surf.core.tessellate import Tessellation, tessellate_patches, welded_grid_from_ids
-from c1surf.io.obj import read_obj
+import c1surf.evaluation.tessellate as tessellate_module
+from c1surf.evaluation.adjacency import PatchAdjacency, _first_appearance, _first_appearances, patch_adjacency
+from c1surf.evaluation.bezier import bernstein_basis
+from c1surf.evaluation.rational import evaluate_rational, homogeneous
+from c1surf.construction.surface import Surface
+from c1surf.evaluation.tessellate import Tessellation, tessellate_patches, welded_grid_from_ids
+from c1surf.io.meshes.obj import read_obj
 
 from conftest import SAMPLES, fan, grid, open_cylinder, surface_of
 

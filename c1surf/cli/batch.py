@@ -19,9 +19,9 @@ from pathlib import Path
 
 import click
 
-from ..io.mesh_out import MESH_FORMATS
-from ..io.patch_formats import PATCH_WRITERS
-from ..io.read import SUPPORTED_SUFFIXES
+from ..io.meshes.write import MESH_FORMATS
+from ..io.patches.formats import PATCH_WRITERS
+from ..io.meshes.read import SUPPORTED_SUFFIXES
 from .common import friendly_errors
 from .options import surface_options
 

@@ -5,9 +5,9 @@ from pathlib import Path
 
 import click
 
-from ..core.smoothness import measure_smoothness
-from ..io.patch_formats import PATCH_LOADERS, PATCH_READERS
-from ..io.read import read_mesh
+from ..evaluation.smoothness import measure_smoothness
+from ..io.patches.formats import PATCH_LOADERS, PATCH_READERS
+from ..io.meshes.read import read_mesh
 from .common import friendly_errors
 from .convert import build_or_fail, extension_setup
 from .options import extension_options, surface_options

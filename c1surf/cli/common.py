@@ -9,7 +9,7 @@ from pathlib import Path
 
 import click
 
-from ..core.errors import TopologyError
+from ..mesh.errors import TopologyError
 from ..io.errors import C1SurfFileError
 
 

@@ -6,16 +6,16 @@ import os
 
 import click
 
-from ..core.errors import TopologyError
-from ..core.surface import Surface, SurfaceOptions
-from ..core.tessellate import patch_adjacency, tessellate_patches
+from ..mesh.errors import TopologyError
+from ..construction.surface import Surface, SurfaceOptions
+from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
-from ..io.attribute_mesh import ATTRIBUTE_FORMATS, write_attribute_mesh
-from ..io.mesh_out import MESH_FORMATS, write_triangle_mesh
-from ..io.patch_formats import PATCH_WRITERS
-from ..io.patch_iges import DEFAULT_UNITS, UNITS
-from ..io.read import read_mesh
-from ..io.surface_data import surface_data
+from ..io.meshes.attribute_mesh import ATTRIBUTE_FORMATS, write_attribute_mesh
+from ..io.meshes.write import MESH_FORMATS, write_triangle_mesh
+from ..io.patches.formats import PATCH_WRITERS
+from ..io.patches.iges import DEFAULT_UNITS, UNITS
+from ..io.meshes.read import read_mesh
+from ..io.meshes.surface_data import surface_data
 from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes, topology_failure
 from .options import extension_options, surface_options
 
@@ -151,14 +151,14 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
 
         groups = [surface.biquadratic, surface.bicubic]
         if surface.rational:  # core.curvature reads 4 columns as homogeneous (w x, w)
-            from ..core.rational import homogeneous
+            from ..evaluation.rational import homogeneous
 
             groups = [homogeneous(g, w) for g, w in zip(groups, surface.patch_weights)]
         extra = curvature_properties(groups, tess, progress.advance)
     progress.phase(f"writing {output}")
     merged = None
     if merge:
-        from ..core.merge import merge_biquadratic
+        from ..evaluation.merge import merge_biquadratic
 
         merged = merge_biquadratic(surface)
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:

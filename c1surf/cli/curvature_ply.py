@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..core.curvature import tessellation_curvature
-from ..io.images import colormap, curvature_range
+from ..evaluation.curvature import tessellation_curvature
+from ..render.pictures import colormap, curvature_range
 
 
 def curvature_properties(groups, tess, progress=None) -> dict:

@@ -6,7 +6,7 @@ import signal
 import click
 
 from .. import __version__
-from ..runtime import tune_allocator
+from .runtime import tune_allocator
 from .batch import batch
 from .check import check
 from .convert import convert
@@ -31,7 +31,7 @@ def main(ctx, debug):
     # SIGTERM (a killed make job, a batch scheduler) unwinds like Ctrl-C, so
     # temporary output files are removed and nothing partial is left behind.
     signal.signal(signal.SIGTERM, _interrupt)
-    tune_allocator()  # reuse freed memory instead of faulting in fresh pages (c1surf.runtime)
+    tune_allocator()  # reuse freed memory instead of faulting in fresh pages (c1surf.cli.runtime)
 
 
 def _interrupt(signum, frame):

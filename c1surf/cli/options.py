@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import click
 
-from ..core.surface import TANGENT_RULES, TRIANGLE_RULES
+from ..construction.surface import TANGENT_RULES, TRIANGLE_RULES
 
 
 def surface_options(command):

@@ -9,14 +9,14 @@ import click
 import numpy as np
 
 from .. import __version__
-from ..core.camera import PROJECTIONS, VIEWS, frame_camera
-from ..core.render import CURVATURE_NAMES, GEOMETRY_NAMES, default_resolution, patch_grid_mesh, render, render_atlas
-from ..core.surface import SurfaceOptions
+from ..render.camera import PROJECTIONS, VIEWS, frame_camera
+from ..render.raycast import CURVATURE_NAMES, GEOMETRY_NAMES, default_resolution, patch_grid_mesh, render, render_atlas
+from ..construction.surface import SurfaceOptions
 from ..io.atomic import atomic_output
-from ..io.exr import write_exr
-from ..io.images import COLORMAPS, curvature_picture, srgb_to_linear, write_png, zebra_picture
-from ..io.patch_formats import PATCH_LOADERS
-from ..io.read import read_mesh
+from ..io.images.exr import write_exr
+from ..render.pictures import COLORMAPS, curvature_picture, srgb_to_linear, write_png, zebra_picture
+from ..io.patches.formats import PATCH_LOADERS
+from ..io.meshes.read import read_mesh
 from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes
 from .convert import available_memory, build_or_fail
 from .options import surface_options
@@ -164,7 +164,7 @@ def render_command(input_path, output, png_path, zebra_path, view, eye, target, 
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="embreex is not installed")  # a note below says it
         if atlas:
-            from ..core.render import atlas_layout, default_tile
+            from ..render.raycast import atlas_layout, default_tile
 
             tile = tile or default_tile(n_patches)
             rows, columns = atlas_layout(n_patches, tile)

@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import click
 
-from ..core.tessellate import tessellate_patches
+from ..evaluation.tessellate import tessellate_patches
 from ..io.atomic import atomic_output
-from ..io.mesh_out import MESH_FORMATS, write_triangle_mesh
-from ..io.patch_formats import PATCH_LOADERS
+from ..io.meshes.write import MESH_FORMATS, write_triangle_mesh
+from ..io.patches.formats import PATCH_LOADERS
 from .common import Failure, Progress, friendly_errors, output_suffix
 from .convert import check_tessellation_size
 

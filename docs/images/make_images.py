@@ -37,9 +37,9 @@ def main():
 
 
 def broken_pair(path):
-    from c1surf.core.camera import frame_camera
-    from c1surf.core.render import reflection_phase, render, stripes
-    from c1surf.core.smoothness import measure_smoothness
+    from c1surf.render.camera import frame_camera
+    from c1surf.render.raycast import reflection_phase, render, stripes
+    from c1surf.evaluation.smoothness import measure_smoothness
     from test_render import misprinted_surface, worst_edge_point
 
     good, bad = misprinted_surface()

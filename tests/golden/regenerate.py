@@ -27,11 +27,11 @@ GOLDEN = Path(__file__).resolve().parent
 if str(ROOT) not in sys.path:  # run as a script from anywhere
     sys.path.insert(0, str(ROOT))
 
-from c1surf.core.adjacency import patch_adjacency  # noqa: E402
-from c1surf.core.surface import Surface, SurfaceOptions  # noqa: E402
-from c1surf.core.tessellate import tessellate_patches  # noqa: E402
-from c1surf.io.obj import read_obj  # noqa: E402
-from c1surf.io.patch_file import surface_patch_document  # noqa: E402
+from c1surf.evaluation.adjacency import patch_adjacency  # noqa: E402
+from c1surf.construction.surface import Surface, SurfaceOptions  # noqa: E402
+from c1surf.evaluation.tessellate import tessellate_patches  # noqa: E402
+from c1surf.io.meshes.obj import read_obj  # noqa: E402
+from c1surf.io.patches.json_patches import surface_patch_document  # noqa: E402
 
 # torus.obj (1536 patches, 1 MB of JSON) is left out to keep the files small;
 # double_torus covers higher genus.

@@ -1,0 +1,117 @@
+"""Blend ratios per cell and per vertex (paper, A1 and section 4).
+
+The paper gives every input cell f a blend ratio alpha_f and notes (section
+4) that ratios can also be attached to mesh points: "alpha = 0.15 everywhere
+except at the mesh points labelled 0.0 and 0.5". c1surf supports both:
+
+- **first step**: the new point of corner (f, v) is ``(1 - a) V + a S_f`` with
+  ``a`` the ratio of vertex v when v has one, else the ratio of cell f. So
+  ``doo_sabin_matrix`` gets one ratio per corner (half-edge).
+- **second step**: a once-refined vertex *is* an input corner (f, v) and
+  keeps that corner's first-step ratio: every new point the second step makes
+  from it in an F-cell or E-cell uses it, times ``1 - cos(2 pi / n)`` as in
+  A1. V-cells (made at input vertex v) take one ratio, the minimum of their
+  corners' ratios: one ratio keeps the V-cell's centroid, which A1a needs,
+  and the minimum lets a zero ratio win, which Lemma 1.3.12 needs. Hence
+  - the F-cell of input cell f keeps alpha_f at the corners without a vertex ratio;
+  - an E-cell's points follow the cells (or vertices) they come from;
+  - the V-cell of v takes v's ratio when v has one, else the smallest ratio
+    of the cells around v.
+  With one ratio everywhere this is the paper's rule.
+
+Zero ratios (Lemma 1.3.12 and its proof): cell ratio 0 makes the points A, B, C
+around the cell coalesce into its vertices, so a planar cell becomes a planar
+piece of surface bounded by its edges, and every edge of it lies on the
+surface; vertex ratio 0 coalesces all points around the vertex into it, so
+the surface passes through it. Coalesced points make patches degenerate
+there (zero derivatives: no normal), as in the paper.
+
+Ratios are data, not geometry: the construction stays linear in the points.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...mesh.halfedges import HalfEdgeMesh
+
+
+def check_ratios(values, count: int, what: str, allow_unset: bool) -> np.ndarray:
+    """Validate ratios: (count,) floats in [0, 1]; NaN (or any negative value) means unset when ``allow_unset``.
+
+    Returns
+    -------
+    (count,) float64, unset entries as NaN
+    """
+    r = np.asarray(values, dtype=np.float64).reshape(-1)
+    if r.size != count:
+        raise ValueError(f"{what}: expected {count} values, got {r.size}")
+    if allow_unset:
+        r = np.where(r < 0, np.nan, r)
+        bad = np.flatnonzero(r > 1)
+    else:
+        bad = np.flatnonzero(~((r >= 0) & (r <= 1)))
+    if bad.size:
+        raise ValueError(f"{what}: blend ratio {r[bad[0]]!r} at index {bad[0]} is not in [0, 1] ({bad.size} such)")
+    return r
+
+
+def corner_ratios(mesh: HalfEdgeMesh, face_ratio: np.ndarray, vertex_ratio: np.ndarray | None = None) -> np.ndarray:
+    """First-step ratio of every corner (half-edge): the vertex's ratio where set, else the cell's.
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh (the coarse mesh)
+    face_ratio : (F,) float
+    vertex_ratio : (V,) float with NaN where unset, or None
+
+    Returns
+    -------
+    (H,) float
+    """
+    ratio = np.asarray(face_ratio, dtype=np.float64)[mesh.face]
+    if vertex_ratio is not None:
+        at_vertex = np.asarray(vertex_ratio, dtype=np.float64)[mesh.origin]
+        ratio = np.where(np.isnan(at_vertex), ratio, at_vertex)
+    return ratio
+
+
+def refined_cell_ratios(face_sizes: np.ndarray, face_vertices: np.ndarray, corner_ratio: np.ndarray) -> np.ndarray:
+    """Mean ratio of the input corners each once-refined cell is made of (a summary per cell).
+
+    Parameters
+    ----------
+    face_sizes, face_vertices : the once-refined cells (``RefinedFaces``); their
+        vertices are input corners (half-edges)
+    corner_ratio : (H,) float, from ``corner_ratios``
+
+    Returns
+    -------
+    (F',) float (exactly the common value where all corners agree)
+    """
+    values = corner_ratio[face_vertices]
+    offsets = np.concatenate([[0], np.cumsum(face_sizes)[:-1]])
+    mean = np.add.reduceat(values, offsets) / face_sizes
+    low, high = np.minimum.reduceat(values, offsets), np.maximum.reduceat(values, offsets)
+    return np.where(low == high, low, mean)
+
+
+def second_step_corner_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, corner_ratio: np.ndarray) -> np.ndarray:
+    """Ratio of every corner (half-edge) of the once-refined mesh in the second step.
+
+    Parameters
+    ----------
+    level1 : HalfEdgeMesh of the once-refined mesh (its vertices are input corners)
+    is_vertex_cell : (F',) bool, the V-cells
+    corner_ratio : (H,) float, first-step ratio of every input corner
+
+    Returns
+    -------
+    (H',) float: ``r (1 - cos(2 pi / n))`` with r the ratio of the corner's
+    vertex, or, in a V-cell, the minimum over the cell's vertices.
+    """
+    ratio = np.asarray(corner_ratio, dtype=np.float64)[level1.origin]
+    cell_min = np.minimum.reduceat(ratio, level1.face_offsets[:-1])
+    in_vertex_cell = is_vertex_cell[level1.face]
+    ratio = np.where(in_vertex_cell, cell_min[level1.face], ratio)
+    per_face = 1.0 - np.cos(2.0 * np.pi / level1.face_sizes)  # per face, then spread to its corners
+    return ratio * np.take(per_face, level1.face)

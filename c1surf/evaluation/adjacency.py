@@ -1,0 +1,246 @@
+"""Patch adjacency as plain arrays: which corners and which sides patches share.
+
+Every patch has four corners and four sides, numbered in parameter space::
+
+    corner 0: (u, v) = (0, 0)    side 0: v = 0, u from 0 to 1 (corner 0 -> corner 1)
+    corner 1: (1, 0)             side 1: u = 1, v from 0 to 1 (corner 1 -> corner 2)
+    corner 2: (1, 1)             side 2: v = 1, u from 0 to 1 (corner 3 -> corner 2)
+    corner 3: (0, 1)             side 3: u = 0, v from 0 to 1 (corner 0 -> corner 3)
+
+``corners[p, c]`` names the surface point at corner ``c`` of patch ``p`` (all
+patches meeting there carry the same id), ``edges[p, s]`` the patch edge under
+side ``s`` (the two patches sharing it carry the same id), and
+``reversed[p, s]`` says that side ``s``, run in increasing parameter, goes
+against the edge's own direction.
+
+The numbering is canonical, so it can be derived from the construction's
+bookkeeping (``patch_adjacency``) or from the patch geometry alone
+(``adjacency_from_geometry``) with the same result: ids are numbered in order
+of first appearance, scanning patches in file order and corners / sides 0..3
+within a patch, and every edge runs in the direction of its first appearance.
+The welded tessellation (``core.tessellate.welded_grid_from_ids``) needs
+nothing else, so a patch file that stores these arrays can be tessellated
+exactly as ``convert`` does.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..parallel import run_tasks
+
+# Corner (start, end) of each side, in increasing parameter.
+SIDE_CORNERS = np.array([[0, 1], [1, 2], [3, 2], [0, 3]])
+
+
+@dataclass(frozen=True)
+class PatchAdjacency:
+    """Shared corners and sides of P patches.
+
+    corners : (P, 4) int (int32 from the construction while it fits), corner ids, dense 0..n_corners-1
+    edges : (P, 4) int (as corners), edge ids, dense 0..n_edges-1
+    reversed : (P, 4) bool
+    """
+
+    corners: np.ndarray
+    edges: np.ndarray
+    reversed: np.ndarray
+
+    @property
+    def n_patches(self) -> int:
+        return int(self.corners.shape[0])
+
+    @property
+    def n_corners(self) -> int:
+        return int(self.corners.max()) + 1 if self.corners.size else 0
+
+    @property
+    def n_edges(self) -> int:
+        return int(self.edges.max()) + 1 if self.edges.size else 0
+
+    def neighbours(self) -> np.ndarray:
+        """(P, 4, 2) int64: (patch, side) on the other side of each side; (-1, -1) on a boundary.
+
+        An edge used by more than two sides (not a surface) gets no neighbours.
+        """
+        p = self.n_patches
+        out = np.full((p, 4, 2), -1, dtype=np.int64)
+        if p == 0:
+            return out
+        flat = self.edges.ravel()
+        order = np.argsort(flat, kind="stable")
+        count = np.bincount(flat, minlength=self.n_edges)
+        start = np.concatenate([[0], np.cumsum(count)])[:-1]
+        pair = np.flatnonzero(count == 2)
+        a, b = order[start[pair]], order[start[pair] + 1]
+        out.reshape(-1, 2)[a] = np.stack(np.divmod(b, 4), axis=1)
+        out.reshape(-1, 2)[b] = np.stack(np.divmod(a, 4), axis=1)
+        return out
+
+    def validate(self, n_patches: int | None = None) -> None:
+        """ValueError unless the arrays have the documented shapes and dense ids."""
+        for name in ("corners", "edges", "reversed"):
+            a = getattr(self, name)
+            if a.ndim != 2 or a.shape[1] != 4 or a.shape[0] != self.corners.shape[0]:
+                raise ValueError(f"adjacency {name} must have shape (P, 4), got {a.shape}")
+        if n_patches is not None and self.n_patches != n_patches:
+            raise ValueError(f"adjacency describes {self.n_patches} patches, the file has {n_patches}")
+        for name in ("corners", "edges"):
+            a = getattr(self, name)
+            if not a.size:
+                continue
+            if a.min() < 0 or not np.all(np.bincount(a.ravel()) > 0):
+                raise ValueError(f"adjacency {name} must be numbered 0, 1, 2, ... without gaps")
+            if name == "edges" and np.bincount(a.ravel()).max() > 2:
+                raise ValueError("an edge is shared by more than two patch sides")
+
+    def __eq__(self, other) -> bool:
+        if not isinstance(other, PatchAdjacency):
+            return NotImplemented
+        return all(np.array_equal(getattr(self, k), getattr(other, k)) for k in ("corners", "edges", "reversed"))
+
+    __hash__ = None
+
+
+def _first_appearance(labels: np.ndarray) -> np.ndarray:
+    """Renumber arbitrary integer labels 0, 1, 2, ... in order of first appearance (row-major)."""
+    return _first_appearances(labels)[0]
+
+
+def _first_appearances(labels: np.ndarray):
+    """(ids, first): labels renumbered 0, 1, 2, ... in order of first appearance (row-major), and
+    first (k,) int64, the flat position where id i appears first (increasing)."""
+    flat = labels.ravel()
+    if flat.size == 0:
+        return np.zeros(labels.shape, dtype=np.int64), np.zeros(0, dtype=np.int64)
+    # int32 ids and positions when they fit: these arrays are 4 entries per patch
+    index = np.int32 if flat.size < 2**31 else np.int64
+    if flat.min() < 0 or flat.max() >= 4 * flat.size + 1024:  # sparse or negative labels: sort
+        _, first, inverse = np.unique(flat, return_index=True, return_inverse=True)
+        order = np.argsort(first, kind="stable")
+        rank = np.empty(first.size, dtype=np.int64)
+        rank[order] = np.arange(first.size)
+        return rank[inverse.ravel()].reshape(labels.shape), first[order]
+    # dense labels: a reverse scatter finds each label's first position; those positions, in
+    # order, name the new ids (a scatter and gather of k labels instead of a cumsum over all)
+    first_at = np.full(int(flat.max()) + 1, flat.size, dtype=index)
+    first_at[flat[::-1]] = np.arange(flat.size, dtype=index)[::-1]
+    is_first = np.zeros(flat.size + 1, dtype=bool)
+    is_first[first_at] = True
+    first = np.flatnonzero(is_first[:-1])
+    new_id = first_at  # reused: only entries of labels that occur are read back
+    new_id[np.take(flat, first)] = np.arange(first.size, dtype=index)
+    return np.take(new_id, flat).reshape(labels.shape), first
+
+
+def _edge_ids(edge_labels: np.ndarray, forward_key: np.ndarray):
+    """(edges, reversed): canonical edge ids and directions (see ``_canonical``)."""
+    edges, first = _first_appearances(edge_labels)
+    key = forward_key.ravel()
+    # a side is reversed when its key differs from that of the edge's first side
+    reversed_ = (key != np.take(np.take(key, first), edges.ravel())).reshape(edges.shape)
+    return edges, reversed_
+
+
+def _canonical(corner_labels: np.ndarray, edge_labels: np.ndarray, forward_key: np.ndarray) -> PatchAdjacency:
+    """Canonical adjacency from arbitrary labels.
+
+    forward_key : (P, 4) int; two sides of one edge run the same way iff their keys are equal.
+    """
+    corners, (edges, reversed_) = run_tasks([lambda: _first_appearance(corner_labels),
+                                             lambda: _edge_ids(edge_labels, forward_key)])
+    return PatchAdjacency(corners, edges, reversed_)
+
+
+def patch_adjacency(refined, frames: np.ndarray) -> PatchAdjacency:
+    """Adjacency of the patches of a construction, from its refined mesh.
+
+    Patches are dual to the refined mesh: a patch sits at a 4-valent refined
+    vertex with outgoing half-edges e0..e3 (counter-clockwise), its corners
+    are the refined faces around the vertex and its sides cross e0..e3.
+
+    Parameters
+    ----------
+    refined : HalfEdgeMesh, the twice-refined mesh
+    frames : (P, 4) int, half-edges e0..e3 of each patch, in patch order
+
+    Returns
+    -------
+    PatchAdjacency (canonical numbering, see the module docstring)
+    """
+    frames = np.asarray(frames).reshape(-1, 4)  # int32 for refined meshes that fit (doo_sabin.refined_halfedges)
+    face, twin = np.asarray(refined.face), np.asarray(refined.twin)
+
+    def corners():  # face(e2), face(e3), face(e0), face(e1): one take, several times faster than four gathers
+        return _first_appearance(np.take(face, frames)[:, [2, 3, 0, 1]])
+
+    def edges():  # side s, run in increasing parameter, goes from face(x) to face(twin x)
+        x = np.empty(frames.shape, dtype=np.result_type(frames, twin))
+        x[:, :2] = np.take(twin, frames[:, [3, 0]])  # x = twin e3, twin e0, e1, e2
+        x[:, 2:] = frames[:, 1:3]
+        label = np.minimum(x, np.take(twin, x))
+        if label.size and label.min() < 0:  # x or twin x is -1
+            raise ValueError("internal: a patch side crosses a boundary half-edge")
+        return _edge_ids(label, x)
+
+    corner_ids, (edge_ids, reversed_) = run_tasks([corners, edges])  # independent: two threads
+    return PatchAdjacency(corner_ids, edge_ids, reversed_)
+
+
+def _side_polygons(group: np.ndarray) -> list[np.ndarray]:
+    """Control polygons of sides 0..3 (in increasing parameter) of a group of patches."""
+    return [group[:, :, 0], group[:, -1, :], group[:, :, -1], group[:, 0, :]]
+
+
+def adjacency_from_geometry(patch_groups, tolerance: float = 1e-9) -> PatchAdjacency:
+    """Adjacency found from the patch geometry alone (no bookkeeping).
+
+    Corners closer than ``tolerance`` times the bounding-box diagonal are one
+    corner; two sides are one edge when their end corners and their mid points
+    match; a side is reversed when its quarter point lies at the other end of
+    the edge's first side. For a c1surf surface this gives exactly
+    ``patch_adjacency`` (tests/test_patch_exchange.py checks it).
+
+    Parameters
+    ----------
+    patch_groups : list of (p_k, du+1, dv+1, 3) float, in patch order
+    tolerance : float, relative to the bounding-box diagonal of the control points
+
+    Returns
+    -------
+    PatchAdjacency
+    """
+    from .bezier import bernstein_basis
+    from .smoothness import _cluster_points
+
+    groups = [np.asarray(g, dtype=np.float64)[..., :3] for g in patch_groups if len(g)]
+    if not groups:
+        empty = np.zeros((0, 4), dtype=np.int64)
+        return PatchAdjacency(empty, empty.copy(), np.zeros((0, 4), dtype=bool))
+    corners = np.concatenate([np.stack([g[:, 0, 0], g[:, -1, 0], g[:, -1, -1], g[:, 0, -1]], axis=1) for g in groups])
+    t = np.array([0.25, 0.5, 0.75])
+    samples = []  # (P, 4, 3 parameters, 3)
+    for g in groups:
+        sides = []
+        for poly in _side_polygons(g):
+            sides.append(np.einsum("ti,pid->ptd", bernstein_basis(poly.shape[1] - 1, t), poly))
+        samples.append(np.stack(sides, axis=1))
+    samples = np.concatenate(samples)
+    p = corners.shape[0]
+    everything = np.concatenate([corners.reshape(-1, 3), samples.reshape(-1, 3)])
+    diagonal = float(np.linalg.norm(everything.max(axis=0) - everything.min(axis=0)))
+    tol = tolerance * diagonal if diagonal > 0 else tolerance
+    corner_label = _cluster_points(corners.reshape(-1, 3), tol).reshape(p, 4)
+    # one cluster over quarter, mid and three-quarter points, so a side's
+    # quarter point can be compared with another side's three-quarter point
+    side_label = _cluster_points(samples.reshape(-1, 3), tol).reshape(p, 4, 3)
+    ends = np.sort(corner_label[:, SIDE_CORNERS], axis=-1)  # (P, 4, 2)
+    mid = side_label[..., 1]
+    quarter = np.minimum(side_label[..., 0], side_label[..., 2])
+    key = np.stack([ends[..., 0], ends[..., 1], mid, quarter], axis=-1).reshape(-1, 4)
+    _, edge_label = np.unique(key, axis=0, return_inverse=True)
+    return _canonical(corner_label, edge_label.reshape(p, 4), side_label[..., 0])
+
+
+__all__ = ["PatchAdjacency", "patch_adjacency", "adjacency_from_geometry", "SIDE_CORNERS"]

@@ -1,0 +1,142 @@
+"""A patch file in memory, whatever its format (JSON, NPZ, IGES).
+
+``PatchSet`` holds the patches in file order (as runs of one degree), where
+each comes from in the input mesh, the patch adjacency (shared corners and
+sides, ``core.adjacency``) and the header (format, versions, options, input).
+``surface_patch_set`` makes one from a ``Surface``; the JSON and NPZ writers
+write it, their readers give it back, and ``c1surf tessellate`` turns it into
+the same mesh ``convert`` writes. See docs/patch-format.md.
+"""
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .. import __version__
+from .adjacency import PatchAdjacency, adjacency_from_geometry, patch_adjacency
+
+FORMAT_NAME = "c1surf-patches"
+FORMAT_VERSION = 1
+KIND_BY_DEGREE = {2: "biquadratic", 3: "bicubic"}
+SOURCE_KINDS = ("face", "edge", "vertex")  # indexed by core.doo_sabin FACE_FROM_FACE/EDGE/VERTEX
+
+
+@dataclass
+class PatchSet:
+    """Bezier patches with their bookkeeping.
+
+    groups : list of (p_k, du+1, dv+1, 3) float, runs of consecutive patches of one
+        degree, in file order (c1surf writes biquadratic first, then bicubic)
+    adjacency : PatchAdjacency or None (IGES files carry none)
+    source_kind : (P,) str array ("face", "edge", "vertex") or None
+    source : (P, 2) int64 or None: (face, -1), (vertex, -1) or the edge's (a, b)
+    header : dict, everything of the file but the patches (format, version,
+        c1surf_version, options, input, counts), as far as the file says
+    weights : None (polynomial patches) or a list parallel to ``groups`` of
+        (p_k, du+1, dv+1) float: rational patches sum(w P B) / sum(w B) (A2a)
+    """
+
+    groups: list
+    adjacency: PatchAdjacency | None = None
+    source_kind: np.ndarray | None = None
+    source: np.ndarray | None = None
+    header: dict = field(default_factory=dict)
+    weights: list | None = None
+
+    @property
+    def n_patches(self) -> int:
+        return int(sum(len(g) for g in self.groups))
+
+    def degrees(self) -> list:
+        """(du, dv) of every patch, in file order."""
+        out = []
+        for g in self.groups:
+            out.extend([(g.shape[1] - 1, g.shape[2] - 1)] * len(g))
+        return out
+
+    def by_degree(self) -> list:
+        """Patches grouped by degree (first appearance order): the old ``read_patches_json`` result."""
+        merged: dict = {}
+        for g in self.groups:
+            merged.setdefault(g.shape[1:3], []).append(g)
+        return [np.concatenate(v) for v in merged.values()]
+
+    def patch(self, k: int) -> np.ndarray:
+        """Control points of patch ``k`` (file order)."""
+        for g in self.groups:
+            if k < len(g):
+                return g[k]
+            k -= len(g)
+        raise IndexError("patch index out of range")
+
+    def welding(self, tolerance: float = 1e-9) -> PatchAdjacency:
+        """The stored adjacency, or one found from the geometry (``adjacency_from_geometry``)."""
+        if self.adjacency is not None:
+            return self.adjacency
+        return adjacency_from_geometry(self.groups, tolerance)
+
+    def source_dicts(self) -> list:
+        """JSON form of the sources: {"face": f} | {"vertex": v} | {"edge": [a, b]}."""
+        if self.source_kind is None:
+            return [None] * self.n_patches
+        out = []
+        for kind, (a, b) in zip(self.source_kind.tolist(), self.source.tolist()):
+            out.append({"edge": [a, b]} if kind == "edge" else {kind: a})
+        return out
+
+
+def degree_runs(patches: list) -> list:
+    """Stack a list of (du+1, dv+1, 3) arrays into runs of consecutive equal shape."""
+    groups, run = [], []
+    for p in patches:
+        if run and p.shape != run[-1].shape:
+            groups.append(np.stack(run))
+            run = []
+        run.append(p)
+    if run:
+        groups.append(np.stack(run))
+    return groups
+
+
+def surface_sources(surface):
+    """(source_kind (P,) str array, source (P, 2) int64) of a Surface's patches."""
+    kind, index, edge = surface.patch_sources()
+    names = np.array(SOURCE_KINDS)[np.asarray(kind, dtype=np.int64)]
+    source = np.stack([np.asarray(index, dtype=np.int64), np.full(len(index), -1, dtype=np.int64)], axis=1)
+    is_edge = names == "edge"
+    source[is_edge] = np.asarray(edge, dtype=np.int64)[is_edge]
+    return names, source
+
+
+def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -> dict:
+    """Header of a Surface's patch file (everything but the patches)."""
+    return {
+        "format": FORMAT_NAME,
+        "version": FORMAT_VERSION,
+        "c1surf_version": __version__,
+        "options": dataclasses.asdict(surface.options),  # every SurfaceOptions field, by name
+        "input": {"path": input_path, "vertices": int(surface.n_input_vertices), "faces": int(surface.n_input_faces)},
+        "counts": {
+            "biquadratic": int(len(surface.biquadratic)),
+            "bicubic": int(len(surface.bicubic)),
+            "corners": adjacency.n_corners,
+            "edges": adjacency.n_edges,
+        },
+    }
+
+
+def surface_patch_set(surface, input_path: str | None = None, adjacency: PatchAdjacency | None = None) -> PatchSet:
+    """The PatchSet of a ``core.surface.Surface`` (patches biquadratic first, then bicubic)."""
+    if adjacency is None:
+        adjacency = patch_adjacency(surface.refined, surface.frames)
+    groups = [np.ascontiguousarray(g[..., :3]) for g in (surface.biquadratic, surface.bicubic) if len(g)]
+    kind, source = surface_sources(surface)
+    weights = getattr(surface, "patch_weights", None)  # rational surfaces (A2a)
+    if weights is not None:
+        weights = [np.ascontiguousarray(w) for g, w in zip((surface.biquadratic, surface.bicubic), weights) if len(g)]
+    return PatchSet(groups, adjacency, kind, source, surface_header(surface, input_path, adjacency), weights)
+
+
+__all__ = ["PatchSet", "surface_patch_set", "degree_runs", "FORMAT_NAME", "FORMAT_VERSION", "KIND_BY_DEGREE", "SOURCE_KINDS"]

@@ -1,0 +1,193 @@
+"""The in-memory result of reading a polygon mesh file."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import MeshInputError
+
+__all__ = ["MeshFile"]
+
+
+@dataclass(eq=False)  # eq on numpy fields would be ambiguous
+class MeshFile:
+    """A polygon mesh exactly as stored in a file (never triangulated).
+
+    Faces are kept in a flat, "CSR"-like layout so that meshes with mixed
+    face sizes need no padding: face ``i`` is
+    ``face_vertices[offs[i]:offs[i + 1]]`` with ``offs = face_offsets()``.
+
+    Attributes
+    ----------
+    path : str
+        The file the mesh was read from.
+    points : ndarray, shape (V, 3), float64
+        Vertex positions, in file order.  Vertices not used by any face
+        are kept (indices stay as in the file).
+    face_sizes : ndarray, shape (F,), int64
+        Number of vertices of each face, in file order.
+    face_vertices : ndarray, shape (sum(face_sizes),), int64
+        0-based vertex indices of all faces, concatenated in file order.
+    face_lines : ndarray, shape (F,), int64, or None
+        1-based source line of each face (text formats), else None.
+    vertex_weights : ndarray, shape (V,), float64, or None
+        OBJ ``v x y z w`` fourth value (1.0 where absent) or PLY vertex
+        property ``weight``.
+    vertex_normals : ndarray, shape (V, 3), float64, or None
+        PLY ``nx ny nz``; OBJ ``vn`` referenced through ``f v//vn`` or
+        ``f v/vt/vn`` (first reference of a vertex wins; NaN for vertices
+        never referenced with a normal).
+    vertex_uvs : ndarray, shape (V, 2), float64, or None
+        PLY ``u v`` / ``s t`` / ``texture_u texture_v``; OBJ ``vt``
+        referenced through ``f v/vt`` (first reference wins; NaN where
+        absent).
+    face_attributes : dict of str to ndarray, shape (F,)
+        Extra scalar per-face properties (PLY), e.g. ``blend``.
+    vertex_attributes : dict of str to ndarray, shape (V,)
+        Extra scalar per-vertex properties, e.g. ``red green blue``.
+    face_groups : ndarray, shape (F,), int64, or None
+        Index into ``group_names`` of each face (OBJ ``g``/``o``); None
+        when the file names no groups.
+    group_names : list of str
+        Group names in order of first use by a face.
+    """
+
+    path: str
+    points: np.ndarray
+    face_sizes: np.ndarray
+    face_vertices: np.ndarray
+    face_lines: np.ndarray | None = None
+    vertex_weights: np.ndarray | None = None
+    vertex_normals: np.ndarray | None = None
+    vertex_uvs: np.ndarray | None = None
+    face_attributes: dict[str, np.ndarray] = field(default_factory=dict)
+    vertex_attributes: dict[str, np.ndarray] = field(default_factory=dict)
+    face_groups: np.ndarray | None = None
+    collapsed_corners: int = 0
+    group_names: list[str] = field(default_factory=list)
+
+    @property
+    def n_vertices(self) -> int:
+        """Number of vertices V (including unused ones)."""
+        return int(self.points.shape[0])
+
+    @property
+    def n_faces(self) -> int:
+        """Number of faces F."""
+        return int(self.face_sizes.shape[0])
+
+    def face_offsets(self) -> np.ndarray:
+        """Start of each face in ``face_vertices``, plus the total.
+
+        Returns
+        -------
+        ndarray, shape (F + 1,), int64
+            ``offs[0] == 0``, ``offs[-1] == len(face_vertices)``.
+        """
+        offs = np.zeros(len(self.face_sizes) + 1, dtype=np.int64)
+        np.cumsum(self.face_sizes, out=offs[1:])
+        return offs
+
+    def face_line(self, face: int) -> int | None:
+        """1-based source line of face ``face``, or None if not known."""
+        if self.face_lines is None:
+            return None
+        return int(self.face_lines[face])
+
+
+def collapse_repeated_corners(face_sizes: np.ndarray, face_vertices: np.ndarray):
+    """Drop corners that repeat the previous corner (zero-length edges, e.g. ``f 4 3 5 5``).
+
+    Exporters write triangles as quads this way; the polygon they mean has the
+    repeat removed. Non-consecutive repeats are left for ``find_repeated_vertex``.
+
+    Parameters
+    ----------
+    face_sizes : (F,) int
+    face_vertices : (sum(face_sizes),) int
+
+    Returns
+    -------
+    face_sizes, face_vertices : the collapsed faces (same face count and order)
+    keep : (sum(face_sizes),) bool, which of the given corners remain
+    """
+    face_sizes = np.asarray(face_sizes, dtype=np.int64)
+    face_vertices = np.asarray(face_vertices, dtype=np.int64)
+    if face_vertices.size == 0:
+        return face_sizes, face_vertices, np.ones(0, bool)
+    offs = np.zeros(len(face_sizes) + 1, dtype=np.int64)
+    np.cumsum(face_sizes, out=offs[1:])
+    face = np.repeat(np.arange(face_sizes.size), face_sizes)
+    nxt = np.arange(face_vertices.size) + 1
+    last = offs[1:] - 1
+    nxt[last[face_sizes > 0]] = offs[:-1][face_sizes > 0]
+    repeat = face_vertices == face_vertices[nxt]
+    keep = ~repeat
+    if not repeat.any():
+        return face_sizes, face_vertices, keep
+    sizes = np.bincount(face[keep], minlength=face_sizes.size).astype(np.int64)
+    return sizes, face_vertices[keep], keep
+
+
+def collapse_repeated_corners_or_refuse(face_sizes, face_vertices, path, line_of_face):
+    """``collapse_repeated_corners``, refusing a face left with fewer than 3 vertices.
+
+    Parameters
+    ----------
+    line_of_face : callable, face index -> 1-based line (or None) for the error
+
+    Returns
+    -------
+    face_sizes, face_vertices, keep, collapsed : as ``collapse_repeated_corners``, plus the count dropped
+    """
+    sizes, vertices, keep = collapse_repeated_corners(face_sizes, face_vertices)
+    collapsed = int(keep.size - keep.sum())
+    if collapsed and np.any(sizes < 3):
+        f = int(np.argmax(sizes < 3))
+        raise MeshInputError(path, "face has fewer than 3 distinct vertices: a polygon needs at least 3 (remove this face)", line_of_face(f))
+    return sizes, vertices, keep, collapsed
+
+
+def find_repeated_vertex(face_sizes: np.ndarray, face_vertices: np.ndarray):
+    """Find the first face (in file order) that visits a vertex twice.
+
+    Parameters
+    ----------
+    face_sizes : ndarray, shape (F,), int
+    face_vertices : ndarray, shape (sum(face_sizes),), int
+
+    Returns
+    -------
+    tuple (face, vertex, first_pos, second_pos) or None
+        ``face`` index, the repeated ``vertex`` value, and its first two
+        0-based positions within the face; None if no face repeats one.
+    """
+    face_sizes = np.asarray(face_sizes)
+    if face_sizes.size == 0:
+        return None
+    offs = np.zeros(len(face_sizes) + 1, dtype=np.int64)
+    np.cumsum(face_sizes, out=offs[1:])
+    bad_faces = []
+    # One (n_k, k) block per distinct size: a row-wise sort is far cheaper
+    # than a global lexsort, and real meshes have only a few sizes.
+    for k in np.unique(face_sizes):
+        if k < 2:
+            continue
+        rows = np.flatnonzero(face_sizes == k)
+        block = face_vertices[offs[rows][:, None] + np.arange(k)]
+        block.sort(axis=1)
+        dup = (block[:, 1:] == block[:, :-1]).any(axis=1)
+        if dup.any():
+            bad_faces.append(rows[np.argmax(dup)])
+    if not bad_faces:
+        return None
+    face = int(min(bad_faces))
+    verts = face_vertices[offs[face]:offs[face + 1]]
+    seen = {}
+    for pos, v in enumerate(verts.tolist()):  # one small face only
+        if v in seen:
+            return face, v, seen[v], pos
+        seen[v] = pos
+    raise AssertionError("unreachable: duplicate not found again")

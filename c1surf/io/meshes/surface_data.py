@@ -1,0 +1,219 @@
+"""What a mesh file says beyond its points: blend ratios, weights, normals, attributes.
+
+``surface_data(mesh, ...)`` gathers the per-cell and per-vertex data the
+extensions of the paper use (``core.surface.Surface`` arguments):
+
+- blend ratios per cell and per vertex (A1, section 4): PLY face / vertex
+  property ``blend``, or a sidecar JSON file (``--blend-file``)::
+
+      {"default": 0.15,                      # cells without a ratio (else --blend)
+       "faces": {"12": 0.3, "handle": 0.0},  # 0-based face index, or OBJ group (g/o) name
+       "vertices": {"5": 0.0, "9": 0.5}}     # 0-based vertex index
+
+  A vertex ratio is used for the corners at that vertex; negative or NaN
+  PLY values mean "no ratio here".
+- homogeneous weights (A2a): OBJ ``v x y z w``, PLY vertex property ``weight``;
+- vertex normals (A1a): OBJ ``vn`` (through ``f v//vn``), PLY ``nx ny nz``;
+- attributes carried through the construction as extra columns: texture
+  coordinates (OBJ ``vt``, PLY ``u v`` / ``s t``) and colours (``red green
+  blue`` [``alpha``]).
+"""
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..errors import MeshInputError
+from .mesh_file import MeshFile
+
+COLOUR_NAMES = ("red", "green", "blue", "alpha")
+
+
+@dataclass
+class SurfaceData:
+    """Inputs of ``Surface`` taken from a mesh file.
+
+    points : (V, 3 + k) float, positions then the k attribute columns
+    attribute_names : list of k str ("u", "v", "red", "green", "blue", "alpha")
+    colour_scale : float, 255 when colours are 0..255, 1 when 0..1 (for writing them back)
+    face_blend, vertex_blend : (F,) / (V,) float with NaN where unset, or None
+    weights : (V,) float or None
+    vertex_normals : (V, 3) float (NaN rows where unset) or None
+    """
+
+    points: np.ndarray
+    attribute_names: list = field(default_factory=list)
+    colour_scale: float = 1.0
+    face_blend: np.ndarray | None = None
+    vertex_blend: np.ndarray | None = None
+    weights: np.ndarray | None = None
+    vertex_normals: np.ndarray | None = None
+
+    def surface_kwargs(self) -> dict:
+        """Keyword arguments of ``Surface`` (besides points and options)."""
+        return {"face_blend": self.face_blend, "vertex_blend": self.vertex_blend, "weights": self.weights,
+                "vertex_normals": self.vertex_normals}
+
+
+def _ratio(path, where: str, value) -> float:
+    try:
+        r = float(value)
+    except (TypeError, ValueError):
+        raise MeshInputError(path, f"{where}: blend ratio {value!r} is not a number") from None
+    if not (0.0 <= r <= 1.0):
+        raise MeshInputError(path, f"{where}: blend ratio {r!r} is not in [0, 1]")
+    return r
+
+
+def read_blend_file(path, mesh: MeshFile):
+    """Read a sidecar JSON of blend ratios for ``mesh``.
+
+    Returns
+    -------
+    face_blend : (F,) float, NaN where unset (the "default" fills them when given)
+    vertex_blend : (V,) float, NaN where unset, or None when the file names no vertices
+    """
+    path = str(path)
+    try:
+        with open(path, encoding="utf-8") as f:
+            doc = json.load(f)
+    except FileNotFoundError:
+        raise MeshInputError(path, "no such file: check the --blend-file path") from None
+    except IsADirectoryError:
+        raise MeshInputError(path, "is a directory, not a blend-ratio file") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise MeshInputError(path, f"not a JSON file ({e})", getattr(e, "lineno", None)) from None
+    if not isinstance(doc, dict):
+        raise MeshInputError(path, 'expected a JSON object like {"faces": {...}, "vertices": {...}}')
+    unknown = set(doc) - {"default", "faces", "vertices"}
+    if unknown:
+        raise MeshInputError(path, f'unknown key {sorted(unknown)[0]!r}: use "default", "faces" and "vertices"')
+    face_blend = np.full(mesh.n_faces, np.nan)
+    if "default" in doc:
+        face_blend[:] = _ratio(path, '"default"', doc["default"])
+    groups = {name: k for k, name in enumerate(mesh.group_names)}
+    faces = doc.get("faces", {})
+    if not isinstance(faces, dict):
+        raise MeshInputError(path, '"faces" must be an object {face index or group name: ratio}')
+    for key, value in faces.items():
+        r = _ratio(path, f'"faces" {key!r}', value)
+        if key in groups and mesh.face_groups is not None:
+            face_blend[mesh.face_groups == groups[key]] = r
+            continue
+        try:
+            index = int(key)
+        except ValueError:
+            names = ", ".join(repr(n) for n in mesh.group_names[:8]) or "none"
+            raise MeshInputError(path, f'"faces": {key!r} is neither a face index nor a group of {mesh.path} (groups: {names})') from None
+        if not 0 <= index < mesh.n_faces:
+            raise MeshInputError(path, f'"faces": face {index} does not exist ({mesh.path} has {mesh.n_faces} faces, numbered from 0)')
+        face_blend[index] = r
+    vertices = doc.get("vertices")
+    if vertices is None:
+        return face_blend, None
+    if not isinstance(vertices, dict):
+        raise MeshInputError(path, '"vertices" must be an object {vertex index: ratio}')
+    vertex_blend = np.full(mesh.n_vertices, np.nan)
+    for key, value in vertices.items():
+        try:
+            index = int(key)
+        except ValueError:
+            raise MeshInputError(path, f'"vertices": {key!r} is not a vertex index') from None
+        if not 0 <= index < mesh.n_vertices:
+            raise MeshInputError(path, f'"vertices": vertex {index} does not exist ({mesh.path} has {mesh.n_vertices} vertices, numbered from 0)')
+        vertex_blend[index] = _ratio(path, f'"vertices" {key!r}', value)
+    return face_blend, vertex_blend
+
+
+def _property_ratios(mesh: MeshFile, values, what: str) -> np.ndarray:
+    r = np.asarray(values, dtype=np.float64)
+    r = np.where(r < 0, np.nan, r)
+    bad = np.flatnonzero(r > 1)
+    if bad.size:
+        raise MeshInputError(mesh.path, f"{what} property 'blend' is {r[bad[0]]!r} at {what} {bad[0]}: blend ratios lie in [0, 1]")
+    return r
+
+
+def _used_vertices(mesh: MeshFile) -> np.ndarray:
+    used = np.zeros(mesh.n_vertices, dtype=bool)
+    used[mesh.face_vertices] = True
+    return used
+
+
+def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = None, normals: bool = False,
+                 attributes: bool = False) -> SurfaceData:
+    """Collect the extension data of ``mesh`` (see the module docstring).
+
+    Parameters
+    ----------
+    blend_file : path of a sidecar JSON of blend ratios, or None
+    use_weights : True / False, or None: use the file's weights when some differ from 1
+    normals : use the file's vertex normals (every used vertex needs one)
+    attributes : carry texture coordinates and colours as extra columns
+
+    Raises
+    ------
+    MeshInputError when requested data is missing or malformed.
+    """
+    data = SurfaceData(points=np.asarray(mesh.points, dtype=np.float64))
+    if "blend" in mesh.face_attributes:
+        data.face_blend = _property_ratios(mesh, mesh.face_attributes["blend"], "face")
+    if "blend" in mesh.vertex_attributes:
+        data.vertex_blend = _property_ratios(mesh, mesh.vertex_attributes["blend"], "vertex")
+    if blend_file is not None:
+        face_blend, vertex_blend = read_blend_file(blend_file, mesh)
+        if data.face_blend is not None:  # the sidecar file wins where it sets a ratio
+            face_blend = np.where(np.isnan(face_blend), data.face_blend, face_blend)
+        data.face_blend = face_blend
+        if vertex_blend is not None:
+            if data.vertex_blend is not None:
+                vertex_blend = np.where(np.isnan(vertex_blend), data.vertex_blend, vertex_blend)
+            data.vertex_blend = vertex_blend
+    weights = mesh.vertex_weights
+    if use_weights and weights is None:
+        raise MeshInputError(mesh.path, "has no vertex weights (OBJ `v x y z w`, PLY property `weight`) for --weights")
+    if weights is not None and (use_weights or (use_weights is None and np.any(weights != 1.0))):
+        used = _used_vertices(mesh)
+        bad = np.flatnonzero(used & ~(weights > 0))
+        if bad.size:
+            raise MeshInputError(mesh.path, f"vertex {bad[0]} has weight {weights[bad[0]]!r}: rational weights must be positive")
+        data.weights = np.where(used, weights, 1.0)
+    used = None
+    if normals:
+        if mesh.vertex_normals is None:
+            raise MeshInputError(mesh.path, "has no vertex normals (OBJ `vn` with `f v//vn`, PLY `nx ny nz`) to interpolate")
+        used = _used_vertices(mesh)
+        n = np.asarray(mesh.vertex_normals, dtype=np.float64)
+        length = np.linalg.norm(n, axis=1)
+        missing = np.flatnonzero(used & ~(length > 0))
+        if missing.size:
+            raise MeshInputError(mesh.path, f"vertex {missing[0]} has no (or a zero) normal ({missing.size} such vertices)")
+        data.vertex_normals = np.where(used[:, None], n, np.nan)
+    if attributes:
+        columns, names = [], []
+        if mesh.vertex_uvs is not None:
+            columns.append(np.asarray(mesh.vertex_uvs, dtype=np.float64))
+            names += ["u", "v"]
+        colours = [c for c in COLOUR_NAMES if c in mesh.vertex_attributes]
+        if colours:
+            values = np.stack([np.asarray(mesh.vertex_attributes[c], dtype=np.float64) for c in colours], axis=1)
+            columns.append(values)
+            names += colours
+            data.colour_scale = 1.0 if np.nanmax(values, initial=0.0) <= 1.0 else 255.0
+        if not columns:
+            raise MeshInputError(mesh.path, "has no texture coordinates or vertex colours to carry (--attributes)")
+        extra = np.concatenate(columns, axis=1)
+        used = _used_vertices(mesh) if used is None else used
+        missing = np.flatnonzero(used & ~np.all(np.isfinite(extra), axis=1))
+        if missing.size:
+            raise MeshInputError(mesh.path, f"vertex {missing[0]} has no texture coordinate ({missing.size} such vertices): "
+                                 "--attributes needs one per vertex")
+        extra = np.where(used[:, None], extra, 0.0)
+        data.points = np.concatenate([data.points, extra], axis=1)
+        data.attribute_names = names
+    return data
+
+
+__all__ = ["SurfaceData", "surface_data", "read_blend_file", "COLOUR_NAMES"]
