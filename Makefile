@@ -30,6 +30,7 @@ demo: $(VENV)/.stamp-base
 	$(BIN)/c1surf check $(OUT)/twisted.json
 
 test: $(VENV)/.stamp-test
+	$(BIN)/lint-imports
 	$(BIN)/python -m pytest -q
 
 bench: $(VENV)/.stamp-bench
