@@ -131,3 +131,57 @@ def misprinted_bicubic(surface: Surface) -> np.ndarray:
         bad[start : start + count, 1, 2] = misprint.reshape(-1, 3)
         start += count
     return bad
+
+
+def single_polygon(n):
+    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return polygon_mesh([list(range(n))], np.c_[np.cos(a), np.sin(a), 0.05 * np.cos(2 * a)])
+
+
+def slab_with_polygons():
+    """A box whose top (z = 1) is a 6 x 6 grid with a merged octagon and hexagon."""
+    n = 6
+    xs = np.linspace(-1, 1, n + 1)
+    top = {(i, j): k for k, (i, j) in enumerate((i, j) for i in range(n + 1) for j in range(n + 1))}
+    points = [(xs[i], xs[j], 1.0) for i in range(n + 1) for j in range(n + 1)]
+    faces = []
+    merged = {(2, 2), (2, 3), (3, 2), (3, 3), (0, 4), (0, 5)}
+    for i in range(n):
+        for j in range(n):
+            if (i, j) not in merged:
+                faces.append([top[i, j], top[i + 1, j], top[i + 1, j + 1], top[i, j + 1]])
+    # octagon around the removed centre vertex (3, 3), counter-clockwise from above
+    ring = [(2, 2), (3, 2), (4, 2), (4, 3), (4, 4), (3, 4), (2, 4), (2, 3)]
+    faces.append([top[p] for p in ring])
+    faces.append([top[p] for p in [(0, 4), (1, 4), (1, 5), (1, 6), (0, 6), (0, 5)]])
+    # close with a bottom vertex for every boundary vertex of the top, sides as quads
+    boundary = [(i, 0) for i in range(n)] + [(n, j) for j in range(n)] + [(i, n) for i in range(n, 0, -1)] + [(0, j) for j in range(n, 0, -1)]
+    base = len(points)
+    points += [(xs[i], xs[j], -1.0) for i, j in boundary]
+    m = len(boundary)
+    for k in range(m):
+        a, b = boundary[k], boundary[(k + 1) % m]
+        faces.append([top[b], top[a], base + k, base + (k + 1) % m])
+    faces.append([base + k for k in range(m)][::-1])
+    used = sorted({v for f in faces for v in f})
+    remap = {v: k for k, v in enumerate(used)}
+    faces = [[remap[v] for v in f] for f in faces]
+    points = np.array(points)[used]
+    return polygon_mesh(faces, points)
+
+
+def rational_sphere_patch(radius, centre):
+    """Rational biquadratic patch of a sphere: a 90 degree meridian arc (latitude -45..45)
+    swept through 90 degrees of longitude (tensor product of two rational quadratic arcs)."""
+    s = np.sqrt(0.5)
+    meridian = np.array([[s, -s], [2 * s, 0.0], [s, s]])  # (r, z); middle point at 1/cos(45)
+    meridian_w = np.array([1.0, s, 1.0])
+    sweep = np.array([[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
+    sweep_w = np.array([1.0, s, 1.0])
+    Q = np.zeros((3, 3, 4))
+    for i in range(3):
+        for j in range(3):
+            w = meridian_w[i] * sweep_w[j]
+            x = radius * np.array([meridian[i, 0] * sweep[j, 0], meridian[i, 0] * sweep[j, 1], meridian[i, 1]]) + centre
+            Q[i, j] = np.append(x * w, w)
+    return Q

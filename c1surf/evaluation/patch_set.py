@@ -36,6 +36,9 @@ class PatchSet:
         c1surf_version, options, input, counts), as far as the file says
     weights : None (polynomial patches) or a list parallel to ``groups`` of
         (p_k, du+1, dv+1) float: rational patches sum(w P B) / sum(w B) (A2a)
+    merged : list of ``evaluation.merge.MergedPiece``, B-spline surfaces that each
+        stand for a rectangle of the biquadratic patches (``convert --merge``); the
+        patches themselves stay in ``groups``. Empty when there are none.
     """
 
     groups: list
@@ -44,6 +47,7 @@ class PatchSet:
     source: np.ndarray | None = None
     header: dict = field(default_factory=dict)
     weights: list | None = None
+    merged: list = field(default_factory=list)
 
     @property
     def n_patches(self) -> int:

@@ -19,7 +19,7 @@ from c1surf.io.meshes.obj import parse_obj, read_obj
 from c1surf.io.meshes.ply import read_ply
 from c1surf.io.meshes.read import read_mesh
 
-SHARED = Path(__file__).resolve().parents[1].parent / "shared" / "meshes"
+SHARED = Path(__file__).resolve().parents[2].parent / "shared" / "meshes"
 
 # A cube-ish point set and faces of sizes 3, 4, 5 and 8.
 PTS = np.array([[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],

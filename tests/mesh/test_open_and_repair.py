@@ -14,14 +14,9 @@ from c1surf.evaluation.tessellate import tessellate
 from c1surf.mesh.halfedges import build_halfedges
 from c1surf.io.meshes.read import read_mesh
 
-from conftest import SAMPLES, fan, grid, open_cylinder, polygon_mesh, shared_mesh
+from conftest import SAMPLES, fan, single_polygon, grid, open_cylinder, polygon_mesh, shared_mesh
 
 MAX_JUMP = 1e-10
-
-
-def single_polygon(n):
-    a = np.linspace(0, 2 * np.pi, n, endpoint=False)
-    return polygon_mesh([list(range(n))], np.c_[np.cos(a), np.sin(a), 0.05 * np.cos(2 * a)])
 
 
 def boundary_curves(surface: Surface):

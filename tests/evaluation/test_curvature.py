@@ -14,8 +14,9 @@ from c1surf.evaluation.curvature import (
     tessellation_curvature,
 )
 from c1surf.io.patches.formats import PATCH_LOADERS
+from conftest import rational_sphere_patch
 
-GOLDEN = Path(__file__).resolve().parent / "golden"
+GOLDEN = Path(__file__).resolve().parents[1] / "golden"
 RNG = np.random.default_rng(20240611)
 NAMES = ("k1", "k2", "K", "H", "kmax")
 
@@ -79,23 +80,6 @@ def test_degree_elevated_and_trivially_rational_patches_agree():
         got = evaluate(homogeneous, u, v)
         for name in NAMES:
             np.testing.assert_allclose(got[name], want[name], atol=1e-9, err_msg=name)
-
-
-def rational_sphere_patch(radius, centre):
-    """Rational biquadratic patch of a sphere: a 90 degree meridian arc (latitude -45..45)
-    swept through 90 degrees of longitude (tensor product of two rational quadratic arcs)."""
-    s = np.sqrt(0.5)
-    meridian = np.array([[s, -s], [2 * s, 0.0], [s, s]])  # (r, z); middle point at 1/cos(45)
-    meridian_w = np.array([1.0, s, 1.0])
-    sweep = np.array([[1.0, 0.0], [1.0, 1.0], [0.0, 1.0]])
-    sweep_w = np.array([1.0, s, 1.0])
-    Q = np.zeros((3, 3, 4))
-    for i in range(3):
-        for j in range(3):
-            w = meridian_w[i] * sweep_w[j]
-            x = radius * np.array([meridian[i, 0] * sweep[j, 0], meridian[i, 0] * sweep[j, 1], meridian[i, 1]]) + centre
-            Q[i, j] = np.append(x * w, w)
-    return Q
 
 
 def test_rational_sphere_patch():

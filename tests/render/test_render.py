@@ -19,9 +19,9 @@ from c1surf.io.images.exr import write_exr
 from c1surf.io.patches.formats import load_patch_set
 
 from conftest import SAMPLES, misprinted_bicubic, surface_of
-from test_curvature import rational_sphere_patch
+from conftest import rational_sphere_patch
 
-GOLDEN = Path(__file__).resolve().parent / "golden"
+GOLDEN = Path(__file__).resolve().parents[1] / "golden"
 REQUIRED = {"kmax", "K", "H", "k1", "k2", "Z", "N.X", "N.Y", "N.Z", "patch", "u", "v", "R", "G", "B"}
 CURVATURES = ("kmax", "K", "H", "k1", "k2")
 

@@ -317,7 +317,7 @@ def test_outputs_are_byte_identical_across_runs(tmp_path, monkeypatch):
     _convert_all(dirs[0], mesh)
     _convert_all(dirs[1], mesh)
     script = (
-        "import sys, pathlib; sys.path.insert(0, sys.argv[1]);"
+        "import sys, pathlib; sys.path[:0] = [sys.argv[1], str(pathlib.Path(sys.argv[1]).parent)];"
         "from test_patch_exchange import _convert_all; _convert_all(pathlib.Path(sys.argv[2]), pathlib.Path(sys.argv[3]))"
     )
     env = {k: v for k, v in os.environ.items() if k != "SOURCE_DATE_EPOCH"}

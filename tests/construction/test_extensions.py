@@ -37,8 +37,7 @@ from c1surf.io.meshes.read import read_mesh
 from c1surf.io.meshes.surface_data import surface_data
 
 from conftest import CLOSED_SAMPLES, SAMPLES, polygon_mesh
-from test_construction import slab_with_polygons
-from test_open_and_repair import fan, grid, open_cylinder, single_polygon
+from conftest import fan, grid, open_cylinder, single_polygon, slab_with_polygons
 
 MAX_JUMP = 1e-10  # radians, as in test_construction
 MAX_GAP = 1e-12  # relative to the bounding-box diagonal

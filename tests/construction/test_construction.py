@@ -20,7 +20,7 @@ from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.tessellate import tessellate
 from c1surf.io.meshes.obj import read_obj
 
-from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, misprinted_bicubic, polygon_mesh, shared_mesh, surface_of
+from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, misprinted_bicubic, polygon_mesh, shared_mesh, slab_with_polygons, surface_of
 
 MAX_JUMP = 1e-10  # radians
 MAX_GAP = 1e-12  # relative to the bounding-box diagonal
@@ -121,38 +121,6 @@ def test_construction_is_linear_in_the_points():
     # and update_points on the same connectivity agrees with a fresh build
     sx.update_points(a * X + b * Y)
     np.testing.assert_allclose(sx.bicubic, sxy.bicubic, atol=1e-13)
-
-
-def slab_with_polygons():
-    """A box whose top (z = 1) is a 6 x 6 grid with a merged octagon and hexagon."""
-    n = 6
-    xs = np.linspace(-1, 1, n + 1)
-    top = {(i, j): k for k, (i, j) in enumerate((i, j) for i in range(n + 1) for j in range(n + 1))}
-    points = [(xs[i], xs[j], 1.0) for i in range(n + 1) for j in range(n + 1)]
-    faces = []
-    merged = {(2, 2), (2, 3), (3, 2), (3, 3), (0, 4), (0, 5)}
-    for i in range(n):
-        for j in range(n):
-            if (i, j) not in merged:
-                faces.append([top[i, j], top[i + 1, j], top[i + 1, j + 1], top[i, j + 1]])
-    # octagon around the removed centre vertex (3, 3), counter-clockwise from above
-    ring = [(2, 2), (3, 2), (4, 2), (4, 3), (4, 4), (3, 4), (2, 4), (2, 3)]
-    faces.append([top[p] for p in ring])
-    faces.append([top[p] for p in [(0, 4), (1, 4), (1, 5), (1, 6), (0, 6), (0, 5)]])
-    # close with a bottom vertex for every boundary vertex of the top, sides as quads
-    boundary = [(i, 0) for i in range(n)] + [(n, j) for j in range(n)] + [(i, n) for i in range(n, 0, -1)] + [(0, j) for j in range(n, 0, -1)]
-    base = len(points)
-    points += [(xs[i], xs[j], -1.0) for i, j in boundary]
-    m = len(boundary)
-    for k in range(m):
-        a, b = boundary[k], boundary[(k + 1) % m]
-        faces.append([top[b], top[a], base + k, base + (k + 1) % m])
-    faces.append([base + k for k in range(m)][::-1])
-    used = sorted({v for f in faces for v in f})
-    remap = {v: k for k, v in enumerate(used)}
-    faces = [[remap[v] for v in f] for f in faces]
-    points = np.array(points)[used]
-    return polygon_mesh(faces, points)
 
 
 def total_operator(surface: Surface):
