@@ -1,4 +1,4 @@
-"""What every c1surf command shares: one-line errors, progress on a terminal."""
+"""What every c1surf command shares: one-line errors, progress (click's bars) on a terminal."""
 from __future__ import annotations
 
 import functools
@@ -90,55 +90,86 @@ def friendly_errors(command):
     return wrapper
 
 
+def shows_progress(quiet: bool) -> bool:
+    """True when progress belongs on stderr: it is a terminal and ``--quiet`` was not given."""
+    return not quiet and sys.stderr.isatty()
+
+
+def terminal_bar(length: int, template: str, info_sep: str = " ", **shown):
+    """A click progress bar on stderr: ``#`` and ``.`` over 30 columns, then ``shown`` (show_pos, ...).
+
+    The current item is shown as given (a string: counts, or the elapsed time at the end).
+    """
+    return click.progressbar(length=length, file=sys.stderr, bar_template=template, fill_char="#", empty_char=".",
+                             width=30, info_sep=info_sep, item_show_func=lambda item: item, **shown)
+
+
 class Progress:
-    """Phase messages on stderr, only when it is a terminal and not ``--quiet``."""
+    """Phase messages and progress bars on stderr, only when it is a terminal and not ``--quiet``.
+
+    ``phase(name)`` opens a timed line (``c1surf: reading cube.obj... 0.01s``);
+    ``advance(label, amount, total)`` draws the bar of a long step, and is the
+    ``progress`` callable the evaluation and render functions take; ``done()``
+    closes the last line with the total time.
+    """
 
     def __init__(self, quiet: bool = False):
-        self.enabled = not quiet and sys.stderr.isatty()
+        self.enabled = shows_progress(quiet)
         self.start = time.perf_counter()
-        self.last = None
-        self.bar = None  # (label, done, started) of the progress bar being drawn
+        self.phase_start = None  # of the open phase line
+        self.bar = None  # click progress bar of the step being drawn
+        self.bar_label, self.bar_start = None, None
+        context = click.get_current_context(silent=True)
+        if self.enabled and context is not None:
+            context.call_on_close(self._end_bar)  # a failure mid-bar still ends its line and shows the cursor
 
     def phase(self, name: str) -> None:
+        """Start the line of phase ``name`` (ending the one before with its time)."""
         if not self.enabled:
             return
         self._end_bar()
-        now = time.perf_counter()
-        if self.last is not None:
-            click.echo(f" {now - self.last:.2f}s", err=True)
+        self._end_phase()
         click.echo(f"c1surf: {name}...", err=True, nl=False)
-        self.last = now
+        self.phase_start = time.perf_counter()
 
     def advance(self, label: str, amount: int, total: int) -> None:
         """Progress bar of a long step: ``amount`` more of ``total`` done (redrawn in place)."""
         if not self.enabled:
             return
-        now = time.perf_counter()
-        if self.bar is None or self.bar[0] != label:
+        if self.bar is None or self.bar_label != label:
+            self._start_bar(label, total)
+        self.bar.update(amount)
+        if self.bar.pos >= total:
             self._end_bar()
-            if self.last is not None:  # close the open phase line
-                click.echo(f" {now - self.last:.2f}s", err=True)
-                self.last = None
-            self.bar = (label, 0, now)
-        label, done, started = self.bar
-        done = min(done + amount, total)
-        self.bar = (label, done, started)
-        filled = int(30 * done / total) if total > 0 else 30
-        click.echo(f"\rc1surf: {label} [{'#' * filled}{'.' * (30 - filled)}] {100 * done // max(total, 1):3d}%",
-                   err=True, nl=False)
-        if done >= total:
-            self._end_bar()
-
-    def _end_bar(self) -> None:
-        if self.bar is not None:
-            click.echo(f" {time.perf_counter() - self.bar[2]:.2f}s", err=True)
-            self.bar = None
 
     def done(self) -> None:
-        if self.enabled:
-            self._end_bar()
-        if self.enabled and self.last is not None:
-            click.echo(f" {time.perf_counter() - self.last:.2f}s (total {time.perf_counter() - self.start:.2f}s)", err=True)
+        """End the last line: its time and the total time."""
+        if not self.enabled:
+            return
+        self._end_bar()
+        self._end_phase(f" (total {time.perf_counter() - self.start:.2f}s)")
+
+    def _end_phase(self, note: str = "") -> None:
+        if self.phase_start is not None:
+            click.echo(f" {time.perf_counter() - self.phase_start:.2f}s{note}", err=True)
+            self.phase_start = None
+
+    def _start_bar(self, label: str, total: int) -> None:
+        self._end_bar()
+        self._end_phase()
+        self.bar = terminal_bar(total, "%(label)s [%(bar)s] %(info)s", label=f"c1surf: {label}", show_percent=True)
+        self.bar_label, self.bar_start = label, time.perf_counter()
+        self.bar.render_progress()  # drawn at 0% already: the first chunk of a step may take seconds
+
+    def _end_bar(self) -> None:
+        """Finish the bar's line with the step's time instead of its ETA."""
+        if self.bar is None:
+            return
+        self.bar.show_eta = False
+        self.bar.update(0, current_item=f"{time.perf_counter() - self.bar_start:.2f}s")
+        self.bar.render_progress()
+        self.bar.render_finish()
+        self.bar = None
 
 
 def output_suffix(path, allowed: dict, what: str) -> str:
