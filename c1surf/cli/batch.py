@@ -2,7 +2,8 @@
 
 Every file is converted by ``c1surf convert`` in a child process (so a crash or
 an out-of-memory kill of one never touches the others, and each conversion
-gives its memory back), at most ``-j`` at once. Outputs go through
+gives its memory back), at most ``-j`` at once: a ``concurrent.futures`` thread
+pool of ``-j`` workers, each waiting on one child at a time. Outputs go through
 ``atomic_output`` as in ``convert``, so an interrupted batch leaves finished
 files and no partial ones; running it again skips the outputs that are newer
 than their input.
@@ -12,9 +13,12 @@ from __future__ import annotations
 import glob
 import os
 import shlex
+import signal
 import subprocess
 import sys
+import threading
 import time
+from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
 import click
@@ -22,7 +26,7 @@ import click
 from ..io.meshes.write import MESH_FORMATS
 from ..io.patches.formats import PATCH_WRITERS
 from ..io.meshes.read import SUPPORTED_SUFFIXES
-from .common import friendly_errors
+from .common import friendly_errors, shows_progress, terminal_bar
 from .options import surface_options
 
 
@@ -69,32 +73,95 @@ def failure_line(stderr: str, returncode: int) -> str:
         if line.startswith("c1surf: error: "):
             return line[len("c1surf: error: "):]
     if returncode < 0:
-        import signal
-
         name = signal.Signals(-returncode).name if -returncode in signal.Signals._value2member_map_ else str(-returncode)
         return f"the conversion was killed by {name}" + (" (out of memory?)" if name == "SIGKILL" else "")
     return lines[-1] if lines else f"exit status {returncode}"
 
 
-class Bar:
-    """One progress line on stderr, redrawn in place; only on a terminal."""
+class ConvertProcesses:
+    """The ``c1surf convert`` children of a batch: one per file, each run by a worker thread.
 
-    def __init__(self, total: int, quiet: bool):
-        self.total, self.enabled = total, not quiet and sys.stderr.isatty()
-        self.start = time.perf_counter()
+    A child is started only while the batch is not stopping, under the same
+    lock that ``stop`` takes, so no child starts after ``stop`` has ended the
+    running ones.
+    """
 
-    def show(self, done: int, failed: int, running: int) -> None:
-        if not self.enabled:
-            return
-        width = 30
-        filled = int(width * done / self.total) if self.total else width
-        elapsed = time.perf_counter() - self.start
-        click.echo(f"\r[{'#' * filled}{'.' * (width - filled)}] {done}/{self.total}  {failed} failed  {running} running  "
-                   f"{elapsed:5.0f}s", err=True, nl=False)
+    def __init__(self):
+        self.lock = threading.Lock()
+        self.running = set()
+        self.stopping = False
 
-    def close(self) -> None:
-        if self.enabled:
-            click.echo("", err=True)
+    def run(self, command: list[str]) -> tuple[int, str]:
+        """Run ``command`` to its end: (exit status, stderr text); stderr is drained as it comes (no full pipe)."""
+        with self.lock:
+            if self.stopping:  # never started: the batch is being interrupted
+                return -signal.SIGTERM, ""
+            child = subprocess.Popen(command, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
+            self.running.add(child)
+        try:
+            _, stderr = child.communicate()
+        finally:
+            with self.lock:
+                self.running.discard(child)
+        return child.returncode, stderr.decode(errors="replace")
+
+    def stop(self) -> None:
+        """End every running child and wait for it (on SIGTERM each child removes its temporary files)."""
+        with self.lock:
+            self.stopping = True
+            children = list(self.running)
+        for child in children:
+            child.terminate()
+        for child in children:
+            child.wait()
+
+
+def run_conversions(commands: dict[Path, list[str]], jobs: int, quiet: bool) -> list[tuple[Path, str]]:
+    """Run the ``convert`` commands ``jobs`` at a time; (input, one-line reason) of each failure, as they end.
+
+    On Ctrl-C or SIGTERM no further child starts, the running ones are ended
+    and waited for, and the interrupt goes on to the caller.
+    """
+    if not commands:
+        return []
+    processes, failures = ConvertProcesses(), []
+    with ThreadPoolExecutor(max_workers=jobs) as pool, batch_bar(len(commands), quiet) as bar:
+        futures = {pool.submit(processes.run, command): path for path, command in commands.items()}
+        pending = set(futures)
+        try:
+            while pending:
+                ended, pending = wait(pending, timeout=1.0, return_when=FIRST_COMPLETED)
+                for future in ended:
+                    returncode, stderr = future.result()
+                    if returncode != 0:
+                        failures.append((futures[future], failure_line(stderr, returncode)))
+                running = sum(future.running() for future in pending)
+                bar.update(len(ended), current_item=f"{len(failures)} failed  {running} running")
+        except KeyboardInterrupt:
+            pool.shutdown(wait=False, cancel_futures=True)
+            processes.stop()
+            raise
+    return failures
+
+
+def batch_bar(total: int, quiet: bool):
+    """The batch's progress line (files done of ``total``, ETA, failed and running), or none off a terminal."""
+    if not shows_progress(quiet):
+        return NoBar()
+    return terminal_bar(total, "[%(bar)s] %(info)s", info_sep="  ", show_pos=True, show_eta=True)
+
+
+class NoBar:
+    """Stands in for the progress bar when none is shown (stderr piped, or ``--quiet``)."""
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc) -> None:
+        pass
+
+    def update(self, n_steps: int, current_item=None) -> None:
+        pass
 
 
 @click.command()
@@ -128,16 +195,36 @@ def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, floa
     stops the others; the summary lists one line per failure, and the exit
     status is 1 if any file failed.
     """
+    started = time.perf_counter()
+    inputs = select_inputs(patterns, shard)
+    out = Path(out_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    planned = {path: outputs_for(path, out, mesh_suffix, patch_suffixes) for path in inputs}
+    todo = {path: outputs for path, outputs in planned.items() if rebuild or not up_to_date(path, outputs)}
+    options = {"blend": blend, "alpha": alpha, "beta": beta, "tangent_rule": tangent_rule}
+    extra_args = shlex.split(extra) + (["--float32"] if float32 else [])
+    commands = {path: convert_command(path, outputs, resolution, options, extra_args) for path, outputs in todo.items()}
+    failures = run_conversions(commands, jobs or os.cpu_count() or 1, quiet)
+    summarize(len(inputs), len(todo), failures, time.perf_counter() - started)
+
+
+def summarize(n_inputs: int, n_run: int, failures, seconds: float) -> None:
+    """The closing lines on stderr: the counts (``n_run`` conversions tried), then one line per failure; exit status 1 if any file failed."""
+    click.echo(f"c1surf batch: {n_run - len(failures)} converted, {n_inputs - n_run} up to date, "
+               f"{len(failures)} failed (of {n_inputs} inputs) in {seconds:.1f}s", err=True)
+    for path, message in failures:
+        click.echo(f"  {path}: {message}", err=True)
+    if failures:
+        raise click.exceptions.Exit(1)
+
+
+def select_inputs(patterns, shard: str | None) -> list[Path]:
+    """The inputs of this batch: the files matching ``patterns``, this shard's share, no two of one stem."""
     inputs = expand_inputs(patterns)
     if not inputs:
         raise click.BadParameter(f"no .obj or .ply file matches {' '.join(patterns)}", param_hint="'GLOB'")
     if shard:
-        try:
-            index, count = (int(x) for x in shard.split("/"))
-            if not 0 <= index < count:
-                raise ValueError
-        except ValueError:
-            raise click.BadParameter(f"expected I/N with 0 <= I < N, got {shard!r}", param_hint="--shard") from None
+        index, count = parse_shard(shard)
         inputs = inputs[index::count]
     stems = {}
     for path in inputs:
@@ -146,72 +233,15 @@ def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, floa
     if clashes:
         shown = "; ".join(" and ".join(str(p) for p in paths[:2]) for paths in clashes[:3])
         raise click.BadParameter(f"inputs with the same name would write the same output: {shown}", param_hint="'GLOB'")
-    out = Path(out_dir)
-    out.mkdir(parents=True, exist_ok=True)
-    options = {"blend": blend, "alpha": alpha, "beta": beta, "tangent_rule": tangent_rule}
-    extra_args = shlex.split(extra) + (["--float32"] if float32 else [])
+    return inputs
 
-    todo, skipped = [], 0
-    for path in inputs:
-        outputs = outputs_for(path, out, mesh_suffix, patch_suffixes)
-        if not rebuild and up_to_date(path, outputs):
-            skipped += 1
-        else:
-            todo.append((path, outputs))
-    jobs = jobs or os.cpu_count() or 1
-    bar = Bar(len(todo), quiet)
-    failures, running, captured, done = [], {}, {}, 0
-    queue = list(reversed(todo))
+
+def parse_shard(shard: str) -> tuple[int, int]:
+    """``"I/N"`` as (I, N) with 0 <= I < N; a usage error otherwise."""
     try:
-        while queue or running:
-            while queue and len(running) < jobs:
-                path, outputs = queue.pop()
-                child = subprocess.Popen(convert_command(path, outputs, resolution, options, extra_args),
-                                         stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE)
-                running[child] = path
-            bar.show(done, len(failures), len(running))
-            for child in _wait_any(running, captured):
-                path = running.pop(child)
-                stderr = (captured.pop(child, b"") + child.stderr.read()).decode(errors="replace")
-                child.stderr.close()
-                done += 1
-                if child.returncode != 0:
-                    failures.append((path, failure_line(stderr, child.returncode)))
-            bar.show(done, len(failures), len(running))
-    except KeyboardInterrupt:
-        for child in running:
-            child.terminate()  # each child removes its temporary files on SIGTERM
-        for child in running:
-            child.wait()
-        bar.close()
-        raise
-    bar.close()
-    converted = done - len(failures)
-    click.echo(f"c1surf batch: {converted} converted, {skipped} up to date, {len(failures)} failed "
-               f"(of {len(inputs)} inputs) in {time.perf_counter() - bar.start:.1f}s", err=True)
-    for path, message in failures:
-        click.echo(f"  {path}: {message}", err=True)
-    if failures:
-        raise click.exceptions.Exit(1)
-
-
-def _wait_any(running: dict, captured: dict) -> list:
-    """Block until at least one child has ended, collecting stderr meanwhile (no child blocks on a full pipe)."""
-    import selectors
-
-    selector = selectors.DefaultSelector()
-    for child in running:
-        selector.register(child.stderr, selectors.EVENT_READ, child)
-    try:
-        while True:
-            ended = [c for c in running if c.poll() is not None]
-            if ended:
-                return ended
-            for key, _ in selector.select(timeout=0.2):
-                chunk = os.read(key.fileobj.fileno(), 65536)
-                if chunk:
-                    captured[key.data] = captured.get(key.data, b"") + chunk
-                else:
-                    selector.unregister(key.fileobj)
-    finally:
-        selector.close()
+        index, count = (int(x) for x in shard.split("/"))
+        if not 0 <= index < count:
+            raise ValueError
+    except ValueError:
+        raise click.BadParameter(f"expected I/N with 0 <= I < N, got {shard!r}", param_hint="--shard") from None
+    return index, count

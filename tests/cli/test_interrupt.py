@@ -94,3 +94,42 @@ def test_write_failure_leaves_no_output(tmp_path, monkeypatch):
     assert result.exit_code == 1
     assert "No space left on device" in result.stderr and len(result.stderr.strip().splitlines()) == 1
     assert not out.exists() and not patches.exists() and temp_files(tmp_path) == []
+
+
+def processes_naming(text: str) -> list[int]:
+    """Ids of the live processes whose command line contains ``text`` (Linux /proc)."""
+    found = []
+    for entry in os.listdir("/proc"):
+        try:
+            with open(f"/proc/{entry}/cmdline", "rb") as f:
+                if entry.isdigit() and text.encode() in f.read():
+                    found.append(int(entry))
+        except OSError:  # not a process, or it ended meanwhile
+            pass
+    return found
+
+
+@pytest.mark.skipif(not os.path.isdir("/proc"), reason="lists processes through /proc")
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_interrupted_batch_ends_its_children_and_leaves_nothing_partial(tmp_path, sig):
+    """The signal reaches the batch alone (a scheduler's SIGTERM): it must end the conversions it started."""
+    mesh = shared_mesh("spot/spot_quadrangulated.obj")
+    src, out = tmp_path / "in", tmp_path / "out"
+    src.mkdir()
+    for name in "abcd":
+        os.symlink(mesh, src / f"{name}.obj")
+    proc = subprocess.Popen([sys.executable, "-m", "c1surf.cli.main", "batch", str(src / "*.obj"), "-o", str(out), "-j", "2",
+                             "-f", ".obj", "-r", "8"], stderr=subprocess.PIPE, text=True, preexec_fn=_interruptible)
+    deadline = time.time() + 180
+    while not (out.is_dir() and temp_files(out)) and proc.poll() is None and time.time() < deadline:
+        time.sleep(0.002)
+    conversions = f"{out}{os.sep}"  # in the children's command lines (-o OUTDIR/a.obj), not in the batch's
+    assert processes_naming(conversions), "no conversion was running"
+    proc.send_signal(sig)
+    _, stderr = proc.communicate(timeout=180)
+    assert proc.returncode == 1
+    assert stderr.strip().splitlines() == ["c1surf: error: interrupted; no partial output was left behind"]
+    assert temp_files(out) == []
+    assert processes_naming(conversions) == []
+    # ended, not waited for: the two conversions running at the signal did not both finish
+    assert len(list(out.glob("*.obj"))) < 2
