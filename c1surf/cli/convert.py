@@ -8,6 +8,8 @@ import click
 
 from ..mesh.errors import TopologyError
 from ..construction.surface import Surface, SurfaceOptions
+from ..evaluation.merge import merge_biquadratic
+from ..evaluation.rational import homogeneous
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.attribute_mesh import ATTRIBUTE_FORMATS, write_attribute_mesh
@@ -16,6 +18,7 @@ from ..io.patches.formats import PATCH_WRITERS
 from ..io.patches.iges import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import surface_data
+from .curvature_ply import curvature_properties
 from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes, topology_failure
 from .options import extension_options, surface_options
 
@@ -112,15 +115,52 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
-def convert(input_path, output, patches_paths, resolution, units, no_group, curvature, blend, alpha, beta, tangent_rule,
-            blend_file, interpolate_vertices, interpolate_normals, weights, triangles, attributes, refinements, merge, force, quiet,
-            float32=False):
+def convert(input_path, output, patches_paths, resolution, units, no_group, curvature, float32, merge, force, quiet,
+            **shape):
     """Convert the polygon mesh INPUT (OBJ or PLY, any n-gons) to a smooth surface.
 
     Writes OUTPUT, a triangle mesh sampled from the surface's Bezier patches
     (shared patch edges share vertices, so a closed input gives a watertight
     output, with exact normals), and optionally the patches themselves.
     """
+    mesh_suffix, patch_suffixes = output_formats(output, patches_paths, curvature, shape["attributes"])
+    progress = Progress(quiet)
+    surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet)
+    check_tessellation_size(surface.n_patches, resolution, force)
+    progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
+    # the same welding `c1surf tessellate` reads from the patch file: identical meshes
+    adjacency = patch_adjacency(surface.refined, surface.frames)
+    tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution, surface.patch_weights)
+    extra = curvature_columns(surface, tess, progress.advance) if curvature else {}
+    progress.phase(f"writing {output}")
+    patch_options = {"adjacency": adjacency, "units": units, "group": not no_group,
+                     "merged": merge_biquadratic(surface) if merge else None}
+    with atomic_output(output, inputs=[input_path]) as mesh_tmp:
+        write_mesh(mesh_tmp, mesh_suffix, tess, extra, data if shape["attributes"] else None, float32)
+        del tess, extra  # written: leave its memory to the patch writers
+        write_patch_files(zip(patches_paths, patch_suffixes), surface, input_path, patch_options, progress)
+    progress.done()
+
+
+def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: Progress, quiet: bool):
+    """Read the mesh file and build its surface: (Surface, SurfaceData); notes on repairs unless ``quiet``.
+
+    ``shape``: the values of the surface and extension options (``options.py``),
+    keyed by ``extension_setup``'s parameter names.
+    """
+    progress.phase(f"reading {input_path}")
+    mesh = read_mesh(input_path)
+    options, data = extension_setup(mesh, mesh_suffix, **shape)
+    progress.phase(f"building the surface of {mesh.n_faces} faces")
+    surface = build_or_fail(mesh, options, data)
+    if not quiet:
+        for note in repair_notes(surface, mesh):
+            click.echo(f"c1surf: note: {note}", err=True)
+    return surface, data
+
+
+def output_formats(output, patches_paths, curvature: bool, attributes: bool) -> tuple[str, list[str]]:
+    """The suffixes of ``--output`` and of each ``--patches``; usage errors for what cannot be written."""
     mesh_suffix = output_suffix(output, MESH_FORMATS, "--output")
     patch_suffixes = [output_suffix(p, PATCH_WRITERS, "--patches") for p in patches_paths]
     targets = [os.path.abspath(p) for p in (output, *patches_paths)]
@@ -130,49 +170,35 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
         raise click.BadParameter("--curvature needs a .ply --output (per-vertex properties)")
     if curvature and attributes:
         raise click.BadParameter("--curvature and --attributes both write vertex colours: choose one")
-    progress = Progress(quiet)
-    progress.phase(f"reading {input_path}")
-    mesh = read_mesh(input_path)
-    options, data = extension_setup(mesh, mesh_suffix, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
-                                    interpolate_normals, weights, triangles, attributes, refinements)
-    progress.phase(f"building the surface of {mesh.n_faces} faces")
-    surface = build_or_fail(mesh, options, data)
-    if not quiet:
-        for note in repair_notes(surface, mesh):
-            click.echo(f"c1surf: note: {note}", err=True)
-    check_tessellation_size(surface.n_patches, resolution, force)
-    progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
-    # the same welding `c1surf tessellate` reads from the patch file: identical meshes
-    adjacency = patch_adjacency(surface.refined, surface.frames)
-    tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution, surface.patch_weights)
-    extra = {}
-    if curvature:
-        from .curvature_ply import curvature_properties
+    return mesh_suffix, patch_suffixes
 
-        groups = [surface.biquadratic, surface.bicubic]
-        if surface.rational:  # core.curvature reads 4 columns as homogeneous (w x, w)
-            from ..evaluation.rational import homogeneous
 
-            groups = [homogeneous(g, w) for g, w in zip(groups, surface.patch_weights)]
-        extra = curvature_properties(groups, tess, progress.advance)
-    progress.phase(f"writing {output}")
-    merged = None
-    if merge:
-        from ..evaluation.merge import merge_biquadratic
+def curvature_columns(surface: Surface, tess, progress) -> dict:
+    """Keyword arguments of ``write_triangle_mesh`` adding the exact curvature at every tessellation vertex."""
+    groups = [surface.biquadratic, surface.bicubic]
+    if surface.rational:  # the curvature evaluation reads 4 columns as homogeneous (w x, w)
+        groups = [homogeneous(g, w) for g, w in zip(groups, surface.patch_weights)]
+    return curvature_properties(groups, tess, progress)
 
-        merged = merge_biquadratic(surface)
-    with atomic_output(output, inputs=[input_path]) as mesh_tmp:
-        if attributes:  # texture coordinates / colours ride along as extra columns of the points
-            write_attribute_mesh(mesh_tmp, tess.points[:, :3], tess.triangles, tess.normals, tess.points[:, 3:],
-                                 data.attribute_names, data.colour_scale, suffix=mesh_suffix)
-        else:
-            write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix, float32=float32, **extra)
-        del tess, extra  # written: leave its memory to the patch writers
-        with contextlib.ExitStack() as patch_files:  # all files appear together, or none
-            for patches_path, patch_suffix in zip(patches_paths, patch_suffixes):
-                progress.phase(f"writing {patches_path}")
-                patch_tmp = patch_files.enter_context(atomic_output(patches_path, inputs=[input_path]))
-                PATCH_WRITERS[patch_suffix](patch_tmp, surface, input_path=str(input_path), adjacency=adjacency,
-                                            file_name=os.path.basename(patches_path), units=units, group=not no_group,
-                                            merged=merged)
-    progress.done()
+
+def write_mesh(path, suffix: str, tess, extra: dict, attribute_data, float32: bool) -> None:
+    """Write the tessellation ``tess``; with ``attribute_data`` (a SurfaceData) its extra point columns too."""
+    if attribute_data is not None:  # texture coordinates / colours ride along as extra columns of the points
+        write_attribute_mesh(path, tess.points[:, :3], tess.triangles, tess.normals, tess.points[:, 3:],
+                             attribute_data.attribute_names, attribute_data.colour_scale, suffix=suffix)
+    else:
+        write_triangle_mesh(path, tess.points, tess.triangles, tess.normals, suffix=suffix, float32=float32, **extra)
+
+
+def write_patch_files(targets, surface: Surface, input_path, patch_options: dict, progress: Progress) -> None:
+    """Write the patches into every (path, suffix) of ``targets``: all files appear together, or none.
+
+    ``patch_options``: the keyword arguments every patch writer takes besides the
+    paths (adjacency, units, group, merged).
+    """
+    with contextlib.ExitStack() as patch_files:
+        for patches_path, patch_suffix in targets:
+            progress.phase(f"writing {patches_path}")
+            patch_tmp = patch_files.enter_context(atomic_output(patches_path, inputs=[input_path]))
+            PATCH_WRITERS[patch_suffix](patch_tmp, surface, input_path=str(input_path),
+                                        file_name=os.path.basename(patches_path), **patch_options)

@@ -34,12 +34,7 @@ def tessellate(patches_path, output, resolution, force, quiet):
     patch_suffix = output_suffix(patches_path, PATCH_LOADERS, "PATCHES")
     progress = Progress(quiet)
     progress.phase(f"reading {patches_path}")
-    patch_set = PATCH_LOADERS[patch_suffix](patches_path)
-    if patch_set.n_patches == 0:
-        raise Failure(f"{patches_path}: the patch file holds no patches")
-    dims = {g.shape[1:3] for g in patch_set.groups}
-    if any(max(d) > 4 for d in dims):
-        raise Failure(f"{patches_path}: patches of degree above 3 are not supported")
+    patch_set = load_tessellable(patches_path, patch_suffix)
     check_tessellation_size(patch_set.n_patches, resolution, force)
     if patch_set.adjacency is None:
         progress.phase("finding shared corners and sides from the geometry")
@@ -50,3 +45,14 @@ def tessellate(patches_path, output, resolution, force, quiet):
     with atomic_output(output, inputs=[patches_path]) as mesh_tmp:
         write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix)
     progress.done()
+
+
+def load_tessellable(patches_path, patch_suffix: str):
+    """The PatchSet of a patch file; a failure when it holds no patch or one of degree above 3."""
+    patch_set = PATCH_LOADERS[patch_suffix](patches_path)
+    if patch_set.n_patches == 0:
+        raise Failure(f"{patches_path}: the patch file holds no patches")
+    dims = {g.shape[1:3] for g in patch_set.groups}
+    if any(max(d) > 4 for d in dims):
+        raise Failure(f"{patches_path}: patches of degree above 3 are not supported")
+    return patch_set
