@@ -45,7 +45,7 @@ def available_memory() -> int:
 def build_or_fail(mesh, options: SurfaceOptions, data=None) -> Surface:
     """Build the surface of a MeshFile; topology problems become one-line failures.
 
-    ``data``: an ``io.surface_data.SurfaceData`` (blend ratios, weights, normals,
+    ``data``: an ``io.meshes.surface_data.SurfaceData`` (blend ratios, weights, normals,
     attribute columns) for the paper's extensions, or None.
     """
     try:
@@ -58,15 +58,19 @@ def build_or_fail(mesh, options: SurfaceOptions, data=None) -> Surface:
         raise Failure(f"{mesh.path}: {e}") from None
 
 
-def extension_setup(mesh, output_suffix_: str | None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
+def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
                     interpolate_normals, weights, triangles, attributes, refinements="2"):
-    """SurfaceOptions and SurfaceData for the surface options and the extension options of a command."""
+    """SurfaceOptions and SurfaceData for the surface options and the extension options of a command.
+
+    ``mesh_suffix``: of the tessellated output (``--attributes`` needs one that
+    carries them), or None for a command that writes no mesh.
+    """
     interpolate = interpolate_vertices or interpolate_normals
     if interpolate and beta != 0:
         raise click.BadParameter("--interpolate-vertices/--interpolate-normals need --beta 0 (beta moves cell centres off the vertices)")
     if interpolate_normals and alpha == 0:
         raise click.BadParameter("--interpolate-normals needs --alpha > 0")
-    if attributes and output_suffix_ is not None and output_suffix_ not in ATTRIBUTE_FORMATS:
+    if attributes and mesh_suffix is not None and mesh_suffix not in ATTRIBUTE_FORMATS:
         raise click.BadParameter(f"--attributes needs an --output in {', '.join(ATTRIBUTE_FORMATS)}")
     if interpolate and refinements == "0":
         raise click.BadParameter("--interpolate-vertices needs at least one refinement step (--refinements 1, 2 or auto)")

@@ -18,13 +18,7 @@ def surface_options(command):
         click.option("--tangent-rule", type=click.Choice(TANGENT_RULES), default="symmetric", show_default=True,
                      help="Tangent plane at cell centres: 'symmetric' (A3) or 'corners' (A3a, from the C_i only)."),
     ]
-    for option in reversed(options):
-        command = option(command)
-    return command
-
-
-EXTENSION_OPTIONS = ("blend_file", "interpolate_vertices", "interpolate_normals", "weights", "triangles", "attributes",
-                     "refinements")
+    return with_options(command, options)
 
 
 def extension_options(command):
@@ -51,6 +45,11 @@ def extension_options(command):
                      help="Doo-Sabin steps before A2/A3: 2 as in the paper; 0 or 1 when a closed input already "
                           "satisfies R1-R3 after that many (Prop. 1.3.1); auto: the fewest that work."),
     ]
+    return with_options(command, options)
+
+
+def with_options(command, options: list):
+    """Decorate ``command`` with click ``options``, listed in the order --help shows them."""
     for option in reversed(options):
         command = option(command)
     return command
