@@ -1,8 +1,6 @@
 """Per-vertex curvature properties for ``convert --curvature`` (and ``tessellate``)."""
 from __future__ import annotations
 
-import numpy as np
-
 from ..evaluation.curvature import tessellation_curvature
 from ..render.pictures import colormap, curvature_range, rgb8
 

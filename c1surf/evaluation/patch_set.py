@@ -67,14 +67,6 @@ class PatchSet:
             merged.setdefault(g.shape[1:3], []).append(g)
         return [np.concatenate(v) for v in merged.values()]
 
-    def patch(self, k: int) -> np.ndarray:
-        """Control points of patch ``k`` (file order)."""
-        for g in self.groups:
-            if k < len(g):
-                return g[k]
-            k -= len(g)
-        raise IndexError("patch index out of range")
-
     def welding(self, tolerance: float = 1e-9) -> PatchAdjacency:
         """The stored adjacency, or one found from the geometry (``adjacency_from_geometry``)."""
         if self.adjacency is not None:

@@ -54,10 +54,6 @@ class PatchGridMesh:
     def per_patch(self) -> int:
         return self.corner_uv.shape[0]
 
-    @property
-    def triangle_patch(self) -> np.ndarray:
-        return np.arange(self.triangles.shape[0]) // self.per_patch
-
 
 def default_resolution(n_patches: int, target_triangles: int = 600_000, largest: int = 8) -> int:
     """Grid size per patch keeping the mesh under about ``target_triangles`` triangles
@@ -172,8 +168,6 @@ class RayCaster:
             b1[index_ray], b2[index_ray] = bary[:, 1], bary[:, 2]
             t[index_ray] = np.einsum("md,md->m", locations - origins[index_ray], directions[index_ray])
         return tri, b1, b2, t
-
-
 
 
 @dataclass(frozen=True)

@@ -16,6 +16,7 @@ from c1surf.evaluation.patch_set import PatchSet
 from c1surf.evaluation.rational import dehomogenize
 from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.io.images.exr import write_exr
+from c1surf.io.images.png import write_png
 from c1surf.io.patches.formats import load_patch_set
 from c1surf.render.camera import VIEWS, frame_camera
 from c1surf.render.image import render
@@ -333,6 +334,16 @@ def test_exr_writer_copes_with_strided_arrays(tmp_path):
     for name, data in channels.items():
         np.testing.assert_array_equal(back[name], data.astype(np.float32))
     assert header["note"] == "strided"
+
+
+def test_png_writer_takes_rgb8_pictures(tmp_path):
+    """Pictures are (H, W, 3) uint8 arrays (``render.pictures``); the writer keeps them exactly."""
+    picture = np.random.default_rng(0).integers(0, 256, (5, 7, 3), dtype=np.uint8)
+    write_png(tmp_path / "p.png", picture)
+    with PILImage.open(tmp_path / "p.png") as im:
+        assert im.mode == "RGB" and np.array_equal(np.asarray(im), picture)
+    with pytest.raises(ValueError, match="uint8"):
+        write_png(tmp_path / "f.png", picture / 255.0)
 
 
 def test_without_embree_the_numpy_fallback_gives_the_same_image(monkeypatch):
