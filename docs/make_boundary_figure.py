@@ -14,7 +14,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from c1surf.evaluation.bezier import bernstein_basis, raise_degree  # noqa: E402
 from c1surf.mesh.ghost_layer import add_ghost_layer  # noqa: E402
 from c1surf.mesh.repair import prepare_topology  # noqa: E402
-from c1surf.evaluation.smoothness import match_patch_sides  # noqa: E402
+from c1surf.evaluation.adjacency import match_patch_sides, side_polygons  # noqa: E402
 from c1surf.construction.surface import Surface  # noqa: E402
 
 # an L-shaped patch of quads with one triangle pair: straight runs, a reflex and convex corners
@@ -47,8 +47,8 @@ basis = bernstein_basis(3, t)
 for side in [patches[:, 0], patches[:, -1], patches[:, :, 0], patches[:, :, -1]]:
     for curve in np.einsum("mi,kid->kmd", basis, side):
         ax.plot(curve[:, 0], curve[:, 1], color="#4c9be8", lw=0.4, zorder=3)
-sides = match_patch_sides(patches, 1e-9)
-curves = np.stack([patches[:, 0], patches[:, -1], patches[:, :, 0], patches[:, :, -1]], axis=1)
+sides = match_patch_sides([patches], 1e-9)
+curves = np.stack(side_polygons(patches), axis=1)
 lone = curves[np.divmod(sides.lone, 4)]
 for curve in np.einsum("mi,kid->kmd", basis, lone):
     ax.plot(curve[:, 0], curve[:, 1], color="#d62728", lw=2.2, zorder=4)

@@ -6,7 +6,7 @@ from pathlib import Path
 import click
 
 from ..evaluation.smoothness import measure_smoothness
-from ..io.patches.formats import PATCH_LOADERS, PATCH_READERS
+from ..io.patches.formats import PATCH_LOADERS
 from ..io.meshes.read import read_mesh
 from .common import friendly_errors
 from .convert import build_or_fail, extension_setup
@@ -35,12 +35,9 @@ def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule
     jump and exits 1 when the surface is not G1 to within --tolerance.
     """
     suffix = Path(path).suffix.lower()
-    patch_weights = None
     if suffix in PATCH_LOADERS:
         patch_set = PATCH_LOADERS[suffix](path)
         groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
-    elif suffix in PATCH_READERS:
-        groups = PATCH_READERS[suffix](path)
     else:
         mesh = read_mesh(path)
         options, data = extension_setup(mesh, None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,

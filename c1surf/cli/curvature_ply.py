@@ -1,22 +1,27 @@
 """Per-vertex curvature properties for ``convert --curvature`` (and ``tessellate``)."""
 from __future__ import annotations
 
-import numpy as np
-
 from ..evaluation.curvature import tessellation_curvature
-from ..render.pictures import colormap, curvature_range
+from ..render.pictures import colormap, curvature_range, rgb8
 
 
-def curvature_properties(groups, tess, progress=None) -> dict:
-    """Keyword arguments of ``io.mesh_out.write_triangle_mesh`` adding exact curvature.
+def curvature_properties(groups, tess, progress=None, weights=None) -> dict:
+    """Keyword arguments of ``io.meshes.write.write_triangle_mesh`` adding exact curvature.
+
+    Parameters
+    ----------
+    groups : list of (p_k, du+1, dv+1, d) float, the tessellated patches (Euclidean, x, y, z first)
+    tess : evaluation.tessellate.Tessellation of them
+    progress : callable(label, advance, total) or None
+    weights : None or a list parallel to ``groups`` of (p_k, du+1, dv+1) float: rational patches (A2a)
 
     Returns
     -------
     dict with ``vertex_properties`` (kmax, K, H, quality = kmax) and ``vertex_colors``
     (kmax through viridis, from 0 to its 98th percentile)
     """
-    c = tessellation_curvature(groups, tess.grid, tess.points.shape[0], progress)
+    c = tessellation_curvature(groups, tess.grid, tess.points.shape[0], progress, weights=weights)
     lo, hi = curvature_range(c["kmax"], signed=False)
-    colors = (colormap(c["kmax"], lo, hi, "viridis") * 255 + 0.5).astype(np.uint8)
+    colors = rgb8(colormap(c["kmax"], lo, hi, "viridis"))
     props = {"kmax": c["kmax"], "K": c["K"], "H": c["H"], "quality": c["kmax"]}
     return {"vertex_properties": props, "vertex_colors": colors}

@@ -9,14 +9,18 @@ import click
 import numpy as np
 
 from .. import __version__
-from ..render.camera import PROJECTIONS, VIEWS, frame_camera
-from ..render.raycast import CURVATURE_NAMES, GEOMETRY_NAMES, default_resolution, patch_grid_mesh, render, render_atlas
 from ..construction.surface import SurfaceOptions
+from ..evaluation.curvature import CURVATURE_NAMES
+from ..evaluation.patch_set import PatchSet, surface_patch_set
 from ..io.atomic import atomic_output
 from ..io.images.exr import write_exr
-from ..render.pictures import COLORMAPS, curvature_picture, srgb_to_linear, write_png, zebra_picture
-from ..io.patches.formats import PATCH_LOADERS
+from ..io.images.png import write_png
 from ..io.meshes.read import read_mesh
+from ..io.patches.formats import PATCH_LOADERS
+from ..render.camera import PROJECTIONS, VIEWS, frame_camera
+from ..render.image import GEOMETRY_NAMES, atlas_layout, default_tile, render, render_atlas
+from ..render.pictures import COLORMAPS, curvature_picture, srgb_to_linear, zebra_picture
+from ..render.raycast import default_resolution, patch_grid_mesh
 from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes
 from .convert import available_memory, build_or_fail
 from .options import surface_options
@@ -47,13 +51,12 @@ def parse_size(text: str) -> tuple[int, int]:
     return parts[0], parts[1]
 
 
-def load_groups(input_path, options: SurfaceOptions, quiet: bool, progress: Progress):
-    """Patch groups (global patch index runs through them in order) of a mesh or patch file."""
+def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Progress) -> PatchSet:
+    """The patches (with their weights and adjacency) of a mesh or patch file."""
     suffix = Path(input_path).suffix.lower()
     if suffix in PATCH_LOADERS:
         progress.phase(f"reading the patches of {input_path}")
-        patch_set = PATCH_LOADERS[suffix](input_path)
-        groups = [g for g in patch_set.groups if len(g)]
+        patches = PATCH_LOADERS[suffix](input_path)
     else:
         progress.phase(f"reading {input_path}")
         mesh = read_mesh(input_path)
@@ -62,12 +65,12 @@ def load_groups(input_path, options: SurfaceOptions, quiet: bool, progress: Prog
         if not quiet:
             for note in repair_notes(surface, mesh):
                 click.echo(f"c1surf: note: {note}", err=True)
-        groups = [g for g in (surface.biquadratic, surface.bicubic) if len(g)]
-    if not groups:
+        patches = surface_patch_set(surface, str(input_path))
+    if patches.n_patches == 0:
         raise Failure(f"{input_path}: there are no patches to render")
-    if any(max(g.shape[1:3]) > 4 for g in groups):
+    if any(max(g.shape[1:3]) > 4 for g in patches.groups):
         raise Failure(f"{input_path}: patches of degree above 3 are not supported")
-    return groups
+    return patches
 
 
 def exr_channels(image, rgb: np.ndarray) -> dict:
@@ -76,6 +79,78 @@ def exr_channels(image, rgb: np.ndarray) -> dict:
     data = {"R": linear[..., 0], "G": linear[..., 1], "B": linear[..., 2], "A": image.mask.astype(np.float32),
             **image.channels}
     return {name: data[name] for name in EXR_CHANNELS}
+
+
+def check_outputs(output, png_path, zebra_path, value_range) -> None:
+    """Usage errors in the output options: nothing to write, wrong suffixes, one file twice, an empty range."""
+    if not (output or png_path or zebra_path):
+        raise click.UsageError("nothing to write: give -o IMAGE.exr, --png PREVIEW.png and/or --zebra ZEBRA.png")
+    if output:
+        output_suffix(output, {".exr": None}, "--output")
+    for path, what in ((png_path, "--png"), (zebra_path, "--zebra")):
+        if path:
+            output_suffix(path, {".png": None}, what)
+    outputs = [p for p in (output, png_path, zebra_path) if p]
+    if len({os.path.abspath(p) for p in outputs}) != len(outputs):
+        raise click.BadParameter("-o, --png and --zebra must name different files")
+    if value_range is not None and not value_range[1] > value_range[0]:
+        raise click.BadParameter(f"--range needs LO < HI, got {value_range[0]} {value_range[1]}")
+
+
+def place_camera(points: np.ndarray, width: int, height: int, camera: dict):
+    """``frame_camera`` with the command's camera options; bad ones become one-line failures."""
+    try:
+        return frame_camera(points, width, height, **camera)
+    except ValueError as e:  # eye on the target, surface behind the eye
+        raise Failure(str(e)) from None
+
+
+def atlas_image(patches: PatchSet, tile, width: int, height: int, camera: dict, progress: Progress):
+    """The atlas of the patches, with a camera placed from the control points for its depth."""
+    tile = tile or default_tile(patches.n_patches)
+    rows, columns = atlas_layout(patches.n_patches, tile)
+    check_image_size(rows * columns * tile * tile)
+    progress.phase(f"atlas of {patches.n_patches} patches")
+    # Control points bound the surface (convex hull), enough to place the camera.
+    control = np.concatenate([g[..., :3].reshape(-1, 3) for g in patches.groups])
+    return render_atlas(patches, tile, place_camera(control, width, height, camera), progress=progress.advance)
+
+
+def view_image(patches: PatchSet, mesh_resolution, width: int, height: int, camera: dict, progress: Progress):
+    """The surface seen through a camera that frames the ray-casting mesh."""
+    n = mesh_resolution or default_resolution(patches.n_patches)
+    progress.phase(f"tessellating {patches.n_patches} patches at {n} x {n} for ray casting")
+    mesh = patch_grid_mesh(patches.groups, n, patches.weights)
+    return render(patches, place_camera(mesh.points, width, height, camera), progress=progress.advance, mesh=mesh)
+
+
+def image_notes(image) -> None:
+    """Notes on how the image was made: the slow ray caster, an empty picture."""
+    if image.info.get("engine") == "trimesh":
+        click.echo("c1surf: note: embreex is not installed (pip install embreex); ray casting used trimesh's "
+                   "fallback, about 1 ms per pixel", err=True)
+    if not image.mask.any():
+        click.echo("c1surf: note: the surface is not in the picture (check --eye, --target, --zoom)", err=True)
+
+
+def exr_attributes(image, quantity: str, colour_range) -> dict:
+    """EXR header attributes: version, kind, colouring, patch count, camera (and the atlas layout)."""
+    atlas = "tile" in image.info
+    attributes = {"c1surfVersion": __version__, "c1surfKind": "atlas" if atlas else "render",
+                  "c1surfColorBy": quantity, "c1surfColorRange": list(colour_range),
+                  "c1surfPatches": int(image.info["patches"])}
+    attributes.update(image.camera.attributes())
+    if atlas:
+        attributes.update({"c1surfTile": int(image.info["tile"]), "c1surfColumns": int(image.info["columns"])})
+    return attributes
+
+
+def write_atomically(path, input_path, progress: Progress, write) -> None:
+    """If ``path``: ``write(tmp)`` a temporary file that becomes ``path`` once complete."""
+    if path:
+        progress.phase(f"writing {path}")
+        with atomic_output(path, inputs=[input_path]) as tmp:
+            write(tmp)
 
 
 @click.command("render")
@@ -132,80 +207,28 @@ def render_command(input_path, output, png_path, zebra_path, view, eye, target, 
     default camera frames the whole surface. Give at least one of -o (EXR),
     --png and --zebra.
     """
-    if not (output or png_path or zebra_path):
-        raise click.UsageError("nothing to write: give -o IMAGE.exr, --png PREVIEW.png and/or --zebra ZEBRA.png")
-    if output:
-        output_suffix(output, {".exr": None}, "--output")
-    for path, what in ((png_path, "--png"), (zebra_path, "--zebra")):
-        if path:
-            output_suffix(path, {".png": None}, what)
-    outputs = [p for p in (output, png_path, zebra_path) if p]
-    if len({os.path.abspath(p) for p in outputs}) != len(outputs):
-        raise click.BadParameter("-o, --png and --zebra must name different files")
-    if value_range is not None and not value_range[1] > value_range[0]:
-        raise click.BadParameter(f"--range needs LO < HI, got {value_range[0]} {value_range[1]}")
+    check_outputs(output, png_path, zebra_path, value_range)
     width, height = parse_size(size)
     if not atlas:
         check_image_size(width * height)
     progress = Progress(quiet)
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule)
-    groups = load_groups(input_path, options, quiet, progress)
-    n_patches = sum(len(g) for g in groups)
-
+    patches = load_patches(input_path, options, quiet, progress)
     if stripe_axis is not None and not np.linalg.norm(stripe_axis) > 0:
         raise click.BadParameter("--stripe-axis must not be the zero vector")
-
-    def place_camera(points):
-        try:
-            return frame_camera(points, width, height, view, eye, target, up, projection, fov, zoom=zoom)
-        except ValueError as e:  # eye on the target, surface behind the eye
-            raise Failure(str(e)) from None
-
+    camera = {"view": view, "eye": eye, "target": target, "up": up, "projection": projection, "fov": fov, "zoom": zoom}
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="embreex is not installed")  # a note below says it
         if atlas:
-            from ..render.raycast import atlas_layout, default_tile
-
-            tile = tile or default_tile(n_patches)
-            rows, columns = atlas_layout(n_patches, tile)
-            check_image_size(rows * columns * tile * tile)
-            progress.phase(f"atlas of {n_patches} patches")
-            # Control points bound the surface (convex hull), enough to place the camera.
-            control = np.concatenate([g[..., :3].reshape(-1, 3) / (g[..., 3:4].reshape(-1, 1) if g.shape[-1] == 4 else 1)
-                                      for g in groups])
-            camera = place_camera(control)
-            image = render_atlas(groups, tile, camera, progress=progress.advance)
+            image = atlas_image(patches, tile, width, height, camera, progress)
         else:
-            n = mesh_resolution or default_resolution(n_patches)
-            progress.phase(f"tessellating {n_patches} patches at {n} x {n} for ray casting")
-            mesh = patch_grid_mesh(groups, n)
-            camera = place_camera(mesh.points)
-            image = render(groups, camera, progress=progress.advance, mesh=mesh)
-    if image.info.get("engine") == "trimesh" and not quiet:
-        click.echo("c1surf: note: embreex is not installed (pip install embreex); ray casting used trimesh's "
-                   "fallback, about 1 ms per pixel", err=True)
-    if not image.mask.any() and not quiet:
-        click.echo("c1surf: note: the surface is not in the picture (check --eye, --target, --zoom)", err=True)
-
-    picture, rgb, (lo, hi) = curvature_picture(image, quantity, colormap, value_range)
-    inputs = [input_path]
-    if output:
-        progress.phase(f"writing {output}")
-        attributes = {"c1surfVersion": __version__, "c1surfKind": "atlas" if atlas else "render",
-                      "c1surfColorBy": quantity, "c1surfColorRange": [lo, hi], "c1surfPatches": int(n_patches)}
-        attributes.update(camera.attributes())
-        if atlas:
-            attributes.update({"c1surfTile": int(image.info["tile"]), "c1surfColumns": int(image.info["columns"])})
-        with atomic_output(output, inputs=inputs) as tmp:
-            write_exr(tmp, exr_channels(image, rgb), attributes)
-    if png_path:
-        progress.phase(f"writing {png_path}")
-        with atomic_output(png_path, inputs=inputs) as tmp:
-            write_png(tmp, picture)
-    if zebra_path:
-        progress.phase(f"writing {zebra_path}")
-        with atomic_output(zebra_path, inputs=inputs) as tmp:
-            write_png(tmp, zebra_picture(image, stripes, stripe_axis))
+            image = view_image(patches, mesh_resolution, width, height, camera, progress)
+    if not quiet:
+        image_notes(image)
+    picture, rgb, colour_range = curvature_picture(image, quantity, colormap, value_range)
+    write_atomically(output, input_path, progress,
+                     lambda tmp: write_exr(tmp, exr_channels(image, rgb), exr_attributes(image, quantity, colour_range)))
+    write_atomically(png_path, input_path, progress, lambda tmp: write_png(tmp, picture))
+    write_atomically(zebra_path, input_path, progress,
+                     lambda tmp: write_png(tmp, zebra_picture(image, stripes, stripe_axis)))
     progress.done()
-
-

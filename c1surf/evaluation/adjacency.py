@@ -18,17 +18,29 @@ bookkeeping (``patch_adjacency``) or from the patch geometry alone
 (``adjacency_from_geometry``) with the same result: ids are numbered in order
 of first appearance, scanning patches in file order and corners / sides 0..3
 within a patch, and every edge runs in the direction of its first appearance.
-The welded tessellation (``core.tessellate.welded_grid_from_ids``) needs
+The welded tessellation (``evaluation.tessellate.welded_grid_from_ids``) needs
 nothing else, so a patch file that stores these arrays can be tessellated
 exactly as ``convert`` does.
+
+This numbering is the only one: the tessellation's side kernels
+(``side_offsets``), the smoothness check and the renderer's hops across
+patch sides use it, and ``match_patch_sides`` is the one geometric matcher
+(the smoothness check, ``adjacency_from_geometry`` and the renderer, when a
+patch file carries no adjacency, all use it).
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+from scipy.spatial import cKDTree
 
 from ..parallel import run_tasks
+from .bezier import bernstein_basis
+from .rational import dehomogenize, homogeneous
 
 # Corner (start, end) of each side, in increasing parameter.
 SIDE_CORNERS = np.array([[0, 1], [1, 2], [3, 2], [0, 3]])
@@ -188,59 +200,214 @@ def patch_adjacency(refined, frames: np.ndarray) -> PatchAdjacency:
     return PatchAdjacency(corner_ids, edge_ids, reversed_)
 
 
-def _side_polygons(group: np.ndarray) -> list[np.ndarray]:
-    """Control polygons of sides 0..3 (in increasing parameter) of a group of patches."""
-    return [group[:, :, 0], group[:, -1, :], group[:, :, -1], group[:, 0, :]]
+# -- sides and corners of patch arrays --------------------------------------------------
 
 
-def adjacency_from_geometry(patch_groups, tolerance: float = 1e-9) -> PatchAdjacency:
-    """Adjacency found from the patch geometry alone (no bookkeeping).
-
-    Corners closer than ``tolerance`` times the bounding-box diagonal are one
-    corner; two sides are one edge when their end corners and their mid points
-    match; a side is reversed when its quarter point lies at the other end of
-    the edge's first side. For a c1surf surface this gives exactly
-    ``patch_adjacency`` (tests/test_patch_exchange.py checks it).
+def corner_points(group: np.ndarray) -> np.ndarray:
+    """Corner control points of a group of patches, corners 0..3.
 
     Parameters
     ----------
-    patch_groups : list of (p_k, du+1, dv+1, 3) float, in patch order
-    tolerance : float, relative to the bounding-box diagonal of the control points
+    group : (p, du+1, dv+1, d) float
 
     Returns
     -------
-    PatchAdjacency
+    (p, 4, d) float
     """
-    from .bezier import bernstein_basis
-    from .smoothness import _cluster_points
+    return np.stack([group[:, 0, 0], group[:, -1, 0], group[:, -1, -1], group[:, 0, -1]], axis=1)
 
-    groups = [np.asarray(g, dtype=np.float64)[..., :3] for g in patch_groups if len(g)]
-    if not groups:
-        empty = np.zeros((0, 4), dtype=np.int64)
-        return PatchAdjacency(empty, empty.copy(), np.zeros((0, 4), dtype=bool))
-    corners = np.concatenate([np.stack([g[:, 0, 0], g[:, -1, 0], g[:, -1, -1], g[:, 0, -1]], axis=1) for g in groups])
-    t = np.array([0.25, 0.5, 0.75])
-    samples = []  # (P, 4, 3 parameters, 3)
-    for g in groups:
-        sides = []
-        for poly in _side_polygons(g):
-            sides.append(np.einsum("ti,pid->ptd", bernstein_basis(poly.shape[1] - 1, t), poly))
-        samples.append(np.stack(sides, axis=1))
-    samples = np.concatenate(samples)
+
+def side_polygons(group: np.ndarray) -> list:
+    """Control polygons of sides 0..3 of a group of patches, in increasing parameter.
+
+    Parameters
+    ----------
+    group : (p, du+1, dv+1, d) float
+
+    Returns
+    -------
+    list of 4 arrays (p, du+1, d) (sides 0 and 2) or (p, dv+1, d) (sides 1 and 3)
+    """
+    return [group[:, :, 0], group[:, -1, :], group[:, :, -1], group[:, 0, :]]
+
+
+def side_offsets(d: int) -> np.ndarray:
+    """Where each side's control polygon and the row next to it lie in a flat patch.
+
+    A patch of degree (d, d) flattened to (d+1)^2 control points has point (i, j)
+    at offset i (d+1) + j. The row next to a side (inwards) gives the derivative
+    across it.
+
+    Returns
+    -------
+    (4, 2, d+1) int: [s, 0] the polygon of side s, [s, 1] the next row inwards,
+    both in increasing parameter
+    """
+    i = np.arange(d + 1)
+    return np.array([[i * (d + 1), i * (d + 1) + 1],  # side 0: v = 0, next v = 1/d
+                     [d * (d + 1) + i, (d - 1) * (d + 1) + i],  # side 1: u = 1
+                     [i * (d + 1) + d, i * (d + 1) + d - 1],  # side 2: v = 1
+                     [i, d + 1 + i]])  # side 3: u = 0
+
+
+# -- the geometric side matcher ---------------------------------------------------------
+
+# Parameters of the points that tell sides apart: a side is one edge with another when their end
+# corners and mid points match, and runs the same way when their quarter points do.
+SIDE_SAMPLES = np.array([0.25, 0.5, 0.75])
+
+
+def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
+    """(k,) int64 label per point of (k, 3) ``points``; points closer than ``tolerance`` share one."""
+    tree = cKDTree(points)
+    pairs = tree.query_pairs(tolerance, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
+    return connected_components(graph, directed=False)[1].astype(np.int64)  # int32 labels would overflow in keys
+
+
+def _side_points(patch_groups, weights=None):
+    """Corners (P, 4, 3) and points of every side at ``SIDE_SAMPLES`` (P, 4, 3, 3), on the surface.
+
+    Rational sides (``weights``: a list parallel to ``patch_groups``) are evaluated
+    as such: the homogeneous polygon, then divided by w.
+    """
+    corners, samples = [], []
+    for k, g in enumerate(patch_groups):
+        if not len(g):
+            continue
+        g = np.asarray(g, dtype=np.float64)[..., :3]
+        h = g if weights is None else homogeneous(g, weights[k])
+        corners.append(corner_points(g))
+        sides = np.stack([np.einsum("ti,pid->ptd", bernstein_basis(poly.shape[1] - 1, SIDE_SAMPLES), poly)
+                          for poly in side_polygons(h)], axis=1)
+        samples.append(sides if weights is None else dehomogenize(sides)[0])
+    return np.concatenate(corners), np.concatenate(samples)
+
+
+@dataclass(frozen=True)
+class SideMatching:
+    """Patch sides matched by geometry; side s of patch p is the flat side ``4 p + s``.
+
+    corners : (P, 4) int64, a label per corner point (equal labels: the same point)
+    edges : (P, 4) int64, a label per side (equal labels: the same edge)
+    forward : (P, 4) int64, the label of each side's quarter point: two sides of one
+        edge run the same way iff these are equal
+    degenerate : (P, 4) bool, the side's two end corners are one point
+    """
+
+    corners: np.ndarray
+    edges: np.ndarray
+    forward: np.ndarray
+    degenerate: np.ndarray
+
+    @cached_property
+    def _counts(self):
+        """(flat edge label, how many sides have it, usable: not degenerate) per flat side."""
+        flat = self.edges.ravel()
+        return flat, np.bincount(flat)[flat], ~self.degenerate.ravel()
+
+    @cached_property
+    def _shared(self) -> np.ndarray:
+        """Sides of the edges found in exactly two sides, the two of each edge one after the other."""
+        flat, count, usable = self._counts
+        shared = np.flatnonzero((count == 2) & usable)
+        return shared[np.argsort(flat[shared], kind="stable")]
+
+    @property
+    def first(self) -> np.ndarray:
+        """(k,) int, one side of each edge found in exactly two sides (in order of edge label)."""
+        return self._shared[0::2]
+
+    @property
+    def second(self) -> np.ndarray:
+        """(k,) int, the other side of each edge of ``first``."""
+        return self._shared[1::2]
+
+    @property
+    def reversed(self) -> np.ndarray:
+        """(k,) bool, the two sides of an edge run in opposite directions."""
+        forward = self.forward.ravel()
+        return forward[self.first] != forward[self.second]
+
+    @property
+    def lone(self) -> np.ndarray:
+        """(m,) int, sides found in one patch only (the surface's boundary)."""
+        _, count, usable = self._counts
+        return np.flatnonzero((count == 1) & usable)
+
+    @property
+    def overshared(self) -> int:
+        """Edges found in more than two sides (not a surface there)."""
+        flat, count, usable = self._counts
+        return int(np.unique(flat[(count > 2) & usable]).size)
+
+
+def _match(corners: np.ndarray, samples: np.ndarray, tolerance: float) -> SideMatching:
+    """SideMatching of corners (P, 4, 3) and side points (P, 4, 3, 3), absolute ``tolerance``."""
     p = corners.shape[0]
-    everything = np.concatenate([corners.reshape(-1, 3), samples.reshape(-1, 3)])
-    diagonal = float(np.linalg.norm(everything.max(axis=0) - everything.min(axis=0)))
-    tol = tolerance * diagonal if diagonal > 0 else tolerance
-    corner_label = _cluster_points(corners.reshape(-1, 3), tol).reshape(p, 4)
+    corner_label = cluster_points(corners.reshape(-1, 3), tolerance).reshape(p, 4)
     # one cluster over quarter, mid and three-quarter points, so a side's
     # quarter point can be compared with another side's three-quarter point
-    side_label = _cluster_points(samples.reshape(-1, 3), tol).reshape(p, 4, 3)
+    side_label = cluster_points(samples.reshape(-1, 3), tolerance).reshape(p, 4, 3)
     ends = np.sort(corner_label[:, SIDE_CORNERS], axis=-1)  # (P, 4, 2)
     mid = side_label[..., 1]
     quarter = np.minimum(side_label[..., 0], side_label[..., 2])
     key = np.stack([ends[..., 0], ends[..., 1], mid, quarter], axis=-1).reshape(-1, 4)
     _, edge_label = np.unique(key, axis=0, return_inverse=True)
-    return _canonical(corner_label, edge_label.reshape(p, 4), side_label[..., 0])
+    return SideMatching(corner_label, edge_label.reshape(p, 4), side_label[..., 0], ends[..., 0] == ends[..., 1])
 
 
-__all__ = ["PatchAdjacency", "patch_adjacency", "adjacency_from_geometry", "SIDE_CORNERS"]
+def match_patch_sides(patch_groups, tolerance: float, weights=None) -> SideMatching:
+    """Find which patch sides are one edge, from the geometry alone.
+
+    Two sides are one edge when their end corners and their mid points
+    coincide (within ``tolerance``) and their quarter points do (in one order
+    or the other); they run the same way when their quarter points coincide.
+
+    Parameters
+    ----------
+    patch_groups : list of (p_k, du+1, dv+1, d) float, patches in order (x, y, z first)
+    tolerance : float, absolute distance below which two points are the same
+    weights : None or a list parallel to ``patch_groups`` of (p_k, du+1, dv+1) float (rational, A2a)
+
+    Returns
+    -------
+    SideMatching (all empty arrays when there are no patches)
+    """
+    if not any(len(g) for g in patch_groups):
+        empty = np.zeros((0, 4), dtype=np.int64)
+        return SideMatching(empty, empty, empty, np.zeros((0, 4), dtype=bool))
+    return _match(*_side_points(patch_groups, weights), tolerance)
+
+
+def adjacency_from_geometry(patch_groups, tolerance: float = 1e-9, weights=None) -> PatchAdjacency:
+    """Adjacency found from the patch geometry alone (no bookkeeping).
+
+    Sides are matched by ``match_patch_sides`` with ``tolerance`` relative to the
+    bounding-box diagonal of the corners and side points; a side is reversed
+    when its quarter point lies at the other end of the edge's first side. For
+    a c1surf surface this gives exactly ``patch_adjacency``
+    (tests/io/test_patch_exchange.py checks it).
+
+    Parameters
+    ----------
+    patch_groups : list of (p_k, du+1, dv+1, d) float, in patch order (x, y, z first)
+    tolerance : float, relative to the bounding-box diagonal
+    weights : None or a list parallel to ``patch_groups`` of (p_k, du+1, dv+1) float (rational, A2a)
+
+    Returns
+    -------
+    PatchAdjacency
+    """
+    if not any(len(g) for g in patch_groups):
+        empty = np.zeros((0, 4), dtype=np.int64)
+        return PatchAdjacency(empty, empty.copy(), np.zeros((0, 4), dtype=bool))
+    corners, samples = _side_points(patch_groups, weights)
+    everything = np.concatenate([corners.reshape(-1, 3), samples.reshape(-1, 3)])
+    diagonal = float(np.linalg.norm(everything.max(axis=0) - everything.min(axis=0)))
+    matching = _match(corners, samples, tolerance * diagonal if diagonal > 0 else tolerance)
+    return _canonical(matching.corners, matching.edges, matching.forward)
+
+
+__all__ = ["PatchAdjacency", "patch_adjacency", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
+           "SIDE_CORNERS", "side_offsets", "side_polygons", "corner_points", "cluster_points"]

@@ -1,6 +1,7 @@
 """Exact curvature of (rational) tensor-product Bezier patches.
 
-First and second derivatives come from the Bernstein bases of ``bezier``; the
+First and second derivatives come from ``bezier.sample_derivatives`` (rational
+patches: homogeneous derivatives and the quotient rule of ``rational``); the
 fundamental forms give the principal curvatures. Everything is vectorized over
 arrays of samples ``(patch, u, v)``.
 
@@ -9,9 +10,9 @@ c1surf surfaces) and a normal curvature is positive where the surface bends
 away from ``n``: a sphere of radius r with outward normals has
 ``k1 = k2 = H = 1/r`` and ``K = 1/r^2``. ``k1 >= k2``; ``kmax = max(|k1|, |k2|)``.
 
-Rational patches are given in homogeneous form: ``d == 4`` means the control
-points are ``(x w, y w, z w, w)`` and the surface is the first three columns
-divided by the fourth.
+Rational patches (A2a) are Euclidean control points with their weights passed
+explicitly (``weights``, a list parallel to the groups, as ``PatchSet.weights``);
+only x, y, z are evaluated, so attribute columns after them are ignored.
 """
 from __future__ import annotations
 
@@ -19,11 +20,12 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from scipy.special import comb
+from .bezier import patch_columns, sample_derivatives
+from .rational import euclidean_derivatives, homogeneous
 
-
-# Derivative orders (du, dv) evaluated by ``patch_derivatives``, in output order.
+# Derivative orders (du, dv) evaluated by ``PatchSampler.derivatives``, in output order.
 _ORDERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))
+CURVATURE_NAMES = ("kmax", "K", "H", "k1", "k2")
 
 
 @dataclass(frozen=True)
@@ -44,128 +46,126 @@ class Curvature:
         return getattr(self, name)
 
 
-def bernstein_columns(degree: int, t: np.ndarray, derivative: int) -> list:
-    """The ``derivative``-th derivative of the degree-``degree`` Bernstein basis at ``t``,
-    as a list of degree + 1 arrays shaped like ``t`` (de Casteljau recursion; same values
-    as ``bezier.bernstein_basis``, several times faster for low degrees)."""
-    s = 1.0 - t
-    levels = [[np.ones_like(t)]]
-    for k in range(1, degree - derivative + 1):
-        prev = levels[-1]
-        levels.append([s * prev[0]] + [s * prev[i] + t * prev[i - 1] for i in range(1, k)] + [t * prev[k - 1]])
-    if derivative > degree:
-        return [np.zeros_like(t) for _ in range(degree + 1)]
-    low = levels[degree - derivative]
-    # d^r/dt^r B_i^n = n!/(n-r)! sum_k (-1)^(r-k) C(r, k) B_{i-k}^{n-r}
-    factor = float(np.prod(np.arange(degree - derivative + 1, degree + 1)))
-    signs = [(-1) ** (derivative - k) * float(comb(derivative, k, exact=True)) for k in range(derivative + 1)]
-    out = []
-    for i in range(degree + 1):
-        acc = None
-        for k, sign in enumerate(signs):
-            if 0 <= i - k <= degree - derivative:
-                term = sign * low[i - k]
-                acc = term if acc is None else acc + term
-        out.append(factor * acc if acc is not None else np.zeros_like(t))
-    return out
+def patch_offsets(groups) -> np.ndarray:
+    """(len(groups) + 1,) int64: first global patch index of each group, then the total."""
+    return np.concatenate([[0], np.cumsum([len(g) for g in groups])]).astype(np.int64)
 
 
-def patch_columns(group: np.ndarray) -> np.ndarray:
-    """(du+1, dv+1, d, p) contiguous copy of a (p, du+1, dv+1, d) group: the layout
-    ``polynomial_derivatives`` gathers from (pass it as ``columns`` to reuse it)."""
-    return np.ascontiguousarray(np.asarray(group, dtype=np.float64).transpose(1, 2, 3, 0))
+class PatchSampler:
+    """The patches of a surface, laid out for evaluation at scattered samples (patch, u, v).
 
-
-def polynomial_derivatives(group: np.ndarray, index, u, v, orders=_ORDERS, columns=None) -> dict:
-    """Partial derivatives of the (homogeneous) polynomial patches at one sample each.
+    Global patch k is patch ``k - offsets[g]`` of group g, ``offsets[g] <= k <
+    offsets[g + 1]`` (biquadratic first, then bicubic, as in a patch file).
 
     Parameters
     ----------
-    group : (p, du+1, dv+1, d) float, patches of one degree
-    index : (m,) int into ``group`` (the patch of each sample), or None when
-        ``group`` already holds one patch per sample (p == m)
-    u, v : (m,) float
-    orders : iterable of (a, b): which derivatives d^(a+b) / du^a dv^b
-    columns : ``patch_columns(group)`` if already computed, else None
-
-    Returns
-    -------
-    dict (a, b) -> (m, d) float (transposed views of (d, m) arrays)
+    groups : list of (p_g, du+1, dv+1, d) float, x, y, z first
+    weights : None or a list parallel to ``groups`` of (p_g, du+1, dv+1) float: rational patches (A2a)
     """
-    if columns is None:
-        columns = patch_columns(group)
-    u = np.atleast_1d(np.asarray(u, dtype=np.float64))
-    v = np.atleast_1d(np.asarray(v, dtype=np.float64))
-    du, dv = columns.shape[0] - 1, columns.shape[1] - 1
-    orders = tuple(orders)
-    bu = {a: bernstein_columns(du, u, a) for a in {o[0] for o in orders}}
-    bv = {b: bernstein_columns(dv, v, b) for b in {o[1] for o in orders}}
-    # Control point by control point on (d, m) arrays: a few dozen contiguous vector
-    # operations, several times faster than einsum over gathered (m, du+1, dv+1, d) blocks.
-    if index is None:
-        cps = [[columns[i, j] for j in range(dv + 1)] for i in range(du + 1)]
-    else:
-        index = np.asarray(index)
-        cps = [[np.take(columns[i, j], index, axis=1) for j in range(dv + 1)] for i in range(du + 1)]
-    out = {}
-    for b in sorted(bv):
-        rows = [sum(bv[b][j] * cps[i][j] for j in range(dv + 1)) for i in range(du + 1)]
-        for a, bb in orders:
-            if bb == b:
-                out[(a, b)] = sum(bu[a][i] * rows[i] for i in range(du + 1)).T
-    return out
+
+    def __init__(self, groups, weights=None):
+        self.offsets = patch_offsets(groups)
+        self.rational = weights is not None
+        self.columns = []
+        for g, group in enumerate(groups):
+            xyz = np.asarray(group, dtype=np.float64)[..., :3]
+            evaluated = xyz if weights is None else homogeneous(xyz, weights[g])
+            self.columns.append(patch_columns(evaluated) if len(group) else None)
+
+    @property
+    def n_patches(self) -> int:
+        return int(self.offsets[-1])
+
+    def derivatives(self, g: int, index, u, v, orders=_ORDERS) -> tuple:
+        """x and its derivatives of ``orders`` at samples of group ``g``.
+
+        Parameters
+        ----------
+        g : int, the group
+        index : (m,) int, the patch of each sample within the group (None: patch k for sample k)
+        u, v : (m,) float
+        orders : tuple of (a, b), derivatives d^(a+b) x / du^a dv^b
+
+        Returns
+        -------
+        tuple of (m, 3) float, one per order
+        """
+        h = sample_derivatives(self.columns[g], index, u, v, orders)
+        x = euclidean_derivatives(h) if self.rational else h
+        return tuple(x[o] for o in orders)
+
+    def tangents(self, g: int, index, u, v) -> tuple:
+        """x, x_u, x_v : (m, 3) float at samples of group ``g`` (arguments as ``derivatives``)."""
+        return self.derivatives(g, index, u, v, _ORDERS[:3])
+
+    def curvature(self, g: int, index, u, v) -> "Curvature":
+        """Curvature at samples of group ``g`` (arguments as ``derivatives``)."""
+        return curvature_from_derivatives(*self.derivatives(g, index, u, v))
+
+    def runs(self, patch: np.ndarray, chunk: int):
+        """Yield (g, which): positions in ``patch`` (global indices) of group g, at most ``chunk`` at a time."""
+        for g in range(len(self.columns)):
+            which = np.flatnonzero((patch >= self.offsets[g]) & (patch < self.offsets[g + 1]))
+            for lo in range(0, which.size, chunk):
+                yield g, which[lo : lo + chunk]
+
+    def curvature_at(self, patch, u, v, chunk: int = 1 << 18, progress=None) -> "Curvature":
+        """Curvature at samples given by global patch index and parameters.
+
+        Parameters
+        ----------
+        patch : (m,) int, global patch index of each sample
+        u, v : (m,) float (or scalars)
+        chunk : int, samples evaluated at once (bounds memory)
+        progress : callable(n) or None, called with the number of samples done per chunk
+
+        Returns
+        -------
+        Curvature with (m,) fields
+        """
+        patch = np.asarray(patch, dtype=np.int64).ravel()
+        u = np.broadcast_to(np.asarray(u, dtype=np.float64), patch.shape).ravel()
+        v = np.broadcast_to(np.asarray(v, dtype=np.float64), patch.shape).ravel()
+        bad = (patch < 0) | (patch >= self.n_patches)
+        if bad.any():
+            raise IndexError(f"patch index out of range 0..{self.n_patches - 1}: {patch[bad][0]}")
+        out = {name: np.full(patch.size, np.nan) for name in CURVATURE_NAMES}
+        out["point"], out["normal"] = np.full((patch.size, 3), np.nan), np.full((patch.size, 3), np.nan)
+        for g, idx in self.runs(patch, chunk):
+            c = self.curvature(g, patch[idx] - self.offsets[g], u[idx], v[idx])
+            for name in out:
+                out[name][idx] = c[name]
+            if progress is not None:
+                progress(idx.size)
+        return Curvature(**out)
 
 
-def _euclidean(d: dict, rational: bool):
-    """x and its derivatives up to the orders present in ``d`` (quotient rule for x = P / w)."""
-    if not rational:
-        return {o: a[:, :3] for o, a in d.items()}
-    P = {o: a[:, :3] for o, a in d.items()}
-    w = {o: a[:, 3:4] for o, a in d.items()}
-    w0 = w[(0, 0)]
-    x = {(0, 0): P[(0, 0)] / w0}
-    x[(1, 0)] = (P[(1, 0)] - w[(1, 0)] * x[(0, 0)]) / w0
-    x[(0, 1)] = (P[(0, 1)] - w[(0, 1)] * x[(0, 0)]) / w0
-    if (2, 0) in d:
-        x[(2, 0)] = (P[(2, 0)] - 2 * w[(1, 0)] * x[(1, 0)] - w[(2, 0)] * x[(0, 0)]) / w0
-        x[(1, 1)] = (P[(1, 1)] - w[(1, 0)] * x[(0, 1)] - w[(0, 1)] * x[(1, 0)] - w[(1, 1)] * x[(0, 0)]) / w0
-        x[(0, 2)] = (P[(0, 2)] - 2 * w[(0, 1)] * x[(0, 1)] - w[(0, 2)] * x[(0, 0)]) / w0
-    return x
-
-
-def patch_derivatives(points: np.ndarray, u, v, rational: bool | None = None, index=None, columns=None):
+def patch_derivatives(points: np.ndarray, u, v, weights=None, index=None) -> tuple:
     """Position and first and second derivatives of the surface at one sample each.
 
     Parameters
     ----------
-    points : (m, du+1, dv+1, d) float, one patch per sample (d = 3, or 4 = homogeneous);
-        or, with ``index``, a group of patches sampled as ``points[index[k]]``
+    points : (m, du+1, dv+1, d) float, one patch per sample; or, with ``index``, a
+        group of patches sampled as ``points[index[k]]``
     u, v : (m,) float
-    rational : bool or None, default ``d == 4``
+    weights : None or (like points without the last axis) float: rational patches (A2a)
     index : (m,) int or None
-    columns : ``patch_columns(points)`` to reuse, or None
 
     Returns
     -------
     x, x_u, x_v, x_uu, x_uv, x_vv : each (m, 3) float, of the Euclidean surface
     """
-    if rational is None:
-        rational = np.shape(points)[-1] == 4
-    x = _euclidean(polynomial_derivatives(points, index, u, v, _ORDERS, columns), rational)
-    return tuple(x[o] for o in _ORDERS)
+    return PatchSampler([points], None if weights is None else [weights]).derivatives(0, index, u, v)
 
 
-def patch_tangents(points: np.ndarray, u, v, rational: bool | None = None, index=None, columns=None):
+def patch_tangents(points: np.ndarray, u, v, weights=None, index=None) -> tuple:
     """Position and first derivatives (arguments as ``patch_derivatives``).
 
     Returns
     -------
     x, x_u, x_v : each (m, 3) float
     """
-    if rational is None:
-        rational = np.shape(points)[-1] == 4
-    x = _euclidean(polynomial_derivatives(points, index, u, v, _ORDERS[:3], columns), rational)
-    return x[(0, 0)], x[(1, 0)], x[(0, 1)]
+    return PatchSampler([points], None if weights is None else [weights]).tangents(0, index, u, v)
 
 
 def curvature_from_derivatives(x, xu, xv, xuu, xuv, xvv) -> Curvature:
@@ -210,12 +210,12 @@ def curvature_from_derivatives(x, xu, xv, xuu, xuv, xvv) -> Curvature:
     return Curvature(k1=k1, k2=k2, K=K, H=H, kmax=kmax, point=x, normal=n)
 
 
-def patch_curvature(points: np.ndarray, u, v, rational: bool | None = None, index=None) -> Curvature:
+def patch_curvature(points: np.ndarray, u, v, weights=None, index=None) -> Curvature:
     """Curvature at one sample each (arguments as ``patch_derivatives``)."""
-    return curvature_from_derivatives(*patch_derivatives(points, u, v, rational, index))
+    return curvature_from_derivatives(*patch_derivatives(points, u, v, weights, index))
 
 
-def surface_curvature(groups, patch, u, v, chunk: int = 1 << 18, progress=None) -> Curvature:
+def surface_curvature(groups, patch, u, v, chunk: int = 1 << 18, progress=None, weights=None) -> Curvature:
     """Curvature at samples given by global patch index and parameters.
 
     Parameters
@@ -226,69 +226,18 @@ def surface_curvature(groups, patch, u, v, chunk: int = 1 << 18, progress=None) 
     u, v : (m,) float
     chunk : int, samples evaluated at once (bounds memory)
     progress : callable(n) or None, called with the number of samples done per chunk
+    weights : None or a list parallel to ``groups`` of (p_k, d_k+1, d_k+1) float (rational, A2a)
 
     Returns
     -------
     Curvature with (m,) fields
     """
-    patch = np.asarray(patch, dtype=np.int64).ravel()
-    u = np.broadcast_to(np.asarray(u, dtype=np.float64), patch.shape).ravel()
-    v = np.broadcast_to(np.asarray(v, dtype=np.float64), patch.shape).ravel()
-    m = patch.size
-    out = {name: np.full(m, np.nan) for name in ("k1", "k2", "K", "H", "kmax")}
-    out["point"] = np.full((m, 3), np.nan)
-    out["normal"] = np.full((m, 3), np.nan)
-    start = 0
-    for group in groups:
-        count = group.shape[0]
-        which = np.flatnonzero((patch >= start) & (patch < start + count))
-        columns = patch_columns(group) if which.size else None
-        for lo in range(0, which.size, chunk):
-            idx = which[lo : lo + chunk]
-            d = patch_derivatives(group, u[idx], v[idx], index=patch[idx] - start, columns=columns)
-            c = curvature_from_derivatives(*d)
-            for name in out:
-                out[name][idx] = c[name]
-            if progress is not None:
-                progress(idx.size)
-        start += count
-    bad = (patch < 0) | (patch >= start)
-    if bad.any():
-        raise IndexError(f"patch index out of range 0..{start - 1}: {patch[bad][0]}")
-    return Curvature(**out)
-
-
-def grid_curvature(group: np.ndarray, t: np.ndarray) -> Curvature:
-    """Curvature of every patch of one degree on the tensor grid ``t x t``.
-
-    Parameters
-    ----------
-    group : (p, d+1, d+1, dim) float
-    t : (n,) float
-
-    Returns
-    -------
-    Curvature with fields of shape (p * n * n,) (and (p * n * n, 3)), ordered (patch, i, j)
-    with u = t[i], v = t[j]
-    """
-    p, n = group.shape[0], t.size
-    ii, jj = np.meshgrid(t, t, indexing="ij")
-    idx = np.repeat(np.arange(p), n * n)
-    u = np.tile(ii.ravel(), p)
-    v = np.tile(jj.ravel(), p)
-    return patch_curvature(group, u, v, index=idx)
-
-
-def patch_offsets(groups) -> np.ndarray:
-    """(len(groups) + 1,) int: first global patch index of each group, then the total."""
-    return np.concatenate([[0], np.cumsum([g.shape[0] for g in groups])]).astype(np.int64)
-
-
+    return PatchSampler(groups, weights).curvature_at(patch, u, v, chunk, progress)
 
 
 def tessellation_curvature(groups, grid: np.ndarray, n_vertices: int | None = None, progress=None,
-                           chunk_patches: int = 1 << 14) -> dict:
-    """Per-vertex curvature of a welded tessellation (``core.tessellate.Tessellation``).
+                           chunk_patches: int = 1 << 14, weights=None) -> dict:
+    """Per-vertex curvature of a welded tessellation (``evaluation.tessellate.Tessellation``).
 
     Sample (i, j) of patch k is vertex ``grid[k, i, j]`` at u = i / (n-1), v = j / (n-1).
     A vertex on a patch edge or corner belongs to several patches; G1 surfaces have
@@ -299,7 +248,10 @@ def tessellation_curvature(groups, grid: np.ndarray, n_vertices: int | None = No
     ----------
     groups : list of patch groups, global patch order as ``grid``
     grid : (P, n, n) int
+    n_vertices : int or None (default ``grid.max() + 1``)
     progress : callable(label, advance, total) or None
+    chunk_patches : int, patches evaluated at once
+    weights : None or a list parallel to ``groups`` of weight arrays (rational, A2a)
 
     Returns
     -------
@@ -307,31 +259,26 @@ def tessellation_curvature(groups, grid: np.ndarray, n_vertices: int | None = No
     """
     n = grid.shape[1]
     t = np.linspace(0.0, 1.0, n)
+    ii, jj = np.meshgrid(t, t, indexing="ij")
     v_count = int(n_vertices if n_vertices is not None else grid.max() + 1)
-    names = ("kmax", "K", "H", "k1", "k2")
-    sums = {name: np.zeros(v_count) for name in names}
+    sums = {name: np.zeros(v_count) for name in CURVATURE_NAMES}
     counts = np.zeros(v_count)
-    total = int(grid.shape[0])
-    start = 0
-    for group in groups:
-        columns = patch_columns(group)
-        for lo in range(0, group.shape[0], chunk_patches):
-            hi = min(group.shape[0], lo + chunk_patches)
-            p = hi - lo
-            ii, jj = np.meshgrid(t, t, indexing="ij")
+    sampler = PatchSampler(groups, weights)
+    for g in range(len(groups)):
+        for lo in range(0, len(groups[g]), chunk_patches):
+            hi = min(len(groups[g]), lo + chunk_patches)
             index = np.repeat(np.arange(lo, hi), n * n)
-            d = patch_derivatives(group, np.tile(ii.ravel(), p), np.tile(jj.ravel(), p), index=index, columns=columns)
-            c = curvature_from_derivatives(*d)
-            ids = grid[start + lo : start + hi].ravel()
+            c = sampler.curvature(g, index, np.tile(ii.ravel(), hi - lo), np.tile(jj.ravel(), hi - lo))
+            ids = grid[sampler.offsets[g] + lo : sampler.offsets[g] + hi].ravel()
             ok = np.isfinite(c.kmax)
             counts += np.bincount(ids[ok], minlength=v_count)
-            for name in names:
+            for name in CURVATURE_NAMES:
                 sums[name] += np.bincount(ids[ok], weights=c[name][ok], minlength=v_count)
             if progress is not None:
-                progress("evaluating curvature", p, total)
-        start += group.shape[0]
+                progress("evaluating curvature", hi - lo, int(grid.shape[0]))
     with np.errstate(invalid="ignore", divide="ignore"):
-        return {name: sums[name] / counts for name in names}
+        return {name: sums[name] / counts for name in CURVATURE_NAMES}
 
 
-__all__ = ["Curvature", "tessellation_curvature", "bernstein_columns", "patch_columns", "polynomial_derivatives", "patch_derivatives", "patch_tangents", "curvature_from_derivatives", "patch_curvature", "surface_curvature", "grid_curvature", "patch_offsets"]
+__all__ = ["Curvature", "PatchSampler", "CURVATURE_NAMES", "curvature_from_derivatives", "patch_derivatives",
+           "patch_tangents", "patch_curvature", "surface_curvature", "tessellation_curvature", "patch_offsets"]

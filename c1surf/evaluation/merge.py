@@ -26,6 +26,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .rational import dehomogenize, homogeneous
+
 STEP = ((1, 0), (0, 1), (-1, 0), (0, -1))  # global directions 0..3: +i, +j, -i, -j
 
 
@@ -153,7 +155,7 @@ def merge_biquadratic(surface, min_patches: int = 2) -> list[MergedPiece]:
 
     Parameters
     ----------
-    surface : core.surface.Surface
+    surface : construction.surface.Surface
     min_patches : int, smallest rectangle worth merging (single patches stay Bezier)
 
     Returns
@@ -167,7 +169,7 @@ def merge_biquadratic(surface, min_patches: int = 2) -> list[MergedPiece]:
     coefficients = surface.biquadratic
     weights = surface.biquadratic_weights
     if weights is not None:
-        coefficients = np.concatenate([coefficients * weights[..., None], weights[..., None]], axis=-1)
+        coefficients = homogeneous(coefficients, weights)
     pieces = []
     for cells in _charts(other, rot):
         for i0, j0, m, n in _rectangles(cells, other):
@@ -183,11 +185,7 @@ def merge_biquadratic(surface, min_patches: int = 2) -> list[MergedPiece]:
             su, lu = _index_map(m)
             sv, lv = _index_map(n)
             net = turned[su[:, None], sv[None, :], lu[:, None], lv[None, :]]  # (m + 2, n + 2, d)
-            if weights is not None:
-                w = net[..., -1]
-                net, w = net[..., :-1] / w[..., None], w
-            else:
-                w = None
+            net, w = dehomogenize(net) if weights is not None else (net, None)
             pieces.append(MergedPiece(net, w, _clamped_knots(m), _clamped_knots(n), patches, turns))
     return pieces
 

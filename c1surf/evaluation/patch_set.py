@@ -2,7 +2,7 @@
 
 ``PatchSet`` holds the patches in file order (as runs of one degree), where
 each comes from in the input mesh, the patch adjacency (shared corners and
-sides, ``core.adjacency``) and the header (format, versions, options, input).
+sides, ``evaluation.adjacency``) and the header (format, versions, options, input).
 ``surface_patch_set`` makes one from a ``Surface``; the JSON and NPZ writers
 write it, their readers give it back, and ``c1surf tessellate`` turns it into
 the same mesh ``convert`` writes. See docs/patch-format.md.
@@ -20,7 +20,7 @@ from .adjacency import PatchAdjacency, adjacency_from_geometry, patch_adjacency
 FORMAT_NAME = "c1surf-patches"
 FORMAT_VERSION = 1
 KIND_BY_DEGREE = {2: "biquadratic", 3: "bicubic"}
-SOURCE_KINDS = ("face", "edge", "vertex")  # indexed by core.doo_sabin FACE_FROM_FACE/EDGE/VERTEX
+SOURCE_KINDS = ("face", "edge", "vertex")  # indexed by construction.refine.doo_sabin FACE_FROM_FACE/EDGE/VERTEX
 
 
 @dataclass
@@ -67,19 +67,11 @@ class PatchSet:
             merged.setdefault(g.shape[1:3], []).append(g)
         return [np.concatenate(v) for v in merged.values()]
 
-    def patch(self, k: int) -> np.ndarray:
-        """Control points of patch ``k`` (file order)."""
-        for g in self.groups:
-            if k < len(g):
-                return g[k]
-            k -= len(g)
-        raise IndexError("patch index out of range")
-
     def welding(self, tolerance: float = 1e-9) -> PatchAdjacency:
         """The stored adjacency, or one found from the geometry (``adjacency_from_geometry``)."""
         if self.adjacency is not None:
             return self.adjacency
-        return adjacency_from_geometry(self.groups, tolerance)
+        return adjacency_from_geometry(self.groups, tolerance, self.weights)
 
     def source_dicts(self) -> list:
         """JSON form of the sources: {"face": f} | {"vertex": v} | {"edge": [a, b]}."""
@@ -132,7 +124,7 @@ def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -
 
 
 def surface_patch_set(surface, input_path: str | None = None, adjacency: PatchAdjacency | None = None) -> PatchSet:
-    """The PatchSet of a ``core.surface.Surface`` (patches biquadratic first, then bicubic)."""
+    """The PatchSet of a ``construction.surface.Surface`` (patches biquadratic first, then bicubic)."""
     if adjacency is None:
         adjacency = patch_adjacency(surface.refined, surface.frames)
     groups = [np.ascontiguousarray(g[..., :3]) for g in (surface.biquadratic, surface.bicubic) if len(g)]

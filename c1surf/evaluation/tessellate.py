@@ -23,9 +23,10 @@ from functools import partial
 
 import numpy as np
 
-from .bezier import bernstein_basis, unit_normals
 from ..parallel import run_tasks
-from .adjacency import PatchAdjacency, adjacency_from_geometry, patch_adjacency  # noqa: F401 (re-exported)
+from .adjacency import PatchAdjacency, patch_adjacency, side_offsets
+from .bezier import bernstein_basis, evaluate_grid, tensor_basis, unit_normals
+from .rational import dehomogenize, evaluate_rational, homogeneous
 
 
 @dataclass(frozen=True)
@@ -56,39 +57,19 @@ class Tessellation:
     def resolution(self) -> int:
         return int(self.grid.shape[1])
 
-    def triangle_uv(self) -> np.ndarray:
-        """(T, 3, 2) float: patch parameters (u, v) of each triangle corner."""
-        n = self.resolution
-        local = _grid_triangles(n)
-        t = np.linspace(0.0, 1.0, n)
-        i, j = np.divmod(local, n)
-        uv = np.stack([t[i], t[j]], axis=-1)  # (2 (n-1)^2, 3, 2)
-        return np.tile(uv, (self.grid.shape[0], 1, 1))
 
+def grid_triangles(n: int) -> np.ndarray:
+    """Triangles of one patch's n x n sample grid, samples numbered i * n + j (i along u).
 
-def _grid_triangles(n: int) -> np.ndarray:
-    """(2 (n-1)^2, 3) int: triangles of an n x n grid numbered i * n + j."""
+    Returns
+    -------
+    (2 (n-1)^2, 3) int, counter-clockwise seen against the normal x_u x x_v
+    """
     i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
     a = (i * n + j).ravel()
     b, c, d = a + n, a + n + 1, a + 1  # (i+1, j), (i+1, j+1), (i, j+1)
     # u x v points outward, so (i,j) -> (i+1,j) -> (i+1,j+1) is counter-clockwise.
     return np.stack([np.stack([a, b, c], 1), np.stack([a, c, d], 1)], axis=1).reshape(-1, 3)
-
-
-def welded_grid(refined, frames: np.ndarray, n: int) -> np.ndarray:
-    """Global vertex index of every grid sample of every patch.
-
-    Parameters
-    ----------
-    refined : HalfEdgeMesh, the twice-refined mesh
-    frames : (P, 4) int, half-edges e0..e3 of each patch
-    n : int >= 2, samples per side
-
-    Returns
-    -------
-    (P, n, n) int, a compact numbering 0..V-1 (see ``welded_grid_from_ids``)
-    """
-    return welded_grid_from_ids(patch_adjacency(refined, frames), n)
 
 
 def welded_grid_from_ids(adjacency: PatchAdjacency, n: int) -> np.ndarray:
@@ -146,7 +127,7 @@ def tessellate_patches(patch_groups, adjacency: PatchAdjacency, resolution: int 
     adjacency : PatchAdjacency of the sum p_k patches
     resolution : int >= 2, samples per patch side
     weights : None or list of (p_k, d_k+1, d_k+1) float: rational patches (A2a), points
-        divided by w and normals by the quotient rule (``core.rational``)
+        divided by w and normals by the quotient rule (``evaluation.rational``)
 
     Returns
     -------
@@ -155,9 +136,7 @@ def tessellate_patches(patch_groups, adjacency: PatchAdjacency, resolution: int 
     if resolution < 2:
         raise ValueError("resolution must be at least 2")
     if weights is not None:
-        from .rational import tessellate_rational
-
-        return tessellate_rational(tessellate_patches, patch_groups, weights, adjacency, resolution)
+        return _tessellate_rational(patch_groups, weights, adjacency, int(resolution))
     n = int(resolution)
     groups = [np.ascontiguousarray(g, dtype=np.float64) for g in patch_groups]
     welding = _Welding.of(adjacency, n)
@@ -165,26 +144,42 @@ def tessellate_patches(patch_groups, adjacency: PatchAdjacency, resolution: int 
     points = np.empty((welding.n_vertices, dim))
     normals = np.empty((welding.n_vertices, 3))
     grid = np.empty((welding.n_patches, n, n), dtype=welding.dtype)
-    local = _grid_triangles(n)
+    local = grid_triangles(n)
     triangles = np.empty((welding.n_patches * local.shape[0], 3), dtype=welding.dtype)
     # dense ids (always, for adjacency from the construction or a patch file): each vertex evaluated once
     _evaluate_welded(groups, welding, points, normals, grid, local.ravel(), triangles)
     if not welding.dense:  # ids with gaps were closed: every sample of every patch, the last patch winning
         t = np.linspace(0.0, 1.0, n)
-        start = 0
-        for group in groups:
-            count = group.shape[0]
-            if count == 0:
-                continue
-            degree = group.shape[1] - 1
-            b, db = bernstein_basis(degree, t), bernstein_basis(degree, t, 1)
-            ids = grid[start : start + count]
-            points[ids] = np.einsum("ai,bj,pijd->pabd", b, b, group, optimize=True)
-            xu = np.einsum("ai,bj,pijd->pabd", db, b, group[..., :3], optimize=True)
-            xv = np.einsum("ai,bj,pijd->pabd", b, db, group[..., :3], optimize=True)
-            normals[ids] = unit_normals(xu, xv)
-            start += count
+        for ids, group, _ in _group_grids(grid, groups):
+            b, db = bernstein_basis(group.shape[1] - 1, t), bernstein_basis(group.shape[1] - 1, t, 1)
+            points[ids] = evaluate_grid(group, b, b)
+            normals[ids] = unit_normals(evaluate_grid(group[..., :3], db, b), evaluate_grid(group[..., :3], b, db))
     return Tessellation(points, normals, triangles, None, grid)
+
+
+def _group_grids(grid: np.ndarray, groups, weights=None):
+    """(rows of ``grid``, group, its weights or None) for every non-empty group, in order."""
+    start = 0
+    for k, group in enumerate(groups):
+        if len(group):
+            yield grid[start : start + len(group)], group, None if weights is None else weights[k]
+            start += len(group)
+
+
+def _tessellate_rational(groups, weights, adjacency: PatchAdjacency, n: int) -> Tessellation:
+    """Welded tessellation of rational patches (A2a).
+
+    The homogeneous patches (w x, w) are tessellated as polynomial ones (the
+    welding is the same), then points are divided by w and normals come from
+    the quotient rule (``rational.evaluate_rational``).
+    """
+    tess = tessellate_patches([homogeneous(g, w) for g, w in zip(groups, weights)], adjacency, n)
+    points, _ = dehomogenize(tess.points)
+    normals = np.empty((points.shape[0], 3))
+    t = np.linspace(0.0, 1.0, n)
+    for ids, group, w in _group_grids(tess.grid, groups, weights):
+        normals[ids] = evaluate_rational(group, w, t, t)[1]
+    return Tessellation(points, normals, tess.triangles, None, tess.grid)
 
 
 # -- the welded numbering --------------------------------------------------------------
@@ -371,18 +366,14 @@ class _Bases:
     def of(d: int, n: int, dim: int) -> "_Bases":
         t = np.linspace(0.0, 1.0, n)[1:-1]
         b, db = bernstein_basis(d, t), bernstein_basis(d, t, 1)
-        m, size = t.size**2, (d + 1) ** 2
-        position = np.kron(np.einsum("ai,bj->abij", b, b).reshape(m, size), np.eye(dim)).T
-        du = np.einsum("ai,bj->ijab", db, b).reshape(size, m)
-        dv = np.einsum("ai,bj->ijab", b, db).reshape(size, m)
+        position = np.kron(tensor_basis(b, b), np.eye(dim)).T
+        du = np.ascontiguousarray(tensor_basis(db, b).T)
+        dv = np.ascontiguousarray(tensor_basis(b, db).T)
         side_position = np.kron(b, np.eye(dim)).T
         zero = np.zeros_like(db)
         along, across = np.concatenate([db, zero], axis=1), np.concatenate([-b, b], axis=1)
-        i = np.arange(d + 1)
-        polygons = [(i * (d + 1), i * (d + 1) + 1), (d * (d + 1) + i, (d - 1) * (d + 1) + i),
-                    (i * (d + 1) + d, i * (d + 1) + d - 1), (i, d + 1 + i)]  # sides 0..3: polygon, next row
         side_index = np.array([[np.concatenate([row, nxt]), np.concatenate([row[::-1], nxt[::-1]])]
-                               for row, nxt in polygons])
+                               for row, nxt in side_offsets(d)])
         # across points inwards: +x_v on side 0, -x_u on side 1, -x_v on side 2, +x_u on side 3, so
         # x_u x x_v is along x across on sides 0 and 1; a flipped polygon turns along around
         side_sign = np.array([[1.0, -1.0], [1.0, -1.0], [-1.0, 1.0], [-1.0, 1.0]])

@@ -148,42 +148,82 @@ def frame_camera(points: np.ndarray, width: int, height: int, view: str = "iso",
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     centre = 0.5 * (lo + hi) if target is None else np.asarray(target, dtype=np.float64)
     radius = max(0.5 * float(np.linalg.norm(hi - lo)), 1e-12)
-    aspect = width / height
+    eye = None if eye is None else np.asarray(eye, dtype=np.float64)
+    frame = _view_frame(centre, view, eye, up)
+    fit = _Fit(pts, centre, radius, frame, width, height, 1.0 + margin)
+    if projection == "orthographic":
+        return fit.orthographic(zoom)
+    if eye is None:
+        return fit.perspective_from_afar(fov, zoom)
+    return fit.perspective_at(eye, fov, zoom)
+
+
+def _view_frame(centre: np.ndarray, view: str, eye, up):
+    """(forward, right, up) looking from ``eye`` (or along the ``view``) at ``centre``."""
     if eye is not None:
-        eye = np.asarray(eye, dtype=np.float64)
         if not np.linalg.norm(centre - eye) > 0:
             raise ValueError(f"the eye {tuple(eye.tolist())} is the point looked at: move --eye or give another --target")
-        forward, right, up_v = _frame(centre - eye, up if up is not None else (0.0, 1.0, 0.0))
-    else:
-        direction, default_up = VIEWS[view]
-        forward, right, up_v = _frame(-_unit(direction), up if up is not None else default_up)
-    rel = pts - centre
-    x, y, z = rel @ right, rel @ up_v, rel @ forward
-    scale = 1.0 + margin
-    if projection == "orthographic":
-        # Only the direction matters: centre the window on the projected extent and
-        # put the ray origins in front of everything.
+        return _frame(centre - eye, up if up is not None else (0.0, 1.0, 0.0))
+    direction, default_up = VIEWS[view]
+    return _frame(-_unit(direction), up if up is not None else default_up)
+
+
+@dataclass(frozen=True)
+class _Fit:
+    """What a camera must frame: the points (n, 3), their centre and radius, the view frame, the image size
+    and the border factor ``scale`` (1 + margin)."""
+
+    points: np.ndarray
+    centre: np.ndarray
+    radius: float
+    frame: tuple
+    width: int
+    height: int
+    scale: float
+
+    def _camera(self, eye, projection: str, **extent) -> Camera:
+        forward, right, up = self.frame
+        return Camera(eye, forward, right, up, self.width, self.height, projection, **extent)
+
+    def _projected(self):
+        """x, y, z : (n,) coordinates of the points relative to the centre, in the view frame."""
+        forward, right, up = self.frame
+        rel = self.points - self.centre
+        return rel @ right, rel @ up, rel @ forward
+
+    def orthographic(self, zoom: float) -> Camera:
+        """Only the direction matters: the window centred on the projected extent, the ray origins in front of
+        everything."""
+        forward, right, up = self.frame
+        x, y, z = self._projected()
+        aspect = self.width / self.height
         cx, cy = 0.5 * (x.min() + x.max()), 0.5 * (y.min() + y.max())
-        half = max(0.5 * (y.max() - y.min()), 0.5 * (x.max() - x.min()) / aspect, 1e-12 * radius) * scale
-        eye = centre + cx * right + cy * up_v - forward * (float(np.max(-z)) + 0.1 * radius)
-        return Camera(eye, forward, right, up_v, width, height, "orthographic", half_height=float(half / zoom))
-    if eye is None:
+        half = max(0.5 * (y.max() - y.min()), 0.5 * (x.max() - x.min()) / aspect, 1e-12 * self.radius) * self.scale
+        eye = self.centre + cx * right + cy * up - forward * (float(np.max(-z)) + 0.1 * self.radius)
+        return self._camera(eye, "orthographic", half_height=float(half / zoom))
+
+    def perspective_from_afar(self, fov, zoom: float) -> Camera:
+        """A field of view of ``fov`` degrees (default 30), the eye as near as framing everything allows."""
+        x, y, z = self._projected()
         ty = np.tan(np.radians(fov if fov is not None else 30.0) / 2.0)
-        tx = ty * aspect
+        tx = ty * self.width / self.height
         # Smallest distance d with |x| <= (d + z) tx / scale and |y| <= (d + z) ty / scale.
-        d = max(float(np.max(np.abs(x) * scale / tx - z)), float(np.max(np.abs(y) * scale / ty - z)),
-                float(np.max(-z)) + 1e-3 * radius)
-        return Camera(centre - d * forward, forward, right, up_v, width, height, "perspective", tan_half_y=float(ty / zoom))
-    if fov is not None:
-        ty = np.tan(np.radians(fov) / 2.0)
-    else:
-        rel = pts - eye
-        depth = rel @ forward
-        front = depth > 1e-9 * radius
-        if not front.any():
-            raise ValueError("the surface is behind the camera: move --eye or --target")
-        ty = max(float(np.max(np.abs(rel[front] @ up_v) / depth[front])),
-                 float(np.max(np.abs(rel[front] @ right) / depth[front])) / aspect) * scale
-        ty = min(ty, np.tan(np.radians(150.0) / 2.0))
-    ty = ty / zoom
-    return Camera(eye, forward, right, up_v, width, height, "perspective", tan_half_y=float(ty))
+        d = max(float(np.max(np.abs(x) * self.scale / tx - z)), float(np.max(np.abs(y) * self.scale / ty - z)),
+                float(np.max(-z)) + 1e-3 * self.radius)
+        return self._camera(self.centre - d * self.frame[0], "perspective", tan_half_y=float(ty / zoom))
+
+    def perspective_at(self, eye: np.ndarray, fov, zoom: float) -> Camera:
+        """The eye where it is given; the field of view ``fov`` degrees, or the narrowest framing everything."""
+        forward, right, up = self.frame
+        if fov is not None:
+            ty = np.tan(np.radians(fov) / 2.0)
+        else:
+            rel = self.points - eye
+            depth = rel @ forward
+            front = depth > 1e-9 * self.radius
+            if not front.any():
+                raise ValueError("the surface is behind the camera: move --eye or --target")
+            ty = max(float(np.max(np.abs(rel[front] @ up) / depth[front])),
+                     float(np.max(np.abs(rel[front] @ right) / depth[front])) / (self.width / self.height)) * self.scale
+            ty = min(ty, np.tan(np.radians(150.0) / 2.0))
+        return self._camera(eye, "perspective", tan_half_y=float(ty / zoom))

@@ -1,5 +1,6 @@
 """Pictures for people: colour maps, shaded curvature previews with a colour bar,
-stripe (zebra) images, PNG output through pillow.
+stripe (zebra) images. Pictures are (H, W, 3) uint8 sRGB arrays; ``io.images.png``
+writes them.
 
 Colour maps are small numpy tables (no matplotlib): ``gray`` is the black-to-white
 ramp of the paper's curvature figures, ``viridis`` a perceptually uniform map
@@ -9,8 +10,10 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["COLORMAPS", "colormap", "curvature_range", "preview_rgb", "add_colorbar", "write_png", "srgb_to_linear",
-           "curvature_picture", "zebra_picture"]
+from .shading import headlight, reflection_phase, stripes
+
+__all__ = ["COLORMAPS", "SIGNED", "colormap", "curvature_range", "preview_rgb", "add_colorbar", "srgb_to_linear",
+           "rgb8", "curvature_picture", "zebra_picture"]
 
 _VIRIDIS = np.array([
     (0.2670, 0.0049, 0.3294), (0.2770, 0.0503, 0.3757), (0.2823, 0.0950, 0.4173), (0.2829, 0.1359, 0.4534),
@@ -25,6 +28,7 @@ _VIRIDIS = np.array([
 ])
 COLORMAPS = {"viridis": _VIRIDIS, "gray": np.array([(0.0, 0.0, 0.0), (1.0, 1.0, 1.0)])}
 BACKGROUND = (0.82, 0.83, 0.85)  # sRGB, light grey
+SIGNED = {"kmax": False, "K": True, "H": True, "k1": True, "k2": True}  # signed: colour range symmetric about 0
 
 
 def colormap(values: np.ndarray, lo: float, hi: float, name: str = "viridis") -> np.ndarray:
@@ -64,15 +68,20 @@ def _format(x: float) -> str:
     return f"{x:.3g}"
 
 
-def add_colorbar(image, lo: float, hi: float, name: str, label: str):
-    """Draw a vertical colour bar with its range and ``label`` in the lower right corner.
+def add_colorbar(picture: np.ndarray, lo: float, hi: float, name: str, label: str) -> np.ndarray:
+    """A vertical colour bar with its range and ``label`` drawn in the lower right corner.
 
     Parameters
     ----------
-    image : PIL.Image (RGB), modified in place and returned
-    """
-    from PIL import ImageDraw, ImageFont
+    picture : (H, W, 3) uint8 sRGB
 
+    Returns
+    -------
+    (H, W, 3) uint8, a new array
+    """
+    from PIL import Image, ImageDraw, ImageFont
+
+    image = Image.fromarray(picture, "RGB")
     w, h = image.size
     bar_h = max(24, int(0.35 * h))
     bar_w = max(6, int(0.025 * w))
@@ -92,63 +101,47 @@ def add_colorbar(image, lo: float, hi: float, name: str, label: str):
     draw.rectangle([x1 - 4, label_y - font_size - 4, w - margin + 2, min(h - 1, h - margin + font_size // 2 + 2)],
                    fill=(255, 255, 255))
     ramp = colormap(np.linspace(hi, lo, bar_h), lo, hi, name)
-    strip = (np.repeat(ramp[:, None, :], bar_w, axis=1) * 255 + 0.5).astype(np.uint8)
-    from PIL import Image
-
-    image.paste(Image.fromarray(strip, "RGB"), (x1, y0))
+    image.paste(Image.fromarray(rgb8(np.repeat(ramp[:, None, :], bar_w, axis=1)), "RGB"), (x1, y0))
     draw.rectangle([x1 - 1, y0 - 1, x1 + bar_w, y0 + bar_h], outline=(0, 0, 0))
     tx = x1 + bar_w + 4
     for frac, text in zip((0.0, 0.5, 1.0), texts):
         y = y0 + frac * (bar_h - 1)
         draw.text((tx, y), text, fill=(0, 0, 0), font=font, anchor="lm")
     draw.text((x1, label_y), label, fill=(0, 0, 0), font=font, anchor="ls")
-    return image
+    return np.asarray(image)
 
 
-def to_image(rgb: np.ndarray):
-    """(H, W, 3) float sRGB in [0, 1] -> PIL RGB image."""
-    from PIL import Image
-
-    return Image.fromarray((np.clip(rgb, 0.0, 1.0) * 255 + 0.5).astype(np.uint8), "RGB")
-
-
-def write_png(path, image) -> None:
-    """Write a PIL image (or an (H, W, 3) float array in [0, 1]) as an optimized PNG."""
-    if isinstance(image, np.ndarray):
-        image = to_image(image)
-    image.save(str(path), format="PNG", optimize=True)
+def rgb8(rgb: np.ndarray) -> np.ndarray:
+    """(..., 3) float sRGB in [0, 1] -> uint8 (rounded, clamped)."""
+    return (np.clip(rgb, 0.0, 1.0) * 255 + 0.5).astype(np.uint8)
 
 
 QUANTITY_LABELS = {"kmax": "max |k|", "K": "Gaussian K", "H": "mean H", "k1": "k1", "k2": "k2"}
 
 
 def curvature_picture(image, quantity: str = "kmax", name: str = "viridis", value_range=None, legend: bool = True):
-    """Shaded curvature preview of a rendered ``core.render.Image``.
+    """Shaded curvature preview of a rendered ``image.Image``.
 
     Returns
     -------
-    picture : PIL.Image with a colour bar (when ``legend``)
+    picture : (H, W, 3) uint8 sRGB, with a colour bar (when ``legend``)
     rgb : (H, W, 3) float sRGB of the surface without the colour bar
     (lo, hi) : the colour range used
     """
-    from .raycast import SIGNED, headlight
-
     values = image.channels[quantity]
     mask = image.mask
     lo, hi = value_range if value_range is not None else curvature_range(values[mask], SIGNED[quantity])
     rgb = preview_rgb(values, mask, headlight(image, ambient=0.45), lo, hi, name)
-    picture = to_image(rgb)
+    picture = rgb8(rgb)
     if legend:
-        add_colorbar(picture, lo, hi, name, QUANTITY_LABELS[quantity])
+        picture = add_colorbar(picture, lo, hi, name, QUANTITY_LABELS[quantity])
     return picture, rgb, (lo, hi)
 
 
 def zebra_picture(image, count: int = 16, axis=None) -> np.ndarray:
-    """(H, W, 3) float sRGB: reflection lines of parallel light lines (``core.render.reflection_phase``)
+    """(H, W, 3) uint8 sRGB: reflection lines of parallel light lines (``shading.reflection_phase``)
     as black and white stripes, lightly shaded, on the background colour."""
-    from .raycast import headlight, reflection_phase, stripes
-
     z = stripes(reflection_phase(image, axis), count)
     shade = 0.75 + 0.25 * headlight(image, ambient=0.0)
     grey = 0.06 + 0.9 * np.nan_to_num(z) * shade
-    return np.where(image.mask[..., None], grey[..., None] * np.ones(3), np.asarray(BACKGROUND))
+    return rgb8(np.where(image.mask[..., None], grey[..., None] * np.ones(3), np.asarray(BACKGROUND)))

@@ -1,51 +1,39 @@
-"""Images of a patch surface with exact per-pixel curvature.
+"""Ray casting: which patch, and where on it, each pixel's ray meets the surface.
 
 Each patch is sampled on its own n x n grid (no welding: rendering does not need
 it; patches that share an edge parametrize it identically, so the grids meet).
 A ray per pixel hits that triangle mesh (Embree through ``embreex`` when
 installed); the hit triangle gives the patch and, by barycentric interpolation
 of its corners' parameters, an approximate (u, v), which Newton steps on
-``x(u, v) = o + t d`` move onto the exact patch. Curvature, normal and position
-are then evaluated at that exact (patch, u, v).
-
-Images are dicts of (H, W) float arrays named like the EXR channels:
-``kmax K H k1 k2 Z N.X N.Y N.Z P.X P.Y P.Z patch u v`` (``patch`` = -1 and the
-others 0 on the background, except ``Z`` = +inf there).
+``x(u, v) = o + t d`` move onto the exact patch. A ray whose solution leaves
+its patch continues on the patch across that side (``PatchAdjacency``: the
+stored one, or one matched from the geometry).
 """
 from __future__ import annotations
 
-import time
 import warnings
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..evaluation.bezier import bernstein_basis
+from ..evaluation.adjacency import PatchAdjacency
+from ..evaluation.bezier import bernstein_basis, evaluate_grid
+from ..evaluation.curvature import PatchSampler
+from ..evaluation.rational import dehomogenize, homogeneous
+from ..evaluation.tessellate import grid_triangles
 from .camera import Camera
-from ..evaluation.curvature import curvature_from_derivatives, patch_columns, patch_derivatives, patch_tangents
 
-CURVATURE_NAMES = ("kmax", "K", "H", "k1", "k2")
-SIGNED = {"kmax": False, "K": True, "H": True, "k1": True, "k2": True}
-GEOMETRY_NAMES = ("Z", "N.X", "N.Y", "N.Z", "P.X", "P.Y", "P.Z", "patch", "u", "v")
-RAY_CHUNK = 1 << 16
-EVAL_CHUNK = 1 << 17
+RAY_CHUNK = 1 << 16  # rays cast at once
+EVAL_CHUNK = 1 << 17  # samples evaluated at once
 
 
-def _report(progress, label, advance, total):
+def report(progress, label: str, advance: int, total: int) -> None:
+    """Call ``progress(label, advance, total)`` unless it is None."""
     if progress is not None:
         progress(label, advance, total)
 
 
-# -- tessellation for rendering ---------------------------------------------------------
-
-
-def grid_triangles(n: int) -> np.ndarray:
-    """(2 (n-1)^2, 3) int: triangles of an n x n grid numbered i * n + j, i along u,
-    counter-clockwise seen against the normal u x v."""
-    i, j = np.meshgrid(np.arange(n - 1), np.arange(n - 1), indexing="ij")
-    a = (i * n + j).ravel()
-    b, c, d = a + n, a + n + 1, a + 1
-    return np.stack([np.stack([a, b, c], 1), np.stack([a, c, d], 1)], axis=1).reshape(-1, 3)
+# -- the mesh the rays hit first ------------------------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -66,10 +54,6 @@ class PatchGridMesh:
     def per_patch(self) -> int:
         return self.corner_uv.shape[0]
 
-    @property
-    def triangle_patch(self) -> np.ndarray:
-        return np.arange(self.triangles.shape[0]) // self.per_patch
-
 
 def default_resolution(n_patches: int, target_triangles: int = 600_000, largest: int = 8) -> int:
     """Grid size per patch keeping the mesh under about ``target_triangles`` triangles
@@ -82,27 +66,31 @@ def default_resolution(n_patches: int, target_triangles: int = 600_000, largest:
     return int(np.clip(n, 2, largest))
 
 
-def euclidean(points: np.ndarray) -> np.ndarray:
-    """(..., 3): the points themselves, or homogeneous (x w, y w, z w, w) divided by w."""
-    if points.shape[-1] == 4:
-        return points[..., :3] / points[..., 3:4]
-    return points[..., :3]
+def patch_grid_mesh(groups, resolution: int, weights=None) -> PatchGridMesh:
+    """Sample every patch on an n x n grid of parameters.
 
+    Parameters
+    ----------
+    groups : list of (p_k, du+1, dv+1, d) float, x, y, z first
+    resolution : int >= 2, samples per patch side
+    weights : None or a list parallel to ``groups`` of (p_k, du+1, dv+1) float (rational, A2a)
 
-def patch_grid_mesh(groups, resolution: int) -> PatchGridMesh:
-    """Sample every patch of ``groups`` (list of (p, d+1, d+1, dim)) on an n x n grid."""
+    Returns
+    -------
+    PatchGridMesh
+    """
     n = int(resolution)
     t = np.linspace(0.0, 1.0, n)
     blocks = []
-    for group in groups:
-        if group.shape[0] == 0:
+    for k, group in enumerate(groups):
+        if len(group) == 0:
             continue
-        b = bernstein_basis(group.shape[1] - 1, t)
-        c = bernstein_basis(group.shape[2] - 1, t)
-        p, dim = group.shape[0], group.shape[3]
-        along_v = np.matmul(c, group)  # (p, du+1, n, dim)
-        grid = np.matmul(b, along_v.reshape(p, group.shape[1], n * dim)).reshape(p, n, n, dim)
-        blocks.append(euclidean(grid).reshape(-1, 3))
+        bu, bv = bernstein_basis(group.shape[1] - 1, t), bernstein_basis(group.shape[2] - 1, t)
+        xyz = group[..., :3]
+        if weights is None:
+            blocks.append(evaluate_grid(xyz, bu, bv).reshape(-1, 3))
+        else:
+            blocks.append(dehomogenize(evaluate_grid(homogeneous(xyz, weights[k]), bu, bv))[0].reshape(-1, 3))
     points = np.concatenate(blocks) if blocks else np.zeros((0, 3))
     local = grid_triangles(n)
     n_patches = points.shape[0] // (n * n)
@@ -182,6 +170,46 @@ class RayCaster:
         return tri, b1, b2, t
 
 
+@dataclass(frozen=True)
+class RayHits:
+    """The pixels whose rays hit the ray-casting mesh, and where.
+
+    pixel : (m,) int, raveled pixel index (row-major)
+    patch : (m,) int, global patch of the hit triangle
+    u, v : (m,) float in [0, 1], the hit's parameters on the mesh (interpolated, not exact)
+    origins, directions : (m, 3) float, the rays
+    """
+
+    pixel: np.ndarray
+    patch: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    origins: np.ndarray
+    directions: np.ndarray
+
+
+def cast_camera_rays(caster: RayCaster, mesh: PatchGridMesh, camera: Camera, progress=None) -> RayHits:
+    """Cast a ray per pixel of ``camera`` at the mesh, a band of rows at a time."""
+    h, w = camera.height, camera.width
+    parts = {name: [] for name in ("pixel", "triangle", "b1", "b2", "origins", "directions")}
+    rows_per_chunk = max(1, RAY_CHUNK // w)
+    for r0 in range(0, h, rows_per_chunk):
+        origins, directions = camera.rays(slice(r0, min(h, r0 + rows_per_chunk)))
+        triangle, b1, b2, _ = caster.cast(origins, directions)
+        hit = np.flatnonzero(triangle >= 0)
+        for name, values in zip(parts, (r0 * w + hit, triangle, b1, b2, origins, directions)):
+            parts[name].append(values if name == "pixel" else values[hit])
+        report(progress, "casting rays", origins.shape[0], h * w)
+    pixel, triangle, b1, b2, origins, directions = (np.concatenate(a) for a in parts.values())
+    corners = mesh.corner_uv[triangle % mesh.per_patch]  # (m, 3, 2)
+    uv = (1.0 - b1 - b2)[:, None] * corners[:, 0] + b1[:, None] * corners[:, 1] + b2[:, None] * corners[:, 2]
+    return RayHits(pixel, triangle // mesh.per_patch, np.clip(uv[:, 0], 0, 1), np.clip(uv[:, 1], 0, 1), origins,
+                   directions)
+
+
+# -- Newton steps onto the exact patch ------------------------------------------------------
+
+
 def _solve3(a, b, c, r):
     """Cramer's rule for [a b c] s = r, row-wise; zero where the matrix is singular."""
     bc = np.cross(b, c)
@@ -200,7 +228,14 @@ def _ray_distance(x, o, d):
     return np.linalg.norm(rel - np.einsum("md,md->m", rel, d)[:, None] * d, axis=1)
 
 
-def newton_on_rays(group, index, u, v, origins, directions, steps: int = 8, columns=None, tolerance: float = 1e-9):
+def ray_distance(x: np.ndarray, origins: np.ndarray, directions: np.ndarray) -> np.ndarray:
+    """(m,) distance of points x (m, 3) from the rays (origins, unit directions: (m, 3))."""
+    rel = x - origins
+    return np.linalg.norm(rel - np.einsum("md,md->m", rel, directions)[:, None] * directions, axis=1)
+
+
+def newton_on_rays(sampler: PatchSampler, group: int, index, u, v, origins, directions, steps: int = 8,
+                   tolerance: float = 1e-9):
     """Newton steps on ``x(u, v) = o + t d``, one patch per ray, until the parameter step
     is below ``tolerance`` (at most ``steps`` steps).
 
@@ -210,9 +245,9 @@ def newton_on_rays(group, index, u, v, origins, directions, steps: int = 8, colu
 
     Parameters
     ----------
-    group : (p, d+1, d+1, dim) float; index : (m,) int, the patch of each ray
+    sampler : PatchSampler of the surface; group : int, the group of every ray's patch
+    index : (m,) int, the patch of each ray within the group
     u, v : (m,) float, start values; origins, directions : (m, 3)
-    columns : ``curvature.patch_columns(group)`` to reuse, or None
 
     Returns
     -------
@@ -220,8 +255,8 @@ def newton_on_rays(group, index, u, v, origins, directions, steps: int = 8, colu
     start_distance : (m,) float, distance of the start point from its ray
     """
     u, v = np.array(u, dtype=np.float64), np.array(v, dtype=np.float64)
-    x, xu, xv = patch_tangents(group, u, v, index=index, columns=columns)
-    start = _ray_distance(x, origins, directions)
+    x, xu, xv = sampler.tangents(group, index, u, v)
+    start = ray_distance(x, origins, directions)
     t = np.einsum("md,md->m", x - origins, directions)
     active = np.arange(u.size)
     for k in range(steps):
@@ -234,394 +269,83 @@ def newton_on_rays(group, index, u, v, origins, directions, steps: int = 8, colu
         active, t = active[going], (t + dt)[going]
         if active.size == 0 or k == steps - 1:
             break
-        x, xu, xv = patch_tangents(group, u[active], v[active], index=index[active], columns=columns)
+        x, xu, xv = sampler.tangents(group, index[active], u[active], v[active])
     return u, v, start
 
 
-class SideNeighbours:
-    """The patch across each side of each patch, found from the geometry: two sides match
-    when their boundary curves have the same mid point (and end points, maybe reversed).
-    Sides: 0: u = 0, 1: u = 1, 2: v = 0, 3: v = 1 (the other parameter runs along)."""
-
-    def __init__(self, groups):
-        from scipy.spatial import cKDTree
-
-        mids, starts = [], []
-        for group in groups:
-            half = bernstein_basis(group.shape[1] - 1, np.array([0.5]))[0]
-            half_v = bernstein_basis(group.shape[2] - 1, np.array([0.5]))[0]
-            sides = ((group[:, 0], half_v), (group[:, -1], half_v), (group[:, :, 0], half), (group[:, :, -1], half))
-            mids.append(np.stack([euclidean(np.einsum("i,pid->pd", w, c)) for c, w in sides], axis=1).reshape(-1, 3))
-            starts.append(np.stack([euclidean(c[:, 0]) for c, _ in sides], axis=1).reshape(-1, 3))
-        self.mids = np.concatenate(mids)
-        self.starts = np.concatenate(starts)
-        self.tolerance = 1e-7 * max(float(np.ptp(self.mids, axis=0).max()), 1e-300)
-        self.tree = cKDTree(self.mids, balanced_tree=False, compact_nodes=False)
-
-    def across(self, patch: np.ndarray, side: np.ndarray):
-        """(q, side_q, reversed) for each (patch, side); q = -1 where no patch is across."""
-        key = patch * 4 + side
-        dist, idx = self.tree.query(self.mids[key], k=3)
-        other = np.where(idx[:, 0] != key, idx[:, 0], idx[:, 1])
-        gap = np.where(idx[:, 0] != key, dist[:, 0], dist[:, 1])
-        other = np.where(gap <= self.tolerance, other, -1)
-        safe = np.maximum(other, 0)
-        flipped = np.linalg.norm(self.starts[key] - self.starts[safe], axis=1) > self.tolerance
-        return np.where(other >= 0, other // 4, -1), np.where(other >= 0, other % 4, -1), flipped
+# The lines u = 0, u = 1, v = 0, v = 1 beyond which a parameter leaves the unit square, as
+# sides (adjacency.SIDE_CORNERS): 3, 1, 0, 2.
+_SIDE_BEYOND = np.array([3, 1, 0, 2])
 
 
-def _hop(neighbours: SideNeighbours, patch, u, v):
+def _hop(adjacency: PatchAdjacency, across: np.ndarray, patch, u, v):
     """Move (patch, u, v) that lie outside the unit square to the patch across the side they
     crossed, at the matching parameters; those with no neighbour are clamped instead.
+
+    adjacency : PatchAdjacency of the surface; across : its ``neighbours()``, (P, 4, 2)
 
     Returns
     -------
     patch, u, v : (m,) updated; moved : (m,) bool
     """
-    below_u, above_u, below_v, above_v = -u, u - 1, -v, v - 1
-    excess = np.stack([below_u, above_u, below_v, above_v], axis=1)
-    side = np.argmax(excess, axis=1)
-    along = np.where(side < 2, v, u)
-    depth = np.clip(excess[np.arange(side.size), side], 0.0, 0.5)
-    q, side_q, flipped = neighbours.across(patch, side)
+    excess = np.stack([-u, u - 1, -v, v - 1], axis=1)
+    beyond = np.argmax(excess, axis=1)  # the line crossed farthest (ties: the first)
+    side = _SIDE_BEYOND[beyond]
+    along = np.where(side % 2 == 1, v, u)  # sides 1 and 3 (u fixed) run along v
+    depth = np.clip(excess[np.arange(side.size), beyond], 0.0, 0.5)
+    q, side_q = across[patch, side, 0], across[patch, side, 1]
     moved = q >= 0
+    # the neighbour runs the other way along the shared edge when exactly one of the two sides is reversed
+    flipped = adjacency.reversed[patch, side] != adjacency.reversed[np.maximum(q, 0), np.maximum(side_q, 0)]
     t = np.clip(np.where(flipped, 1.0 - along, along), 0.0, 1.0)
-    nu = np.select([side_q == 0, side_q == 1], [depth, 1.0 - depth], t)
-    nv = np.select([side_q == 2, side_q == 3], [depth, 1.0 - depth], t)
+    nu = np.select([side_q == 3, side_q == 1], [depth, 1.0 - depth], t)
+    nv = np.select([side_q == 0, side_q == 2], [depth, 1.0 - depth], t)
     return (np.where(moved, q, patch), np.where(moved, nu, np.clip(u, 0, 1)),
             np.where(moved, nv, np.clip(v, 0, 1)), moved)
 
 
-def locate_on_rays(groups, patch, u, v, origins, directions, steps: int = 8, hops: int = 2, progress=None,
-                   columns=None):
-    """Exact (patch, u, v) where each ray meets the surface, from approximate ones.
+def locate_on_rays(sampler: PatchSampler, adjacency, hits: RayHits, steps: int = 8, hops: int = 2, progress=None):
+    """Exact (patch, u, v) where each ray meets the surface, from the mesh hits.
 
     Newton steps on the start patch; a ray whose solution leaves the patch moves to the
-    patch across that side (``SideNeighbours``) and continues there, at most ``hops``
-    times. Callers should keep the start values where this did not bring the point
-    closer to the ray (a ray that grazes the silhouette may miss the exact surface).
+    patch across that side and continues there, at most ``hops`` times. Callers should
+    keep the start values where this did not bring the point closer to the ray (a ray
+    that grazes the silhouette may miss the exact surface).
+
+    Parameters
+    ----------
+    sampler : PatchSampler of the surface
+    adjacency : callable () -> PatchAdjacency of the surface, called when a ray first leaves its patch
+    hits : RayHits
+    steps : int, Newton steps per patch visited; hops : int
+    progress : callable(label, advance, total) or None
 
     Returns
     -------
     patch : (m,) int; u, v : (m,) float in [0, 1]
     start_distance : (m,) float, distance of the start point from its ray
     """
-    offsets = np.concatenate([[0], np.cumsum([g.shape[0] for g in groups])])
-    if columns is None:
-        columns = [patch_columns(g) if g.shape[0] else None for g in groups]
-    patch, u, v = np.array(patch, dtype=np.int64), np.array(u, dtype=np.float64), np.array(v, dtype=np.float64)
+    patch = np.array(hits.patch, dtype=np.int64)
+    u, v = np.array(hits.u, dtype=np.float64), np.array(hits.v, dtype=np.float64)
     start_distance = np.zeros(patch.size)
     todo = np.arange(patch.size)
-    neighbours = None
+    welding = across = None
     for round_ in range(hops + 1):
-        for k, group in enumerate(groups):
-            which = todo[(patch[todo] >= offsets[k]) & (patch[todo] < offsets[k + 1])]
-            for lo in range(0, which.size, EVAL_CHUNK):
-                idx = which[lo : lo + EVAL_CHUNK]
-                u[idx], v[idx], d0 = newton_on_rays(group, patch[idx] - offsets[k], u[idx], v[idx], origins[idx],
-                                                    directions[idx], steps, columns[k])
-                if round_ == 0:
-                    start_distance[idx] = d0
-                    _report(progress, "finding the exact hits", idx.size, patch.size)
+        for g, which in sampler.runs(patch[todo], EVAL_CHUNK):
+            idx = todo[which]
+            u[idx], v[idx], d0 = newton_on_rays(sampler, g, patch[idx] - sampler.offsets[g], u[idx], v[idx],
+                                                hits.origins[idx], hits.directions[idx], steps)
+            if round_ == 0:
+                start_distance[idx] = d0
+                report(progress, "finding the exact hits", idx.size, patch.size)
         eps = 1e-12
         out = (u[todo] < -eps) | (u[todo] > 1 + eps) | (v[todo] < -eps) | (v[todo] > 1 + eps)
         todo = todo[out]
         if todo.size == 0 or round_ == hops:
             break
-        if neighbours is None:
-            neighbours = SideNeighbours(groups)
-        patch[todo], u[todo], v[todo], moved = _hop(neighbours, patch[todo], u[todo], v[todo])
+        if welding is None:
+            welding = adjacency()
+            across = welding.neighbours()
+        patch[todo], u[todo], v[todo], moved = _hop(welding, across, patch[todo], u[todo], v[todo])
         todo = todo[moved]
     return patch, np.clip(u, 0.0, 1.0), np.clip(v, 0.0, 1.0), start_distance
-
-
-# -- images -----------------------------------------------------------------------------
-
-
-@dataclass
-class Image:
-    """Per-pixel buffers (dict of (H, W) float arrays), the camera, and how they were made."""
-
-    channels: dict
-    camera: Camera | None
-    info: dict = field(default_factory=dict)
-    view_directions: np.ndarray | None = None  # (H, W, 3) unit ray direction at each surface pixel
-
-    @property
-    def mask(self) -> np.ndarray:
-        return self.channels["patch"] >= 0
-
-    @property
-    def shape(self) -> tuple:
-        return self.channels["patch"].shape
-
-
-def _empty_channels(shape) -> dict:
-    out = {name: np.zeros(shape) for name in CURVATURE_NAMES + GEOMETRY_NAMES}
-    out["patch"][:] = -1
-    out["Z"][:] = np.inf
-    return out
-
-
-def evaluate_samples(groups, patch, u, v, progress=None, label: str = "evaluating curvature", columns=None):
-    """Curvature and geometry at samples (patch, u, v); ``columns``: the groups'
-    ``curvature.patch_columns`` if already made.
-
-    Returns
-    -------
-    dict of (m,) arrays: patch, u, v, kmax, K, H, k1, k2, and (m, 3) point, normal
-    """
-    patch = np.asarray(patch, dtype=np.int64)
-    m = patch.size
-    out = {name: np.full(m, np.nan) for name in CURVATURE_NAMES}
-    out["patch"] = patch
-    out["u"], out["v"] = np.asarray(u, dtype=np.float64), np.asarray(v, dtype=np.float64)
-    out["point"], out["normal"] = np.full((m, 3), np.nan), np.full((m, 3), np.nan)
-    start = 0
-    for k, group in enumerate(groups):
-        which = np.flatnonzero((patch >= start) & (patch < start + group.shape[0]))
-        cols = columns[k] if columns is not None else (patch_columns(group) if which.size else None)
-        for lo in range(0, which.size, EVAL_CHUNK):
-            idx = which[lo : lo + EVAL_CHUNK]
-            d = patch_derivatives(group, out["u"][idx], out["v"][idx], index=patch[idx] - start, columns=cols)
-            c = curvature_from_derivatives(*d)
-            for name in CURVATURE_NAMES:
-                out[name][idx] = c[name]
-            out["point"][idx], out["normal"][idx] = c.point, c.normal
-            _report(progress, label, idx.size, m)
-        start += group.shape[0]
-    return out
-
-
-def _fill(channels, flat_index, values, camera):
-    """Write per-sample ``values`` into the image buffers at raveled pixel ``flat_index``."""
-    for name in CURVATURE_NAMES + ("u", "v"):
-        channels[name].reshape(-1)[flat_index] = values[name]
-    for k, axis in enumerate("XYZ"):
-        channels[f"N.{axis}"].reshape(-1)[flat_index] = values["normal"][:, k]
-        channels[f"P.{axis}"].reshape(-1)[flat_index] = values["point"][:, k]
-    if camera is not None:
-        channels["Z"].reshape(-1)[flat_index] = camera.depth(values["point"])
-    else:
-        channels["Z"].reshape(-1)[flat_index] = 0.0
-
-
-def render(groups, camera: Camera, resolution: int | None = None, newton_steps: int = 8, progress=None,
-           mesh: PatchGridMesh | None = None) -> Image:
-    """Ray-cast the surface: exact (patch, u, v), curvature, normal and depth per pixel.
-
-    Parameters
-    ----------
-    groups : list of (p, d+1, d+1, dim) patch arrays (global patch index runs through
-        them in order); dim 4 = homogeneous (rational)
-    camera : Camera
-    resolution : samples per patch side of the ray-casting mesh (default: about 2M
-        triangles in all)
-    newton_steps : at most this many Newton steps from the tessellation hit onto the exact
-        patch (per patch visited; they stop when converged); 0 keeps the tessellation's (u, v)
-    progress : callable(label, advance, total) or None
-    mesh : ``patch_grid_mesh(groups, n)`` if already made (e.g. to frame the camera)
-
-    Returns
-    -------
-    Image
-    """
-    n_patches = sum(g.shape[0] for g in groups)
-    if n_patches == 0:
-        raise ValueError("no patches to render")
-    n = mesh.resolution if mesh is not None else resolution or default_resolution(n_patches)
-    clock = [time.perf_counter()]
-
-    def lap():
-        clock.append(time.perf_counter())
-        return round(clock[-1] - clock[-2], 4)
-
-    _report(progress, "building the ray tracer", 0, 1)
-    if mesh is None:
-        mesh = patch_grid_mesh(groups, n)
-    caster = RayCaster(mesh.points, mesh.triangles)
-    _report(progress, "building the ray tracer", 1, 1)
-    seconds = {"tessellate": lap()}
-    h, w = camera.height, camera.width
-    channels = _empty_channels((h, w))
-    pixel, tri_all, b1_all, b2_all, o_all, d_all = [], [], [], [], [], []
-    rows_per_chunk = max(1, RAY_CHUNK // w)
-    for r0 in range(0, h, rows_per_chunk):
-        rows = slice(r0, min(h, r0 + rows_per_chunk))
-        origins, dirs = camera.rays(rows)
-        tri, b1, b2, _ = caster.cast(origins, dirs)
-        hit = np.flatnonzero(tri >= 0)
-        pixel.append(r0 * w + hit)
-        tri_all.append(tri[hit])
-        b1_all.append(b1[hit])
-        b2_all.append(b2[hit])
-        o_all.append(origins[hit])
-        d_all.append(dirs[hit])
-        _report(progress, "casting rays", origins.shape[0], h * w)
-    seconds["cast"] = lap()
-    pixel = np.concatenate(pixel)
-    tri = np.concatenate(tri_all)
-    b1, b2 = np.concatenate(b1_all), np.concatenate(b2_all)
-    origins, dirs = np.concatenate(o_all), np.concatenate(d_all)
-    patch = tri // mesh.per_patch
-    corners = mesh.corner_uv[tri % mesh.per_patch]  # (m, 3, 2)
-    uv = (1.0 - b1 - b2)[:, None] * corners[:, 0] + b1[:, None] * corners[:, 1] + b2[:, None] * corners[:, 2]
-    u, v = np.clip(uv[:, 0], 0, 1), np.clip(uv[:, 1], 0, 1)
-    columns = [patch_columns(g) if g.shape[0] else None for g in groups]
-    if newton_steps > 0:
-        patch0, u0, v0 = patch, u, v
-        patch, u, v, before = locate_on_rays(groups, patch, u, v, origins, dirs, newton_steps, progress=progress,
-                                             columns=columns)
-    seconds["locate"] = lap()
-    values = evaluate_samples(groups, patch, u, v, progress, columns=columns)
-    if newton_steps > 0:
-        # Keep the tessellation's (patch, u, v) where the exact search did not get closer
-        # to the ray (rays grazing the silhouette may miss the exact surface).
-        worse = np.flatnonzero(_ray_distance(values["point"], origins, dirs) > before * (1 + 1e-9) + 1e-300)
-        if worse.size:
-            redo = evaluate_samples(groups, patch0[worse], u0[worse], v0[worse], columns=columns)
-            for name, array in values.items():
-                array[worse] = redo[name]
-            patch = values["patch"]
-    channels["patch"].reshape(-1)[pixel] = patch
-    _fill(channels, pixel, values, camera)
-    view = np.zeros((h * w, 3))
-    view[pixel] = dirs
-    seconds["evaluate"] = lap()
-    info = {"engine": caster.engine, "resolution": n, "triangles": int(mesh.triangles.shape[0]), "patches": n_patches,
-            "hits": int(pixel.size), "seconds": seconds}
-    return Image(channels, camera, info, view.reshape(h, w, 3))
-
-
-def atlas_layout(n_patches: int, tile: int, columns: int | None = None) -> tuple[int, int]:
-    """(rows, columns) of tiles for ``n_patches`` (about square)."""
-    cols = columns or max(1, int(np.ceil(np.sqrt(max(n_patches, 1)))))
-    return max(1, int(np.ceil(n_patches / cols))), cols
-
-
-def default_tile(n_patches: int, budget: int = 4_000_000, largest: int = 32) -> int:
-    """Largest tile size (pixels per patch side) keeping the atlas under ``budget`` pixels."""
-    return int(np.clip(np.floor(np.sqrt(budget / max(n_patches, 1))), 2, largest))
-
-
-def render_atlas(groups, tile: int | None = None, camera: Camera | None = None, columns: int | None = None,
-                 progress=None) -> Image:
-    """Parameter-space image: patch k is a tile x tile square, u to the right, v up.
-
-    Tile k is at row k // columns, column k % columns; pixel centres sample
-    u = (c + 0.5) / tile, v = 1 - (r + 0.5) / tile. ``Z`` is the depth seen from
-    ``camera`` (0 without one).
-    """
-    n_patches = sum(g.shape[0] for g in groups)
-    tile = tile or default_tile(n_patches)
-    rows, cols = atlas_layout(n_patches, tile, columns)
-    h, w = rows * tile, cols * tile
-    channels = _empty_channels((h, w))
-    i, j = np.divmod(np.arange(h * w), w)
-    patch = (i // tile) * cols + (j // tile)
-    inside = np.flatnonzero(patch < n_patches)
-    r, c = i[inside] % tile, j[inside] % tile
-    u = (c + 0.5) / tile
-    v = 1.0 - (r + 0.5) / tile
-    values = evaluate_samples(groups, patch[inside], u, v, progress=progress)
-    channels["patch"].reshape(-1)[inside] = patch[inside]
-    _fill(channels, inside, values, camera)
-    view = np.zeros((h * w, 3))
-    if camera is not None:
-        if camera.projection == "perspective":
-            rel = values["point"] - camera.eye
-            view[inside] = rel / np.linalg.norm(rel, axis=1, keepdims=True)
-        else:
-            view[inside] = camera.forward
-    info = {"tile": tile, "rows": rows, "columns": cols, "patches": n_patches}
-    return Image(channels, camera, info, view.reshape(h, w, 3))
-
-
-# -- shading and reflection lines ---------------------------------------------------------
-
-
-def normals_of(image: Image) -> np.ndarray:
-    return np.stack([image.channels[f"N.{a}"] for a in "XYZ"], axis=-1)
-
-
-def headlight(image: Image, ambient: float = 0.3) -> np.ndarray:
-    """(H, W) diffuse shading from a light at the eye: ambient + (1 - ambient) |n . d|."""
-    d = image.view_directions
-    if d is None or not np.any(d):
-        return np.ones(image.shape)
-    lam = np.abs(np.einsum("hwd,hwd->hw", normals_of(image), d))
-    return ambient + (1.0 - ambient) * np.nan_to_num(lam)
-
-
-def reflection_phase(image: Image, axis=None) -> np.ndarray:
-    """(H, W) angle in (-pi, pi] of the reflected view ray about the light-line ``axis``.
-
-    The light is a set of parallel lines at infinity along ``axis`` (default: the
-    camera's up vector), so the stripes ``sin(N phase)`` are the reflection lines of
-    that environment; they are continuous where the normal is (G1) and break where
-    it jumps. NaN on the background.
-    """
-    cam = image.camera
-    axis = np.asarray(axis if axis is not None else cam.up, dtype=np.float64)
-    axis = axis / np.linalg.norm(axis)
-    e1 = np.cross(cam.forward, axis)
-    if np.linalg.norm(e1) < 1e-9:
-        e1 = cam.right
-    e1 /= np.linalg.norm(e1)
-    e2 = np.cross(axis, e1)
-    d = image.view_directions
-    n = normals_of(image)
-    r = d - 2.0 * np.einsum("hwd,hwd->hw", d, n)[..., None] * n
-    phase = np.arctan2(r @ e1, r @ e2)
-    return np.where(image.mask, phase, np.nan)
-
-
-def wrap(angle):
-    """Angles into [-pi, pi)."""
-    return (angle + np.pi) % (2.0 * np.pi) - np.pi
-
-
-def stripes(phase: np.ndarray, count: int = 12) -> np.ndarray:
-    """(H, W) stripe intensity in [0, 1] from ``phase``: ``count`` black and white pairs per
-    turn, antialiased by the phase change between neighbouring pixels. NaN stays NaN."""
-    p = count * phase
-    s = np.sin(p)
-    gx = np.zeros_like(p)
-    gy = np.zeros_like(p)
-    dx = np.abs(wrap(p[:, 1:] - p[:, :-1]))
-    dy = np.abs(wrap(p[1:, :] - p[:-1, :]))
-    gx[:, :-1] = np.nan_to_num(dx)
-    gy[:-1, :] = np.nan_to_num(dy)
-    # sin(p) changes by about g per pixel near an edge of a stripe: a ramp one pixel wide,
-    # and grey where the stripes are finer than the pixels.
-    g = np.maximum(np.hypot(gx, gy), 1e-6)
-    return np.clip(0.5 + 0.5 * s / g, 0.0, 1.0)
-
-
-def edge_discontinuity(values: np.ndarray, patch: np.ndarray, angular: bool = True):
-    """Jumps of an image field across patch edges, with the smooth trend removed.
-
-    For four pixels in a row (or column) a b | c d with a, b on one patch and c, d on
-    another, the jump is ``|(c - b) - ((b - a) + (d - c)) / 2|``: about zero where the
-    field is continuous and differentiable along the line, of the order of a pixel times
-    the change of slope where only its derivative jumps (a G1 surface's reflection lines
-    have such kinks), and the size of the break where the field itself jumps (normals
-    that jump across an edge). The same statistic for four pixels on one patch is
-    returned for scale.
-
-    Returns
-    -------
-    across : (k,) float, one value per edge crossing
-    within : (l,) float, one value per run of four pixels on one patch
-    """
-    across, within = [], []
-    for f, p in ((values, patch), (values.T, patch.T)):
-        a, b, c, d = f[:, :-3], f[:, 1:-2], f[:, 2:-1], f[:, 3:]
-        pa, pb, pc, pd = p[:, :-3], p[:, 1:-2], p[:, 2:-1], p[:, 3:]
-        on = (pa >= 0) & (pd >= 0) & (pb >= 0) & (pc >= 0)
-        on &= np.isfinite(a) & np.isfinite(b) & np.isfinite(c) & np.isfinite(d)
-        step = wrap if angular else (lambda x: x)
-        jump = np.abs(step(c - b) - 0.5 * (step(b - a) + step(d - c)))
-        across.append(jump[on & (pa == pb) & (pc == pd) & (pb != pc)])
-        within.append(jump[on & (pa == pb) & (pb == pc) & (pc == pd)])
-    return np.concatenate(across), np.concatenate(within)

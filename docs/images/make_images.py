@@ -2,7 +2,7 @@
 
 Curvature previews and reflection lines of sample meshes, and a close-up of the
 reflection lines of a surface with the paper's misprinted P_12 next to the
-correct one (the test tests/test_render.py::test_reflection_lines_break_on_a_broken_surface
+correct one (the test tests/render/test_render.py::test_reflection_lines_break_on_a_broken_surface
 measures the same thing).
 """
 from __future__ import annotations
@@ -17,6 +17,7 @@ from PIL import Image, ImageDraw
 HERE = Path(__file__).resolve().parent
 ROOT = HERE.parents[1]
 sys.path.insert(0, str(ROOT / "tests"))
+sys.path.insert(0, str(ROOT / "tests" / "render"))
 
 
 def c1surf(*args):
@@ -37,9 +38,11 @@ def main():
 
 
 def broken_pair(path):
-    from c1surf.render.camera import frame_camera
-    from c1surf.render.raycast import reflection_phase, render, stripes
+    from c1surf.evaluation.patch_set import PatchSet
     from c1surf.evaluation.smoothness import measure_smoothness
+    from c1surf.render.camera import frame_camera
+    from c1surf.render.image import render
+    from c1surf.render.shading import reflection_phase, stripes
     from test_render import misprinted_surface, worst_edge_point
 
     good, bad = misprinted_surface()
@@ -54,7 +57,7 @@ def broken_pair(path):
     camera = frame_camera(window, 180, 180, eye=point + normal, target=point, projection="orthographic")
     tiles = []
     for groups in (good, bad):
-        image = render(groups, camera)
+        image = render(PatchSet(groups), camera)
         z = stripes(reflection_phase(image, axis=axis), 48)
         rgb = np.repeat(np.nan_to_num(z)[..., None], 3, axis=2)
         tiles.append((np.clip(rgb, 0, 1) * 255).astype(np.uint8))

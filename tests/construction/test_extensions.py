@@ -26,7 +26,8 @@ from c1surf.evaluation.bezier import bernstein_basis, evaluate_patches, raise_de
 from c1surf.construction.stencils.blend import corner_ratios, second_step_corner_ratios
 from c1surf.construction.refine.doo_sabin import FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin
 from c1surf.evaluation.rational import evaluate_rational
-from c1surf.evaluation.smoothness import match_patch_sides, measure_smoothness
+from c1surf.evaluation.adjacency import match_patch_sides
+from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.tessellate import tessellate
 from c1surf.mesh.halfedges import build_halfedges
@@ -694,8 +695,8 @@ def test_rational_patch_files_and_the_command_line(tmp_path):
 
 def side_derivatives(patches, side):
     """Outward cross-boundary derivative (Bernstein coefficients, in the patch's own direction along the side)."""
-    outer = {0: patches[:, 0, :], 1: patches[:, -1, :], 2: patches[:, :, 0], 3: patches[:, :, -1]}[side]
-    inner = {0: patches[:, 1, :], 1: patches[:, -2, :], 2: patches[:, :, 1], 3: patches[:, :, -2]}[side]
+    outer = {0: patches[:, :, 0], 1: patches[:, -1, :], 2: patches[:, :, -1], 3: patches[:, 0, :]}[side]
+    inner = {0: patches[:, :, 1], 1: patches[:, -2, :], 2: patches[:, :, -2], 3: patches[:, 1, :]}[side]
     return 3 * (outer - inner)
 
 
@@ -708,7 +709,7 @@ def shared_side_mismatch(surface, wanted):
     quad = raise_degree(surface.biquadratic, 3, 3)
     patches = np.concatenate([quad, surface.bicubic])
     kinds = np.r_[np.zeros(len(quad), int), np.ones(len(surface.bicubic), int)]
-    sides = match_patch_sides(patches, 1e-9 * scale_of(patches.reshape(-1, 3)))
+    sides = match_patch_sides([patches], 1e-9 * scale_of(patches.reshape(-1, 3)))
     worst, count = 0.0, 0
     for a, b, rev in zip(sides.first, sides.second, sides.reversed):
         pa, sa = divmod(int(a), 4)

@@ -6,13 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from c1surf.evaluation.bezier import bernstein_basis, evaluate_patches_at, raise_degree
-from c1surf.evaluation.curvature import (
-    bernstein_columns,
-    patch_curvature,
-    surface_curvature,
-    tessellation_curvature,
-)
+from c1surf.evaluation.bezier import bernstein_basis, bernstein_columns, evaluate_patches_at, raise_degree
+from c1surf.evaluation.curvature import patch_curvature, surface_curvature, tessellation_curvature
+from c1surf.evaluation.rational import dehomogenize
 from c1surf.io.patches.formats import PATCH_LOADERS
 from conftest import rational_sphere_patch
 
@@ -48,8 +44,12 @@ def graph_curvature(a, b, c, x, y):
     return {"K": K, "H": H, "k1": H + root, "k2": H - root, "kmax": np.abs(H) + root}
 
 
-def evaluate(points, u, v, **kw):
-    return patch_curvature(np.broadcast_to(points, (u.size,) + points.shape), u, v, **kw)
+def evaluate(points, u, v, weights=None):
+    """Curvature of one patch at many samples (rational with ``weights``)."""
+    def each(a):
+        return np.broadcast_to(a, (u.size,) + a.shape)
+
+    return patch_curvature(each(points), u, v, None if weights is None else each(weights))
 
 
 @pytest.mark.parametrize("a, b, c", [(0.7, 0.7, 0.0), (0.7, -0.3, 0.0), (0.4, 1.3, -0.8), (0.0, 0.0, 1.0)])
@@ -76,8 +76,7 @@ def test_degree_elevated_and_trivially_rational_patches_agree():
     want = graph_curvature(0.4, 1.3, -0.8, 2 * u - 1, 2 * v - 1)
     cubic = raise_degree(P[None], 3, 3)[0]
     for w in (1.0, 2.5):
-        homogeneous = np.concatenate([cubic * w, np.full((4, 4, 1), w)], axis=-1)
-        got = evaluate(homogeneous, u, v)
+        got = evaluate(cubic, u, v, weights=np.full((4, 4), w))
         for name in NAMES:
             np.testing.assert_allclose(got[name], want[name], atol=1e-9, err_msg=name)
 
@@ -87,7 +86,8 @@ def test_rational_sphere_patch():
     radius, centre = 2.5, np.array([0.3, -1.0, 2.0])
     Q = rational_sphere_patch(radius, centre)
     u, v = RNG.random(400), RNG.random(400)
-    got = evaluate(Q, u, v)
+    x, w = dehomogenize(Q)
+    got = evaluate(x, u, v, weights=w)
     np.testing.assert_allclose(np.linalg.norm(got.point - centre, axis=1), radius, atol=1e-12)
     side = np.sign(np.einsum("md,md->m", got.normal, got.point - centre))  # +1: normal points outward
     assert abs(side.sum()) == side.size  # one orientation over the patch
@@ -111,7 +111,8 @@ def test_rational_cylinder_patch():
             x = np.array([arc[i, 0], arc[i, 1], 1.5 * j / 2])
             Q[i, j] = np.append(x * w[i], w[i])
     u, v = RNG.random(300), RNG.random(300)
-    got = evaluate(Q, u, v)
+    x, w = dehomogenize(Q)
+    got = evaluate(x, u, v, weights=w)
     np.testing.assert_allclose(np.hypot(got.point[:, 0], got.point[:, 1]), r, atol=1e-12)
     side = np.sign(np.einsum("md,md->m", got.normal[:, :2], got.point[:, :2]))
     np.testing.assert_allclose(got.K, 0, atol=1e-9)

@@ -141,7 +141,7 @@ def test_rational_matches_reference(n):
     adjacency = patch_adjacency(s.refined, s.frames)
     tess = tessellate_patches(groups, adjacency, n, patch_weights)
     grid = reference_grid(adjacency, n)
-    # core.rational recomputes the normals with evaluate_rational: those agree to rounding (~1e-15)
+    # the rational tessellation recomputes the normals with evaluate_rational: those agree to rounding (~1e-15)
     normals, condition = np.full((tess.points.shape[0], 3), np.nan), np.full(tess.points.shape[0], 10.0)
     t, start = np.linspace(0.0, 1.0, n), 0
     for g, w in zip(groups, patch_weights):
@@ -211,7 +211,7 @@ def test_triangle_patch_is_made_on_demand_or_kept():
     tess = tessellate_patches([s.biquadratic, s.bicubic], patch_adjacency(s.refined, s.frames), 3)
     assert np.array_equal(tess.triangle_patch, np.arange(tess.triangles.shape[0]) // 8)
     given = np.arange(tess.triangles.shape[0])
-    kept = Tessellation(tess.points, tess.normals, tess.triangles, given, tess.grid)  # positional, as core.rational builds it
+    kept = Tessellation(tess.points, tess.normals, tess.triangles, given, tess.grid)  # positional, as the rational tessellation builds it
     assert kept.triangle_patch is given
 
 

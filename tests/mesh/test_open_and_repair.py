@@ -8,7 +8,8 @@ from scipy.spatial import cKDTree
 
 from c1surf.evaluation.bezier import bernstein_basis, raise_degree
 from c1surf.mesh.errors import TopologyError
-from c1surf.evaluation.smoothness import match_patch_sides, measure_smoothness
+from c1surf.evaluation.adjacency import match_patch_sides, side_polygons
+from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.construction.surface import Surface
 from c1surf.evaluation.tessellate import tessellate
 from c1surf.mesh.halfedges import build_halfedges
@@ -23,9 +24,9 @@ def boundary_curves(surface: Surface):
     """Patch sides that no other patch shares, found from geometry: (k, 4, 3) cubic control points."""
     patches = np.concatenate([raise_degree(surface.biquadratic[..., :3], 3, 3), surface.bicubic[..., :3]])
     flat = patches.reshape(-1, 3)
-    sides = match_patch_sides(patches, 1e-9 * np.linalg.norm(np.ptp(flat, axis=0)))
+    sides = match_patch_sides([patches], 1e-9 * np.linalg.norm(np.ptp(flat, axis=0)))
     patch, side = np.divmod(sides.lone, 4)
-    curves = np.stack([patches[:, 0], patches[:, -1], patches[:, :, 0], patches[:, :, -1]], axis=1)
+    curves = np.stack(side_polygons(patches), axis=1)
     return curves[patch, side]
 
 

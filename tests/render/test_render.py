@@ -11,15 +11,21 @@ from click.testing import CliRunner
 from PIL import Image as PILImage
 
 from c1surf.cli.main import main
-from c1surf.render.camera import VIEWS, frame_camera
 from c1surf.evaluation.curvature import patch_tangents, surface_curvature, tessellation_curvature
-from c1surf.render.raycast import edge_discontinuity, patch_grid_mesh, reflection_phase, render, stripes
+from c1surf.evaluation.patch_set import PatchSet
+from c1surf.evaluation.rational import dehomogenize
 from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.io.images.exr import write_exr
+from c1surf.io.images.png import write_png
 from c1surf.io.patches.formats import load_patch_set
+from c1surf.render.camera import VIEWS, frame_camera
+from c1surf.render.image import render
+from c1surf.render.raycast import patch_grid_mesh
+from c1surf.render.shading import reflection_phase, stripes
 
 from conftest import SAMPLES, misprinted_bicubic, surface_of
 from conftest import rational_sphere_patch
+from render_reference import edge_discontinuity
 
 GOLDEN = Path(__file__).resolve().parents[1] / "golden"
 REQUIRED = {"kmax", "K", "H", "k1", "k2", "Z", "N.X", "N.Y", "N.Z", "patch", "u", "v", "R", "G", "B"}
@@ -54,13 +60,14 @@ def check_channels(channels, width, height, n_patches):
     return on
 
 
-def check_curvature_at_pixels(channels, groups, count=40, seed=0):
+def check_curvature_at_pixels(channels, groups, count=40, seed=0, weights=None):
     """Curvature stored at a pixel == direct evaluation at that pixel's (patch, u, v)."""
     rows, cols = np.nonzero(channels["patch"] >= 0)
     pick = np.random.default_rng(seed).choice(rows.size, size=min(count, rows.size), replace=False)
     r, c = rows[pick], cols[pick]
     patch = channels["patch"][r, c].astype(np.int64)
-    direct = surface_curvature(groups, patch, channels["u"][r, c].astype(np.float64), channels["v"][r, c].astype(np.float64))
+    direct = surface_curvature(groups, patch, channels["u"][r, c].astype(np.float64), channels["v"][r, c].astype(np.float64),
+                               weights=weights)
     scale = max(1.0, float(np.max(direct.kmax)))
     for name in CURVATURES:
         np.testing.assert_allclose(channels[name][r, c], direct[name], rtol=1e-4, atol=1e-5 * scale, err_msg=name)
@@ -102,7 +109,7 @@ def test_hits_are_exact_points_on_the_pixel_rays():
     for projection in ("perspective", "orthographic"):
         mesh = patch_grid_mesh(groups, 3)  # a coarse mesh: the Newton steps do the work
         camera = frame_camera(mesh.points, 160, 120, "iso", projection=projection)
-        image = render(groups, camera, mesh=mesh)
+        image = render(patch_set, camera, mesh=mesh)
         ch = image.channels
         on = image.mask
         origins, dirs = camera.rays()
@@ -158,15 +165,38 @@ def test_patch_file_renders_like_its_mesh(tmp_path):
 def test_rational_patches_render_with_their_exact_curvature():
     radius = 1.7
     q = rational_sphere_patch(radius, np.zeros(3))
-    group = np.stack([q, q * np.array([-1, 1, 1, 1]), q * np.array([1, -1, 1, 1])])  # three pieces
-    camera = frame_camera(patch_grid_mesh([group], 8).points, 80, 80, eye=(3.0, 2.0, 1.0))
-    image = render([group], camera)
+    group, weights = dehomogenize(np.stack([q, q * np.array([-1, 1, 1, 1]), q * np.array([1, -1, 1, 1])]))  # 3 pieces
+    camera = frame_camera(patch_grid_mesh([group], 8, [weights]).points, 80, 80, eye=(3.0, 2.0, 1.0))
+    image = render(PatchSet([group], weights=[weights]), camera)
     on = image.mask
     assert on.mean() > 0.2
     np.testing.assert_allclose(image.channels["kmax"][on], 1 / radius, rtol=1e-9)
     np.testing.assert_allclose(image.channels["K"][on], 1 / radius**2, rtol=1e-9)
     p = np.stack([image.channels[f"P.{a}"][on] for a in "XYZ"], axis=1)
     np.testing.assert_allclose(np.linalg.norm(p, axis=1), radius, rtol=1e-12)
+
+
+def test_render_keeps_the_weights_of_a_rational_patch_file(tmp_path):
+    """A rational patch file renders its rational surface (``render`` used to drop the weights):
+    every pixel's position, normal and curvature are the rational patches' at its (patch, u, v)."""
+    rng = np.random.default_rng(5)
+    lines = (SAMPLES / "twisted.obj").read_text().splitlines()
+    weighted = [f"{line} {rng.uniform(0.5, 2.0):.6f}" if line.startswith("v ") else line for line in lines]
+    obj, patches, exr = tmp_path / "weighted.obj", tmp_path / "weighted.json", tmp_path / "weighted.exr"
+    obj.write_text("\n".join(weighted) + "\n")
+    assert run("convert", obj, "-o", tmp_path / "weighted.ply", "--patches", patches).exit_code == 0
+    patch_set = load_patch_set(patches)
+    assert patch_set.weights is not None
+    result = run("render", patches, "-o", exr, "--size", "80x60")
+    assert result.exit_code == 0, result.output
+    channels, _ = read_exr(exr)
+    on = check_channels(channels, 80, 60, patch_set.n_patches)
+    check_curvature_at_pixels(channels, patch_set.groups, count=60, weights=patch_set.weights)
+    # the same control points without their weights are another surface
+    patch, u, v = channels["patch"][on].astype(np.int64), channels["u"][on], channels["v"][on]
+    polynomial = surface_curvature(patch_set.groups, patch, u.astype(np.float64), v.astype(np.float64))
+    p = np.stack([channels[f"P.{a}"][on] for a in "XYZ"], axis=1)
+    assert np.abs(p - polynomial.point).max() > 1e-3 * np.ptp(p, axis=0).max()
 
 
 @pytest.mark.parametrize("projection", ["perspective", "orthographic"])
@@ -236,7 +266,7 @@ def test_reflection_lines_break_on_a_broken_surface():
     camera = frame_camera(window, 160, 160, eye=point + normal, target=point, projection="orthographic")
     jumps, within, pictures = {}, {}, {}
     for name, groups in (("good", good), ("bad", bad)):
-        image = render(groups, camera)
+        image = render(PatchSet(groups), camera)
         assert image.mask.all() and len(np.unique(image.channels["patch"])) >= 2
         phase = reflection_phase(image, axis=tangent)
         a, w = edge_discontinuity(64 * phase, image.channels["patch"])
@@ -306,15 +336,25 @@ def test_exr_writer_copes_with_strided_arrays(tmp_path):
     assert header["note"] == "strided"
 
 
+def test_png_writer_takes_rgb8_pictures(tmp_path):
+    """Pictures are (H, W, 3) uint8 arrays (``render.pictures``); the writer keeps them exactly."""
+    picture = np.random.default_rng(0).integers(0, 256, (5, 7, 3), dtype=np.uint8)
+    write_png(tmp_path / "p.png", picture)
+    with PILImage.open(tmp_path / "p.png") as im:
+        assert im.mode == "RGB" and np.array_equal(np.asarray(im), picture)
+    with pytest.raises(ValueError, match="uint8"):
+        write_png(tmp_path / "f.png", picture / 255.0)
+
+
 def test_without_embree_the_numpy_fallback_gives_the_same_image(monkeypatch):
-    groups = load_patch_set(GOLDEN / "tetrahedron.json").groups
-    mesh = patch_grid_mesh(groups, 4)
+    patch_set = load_patch_set(GOLDEN / "tetrahedron.json")
+    mesh = patch_grid_mesh(patch_set.groups, 4)
     camera = frame_camera(mesh.points, 40, 30, "iso")
-    fast = render(groups, camera, mesh=mesh)
+    fast = render(patch_set, camera, mesh=mesh)
     assert fast.info["engine"] == "embree"
     monkeypatch.setitem(__import__("sys").modules, "embreex", None)  # import embreex now fails
     with pytest.warns(RuntimeWarning, match="embreex"):
-        slow = render(groups, camera, mesh=mesh)
+        slow = render(patch_set, camera, mesh=mesh)
     assert slow.info["engine"] == "trimesh"
     same = fast.channels["patch"] == slow.channels["patch"]
     assert same.mean() > 0.99
