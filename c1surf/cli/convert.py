@@ -9,7 +9,6 @@ import click
 from ..mesh.errors import TopologyError
 from ..construction.surface import Surface, SurfaceOptions
 from ..evaluation.merge import merge_biquadratic
-from ..evaluation.rational import homogeneous
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.attribute_mesh import ATTRIBUTE_FORMATS, write_attribute_mesh
@@ -179,10 +178,7 @@ def output_formats(output, patches_paths, curvature: bool, attributes: bool) -> 
 
 def curvature_columns(surface: Surface, tess, progress) -> dict:
     """Keyword arguments of ``write_triangle_mesh`` adding the exact curvature at every tessellation vertex."""
-    groups = [surface.biquadratic, surface.bicubic]
-    if surface.rational:  # the curvature evaluation reads 4 columns as homogeneous (w x, w)
-        groups = [homogeneous(g, w) for g, w in zip(groups, surface.patch_weights)]
-    return curvature_properties(groups, tess, progress)
+    return curvature_properties([surface.biquadratic, surface.bicubic], tess, progress, surface.patch_weights)
 
 
 def write_mesh(path, suffix: str, tess, extra: dict, attribute_data, float32: bool) -> None:

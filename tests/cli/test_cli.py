@@ -134,3 +134,35 @@ def test_too_large_output_is_refused_with_an_estimate(tmp_path):
     assert code == 1 and len(lines) == 1
     assert "GiB" in lines[0] and "--force" in lines[0] and "--resolution" in lines[0]
     assert not out.exists()
+
+
+def test_curvature_of_a_rational_surface_is_the_rational_one(tmp_path):
+    """``convert --curvature`` on weighted input: every PLY vertex carries the curvature of the
+    rational patch at that sample (interior samples, evaluated here patch by patch, not through the tessellation)."""
+    from plyfile import PlyData
+
+    from c1surf.construction.surface import Surface
+    from c1surf.evaluation.curvature import patch_curvature
+    from c1surf.evaluation.tessellate import patch_adjacency, tessellate_patches
+    from c1surf.io.meshes.obj import read_obj
+
+    mesh = read_obj(SAMPLES / "twisted.obj")
+    weights = np.random.default_rng(8).uniform(0.5, 2.0, mesh.n_vertices)
+    offsets = mesh.face_offsets()
+    lines = [f"v {float(x)!r} {float(y)!r} {float(z)!r} {float(w)!r}" for (x, y, z), w in zip(mesh.points, weights)]
+    lines += ["f " + " ".join(str(v + 1) for v in mesh.face_vertices[offsets[f]: offsets[f + 1]]) for f in range(mesh.n_faces)]
+    src, out, n = tmp_path / "w.obj", tmp_path / "w.ply", 4
+    src.write_text("\n".join(lines) + "\n")
+    result = CliRunner().invoke(main, ["convert", str(src), "-o", str(out), "--curvature", "-r", str(n)])
+    assert result.exit_code == 0, result.output
+    kmax = np.asarray(PlyData.read(str(out))["vertex"]["kmax"], dtype=np.float64)
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, weights=weights)
+    groups = [surface.biquadratic, surface.bicubic]
+    tess = tessellate_patches(groups, patch_adjacency(surface.refined, surface.frames), n, surface.patch_weights)
+    t = np.linspace(0.0, 1.0, n)[1:-1]  # interior samples: a vertex on a patch side takes one side's curvature
+    u, v = np.repeat(t, n - 2), np.tile(t, n - 2)
+    for k, (group, w) in enumerate(zip(groups, surface.patch_weights)):
+        first = 0 if k == 0 else len(groups[0])
+        for p in (0, len(group) - 1):
+            exact = patch_curvature(group, u, v, w, index=np.full(u.size, p)).kmax
+            np.testing.assert_allclose(kmax[tess.grid[first + p, 1:-1, 1:-1].ravel()], exact, rtol=1e-5, atol=1e-6)  # float32 in PLY
