@@ -146,6 +146,13 @@ class Surface:
     cubic_hole = property(lambda self: self.topology.cubic_hole, doc="(Nc,) int, hole of every bicubic patch")
     frames = property(lambda self: self.topology.frames, doc="(Nq + Nc, 4) int, every patch's frame, biquadratic first")
 
+    def stage(self, name: str):
+        """The stage called ``name`` ("place", "doo_sabin_1", ..., "patches"; ``stages``); KeyError if there is none."""
+        for stage in self.stages:
+            if stage.name == name:
+                return stage
+        raise KeyError(f"no stage {name!r}: this surface has {[stage.name for stage in self.stages]}")
+
     @property
     def n_patches(self) -> int:
         return int(self.quad_frames.shape[0] + self.cubic_frames.shape[0])
