@@ -133,6 +133,7 @@ class NormalConstraint:
         self._matrices = {}
 
     def apply(self, x: np.ndarray) -> np.ndarray:
+        """(N, D) refined points with the cell corners moved (a copy)."""
         x = np.array(x, dtype=np.float64, copy=True)
         for g in self.groups:
             phase = g.phases()

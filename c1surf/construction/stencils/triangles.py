@@ -35,8 +35,6 @@ derived from the join condition and measured G1 at machine precision.
 """
 from __future__ import annotations
 
-import numpy as np
-
 from .bicubic import boundary_rows, shift
 
 
