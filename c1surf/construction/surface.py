@@ -122,16 +122,21 @@ class Surface:
         corner = corner_ratios(t.input, t.per_coarse_face(blend, float(o.blend)), t.per_coarse_vertex(vertex_blend))
         inputs = StageInputs(points, corner, o.hole_rules(), o.interpolate_vertices, t.per_coarse_vertex(vertex_normals),
                              self.weights is not None)
-        self.stages = []
-        for build in STAGE_BUILDERS:
-            start = time.perf_counter()
-            stage = build(t, inputs)
-            if stage is not None:
-                self.stages.append(stage)
-                self.timings[f"build {stage.name}"] = time.perf_counter() - start
+        self.stages = self._build_stages(inputs)
         self._stencils = {}
         self._reused = False
         self._apply(points)
+
+    def _build_stages(self, inputs: StageInputs) -> list:
+        """The stages that apply to this topology and these options, in order (``stages.STAGE_BUILDERS``)."""
+        stages = []
+        for build in STAGE_BUILDERS:
+            start = time.perf_counter()
+            stage = build(self.topology, inputs)
+            if stage is not None:
+                stages.append(stage)
+                self.timings[f"build {stage.name}"] = time.perf_counter() - start
+        return stages
 
     # -- the topology's numbers, by their old names -----------------------------------
 
