@@ -44,8 +44,9 @@ class Stage(Protocol):
     name : str
     shape : (rows out, rows in)
     mixes_coordinates : bool; False: the same map on every column of the points,
-        ``matrix()`` is (rows out, rows in); True: ``matrix()`` acts on the
-        flattened points (rows out * d, rows in * d)
+        ``matrix()`` is (rows out, rows in); True: ``matrix(d, weights=None)`` acts
+        on the flattened points, (rows out * d, rows in * d), and a rational
+        surface's passes the (fixed) weight column it is applied to
     apply(points) : (rows in, d) float -> (rows out, d) float
     matrix() : scipy.sparse matrix of the same map (built on demand, kept)
     """
