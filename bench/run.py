@@ -156,59 +156,33 @@ def _triangulated(mesh):
     return np.ascontiguousarray(mesh.points, dtype=np.float64), np.ascontiguousarray(np.concatenate(tris), dtype=np.int64)
 
 
-def _instrumented_build(surface_module, build):
-    """Run ``build()``, splitting the time of Surface construction into phases.
+PATCH_STAGES = ("patches",)  # the A2/A3 layouts; every other stage is a refinement operator
 
-    Functions that surface.py calls by name are wrapped: the refinement
-    operators (doo_sabin_matrix, second_step_corner_ratios,
-    perturbation_matrix; the second step is kept factored and costs nothing
-    to set up), the patch layouts (biquadratic_layout, bicubic_layout) and
-    update_points (geometry: the sparse products and gathers); everything else
-    in the constructor is topology (half-edges, refinement connectivity,
-    neighbourhoods, frames).
+
+def _phases(surface, build: float) -> dict:
+    """Split the time of one Surface construction into phases, from its stage list.
+
+    ``Surface.timings`` holds the seconds spent on the topology (half-edges,
+    refinement connectivity, neighbourhoods, frames), on building each stage
+    and on applying it. Building the patch stages (A2/A3 layouts) is
+    "patches", building the others (refinement operators: placement, Doo-Sabin
+    steps, perturbation; the second step is kept factored and costs nothing to
+    set up) "refinement", applying all of them "geometry" (the sparse products
+    and gathers); the rest of ``build`` (checks, blend ratios) counts as topology.
     """
-    groups = {"doo_sabin_matrix": "refinement", "second_step_corner_ratios": "refinement", "perturbation_matrix": "refinement",
-              "biquadratic_layout": "patches", "bicubic_layout": "patches"}
     spent = {"refinement": 0.0, "patches": 0.0, "geometry": 0.0}
-    depth = [0]
-
-    def wrap(function, group):
-        def timed(*args, **kwargs):
-            depth[0] += 1
-            start = time.perf_counter()
-            try:
-                return function(*args, **kwargs)
-            finally:
-                depth[0] -= 1
-                if depth[0] == 0:
-                    spent[group] += time.perf_counter() - start
-        return timed
-
-    saved = {}
-    for name, group in groups.items():
-        if callable(getattr(surface_module, name, None)):
-            saved[name] = getattr(surface_module, name)
-            setattr(surface_module, name, wrap(saved[name], group))
-    cls = surface_module.Surface
-    original_update = cls.update_points
-    cls.update_points = wrap(original_update, "geometry")
-    try:
-        start = time.perf_counter()
-        result = build()
-        total = time.perf_counter() - start
-    finally:
-        for name, function in saved.items():
-            setattr(surface_module, name, function)
-        cls.update_points = original_update
-    spent["topology"] = total - sum(spent.values())
-    return result, spent, total
+    for stage in surface.stages:
+        spent["patches" if stage.name in PATCH_STAGES else "refinement"] += surface.timings[f"build {stage.name}"]
+        spent["geometry"] += surface.timings[f"apply {stage.name}"]
+    spent["topology"] = build - sum(spent.values())
+    return spent
 
 
 def work_c1surf(job):
     from c1surf.cli import runtime
 
     runtime.tune_allocator()
-    import c1surf.construction.surface as surface_module
+    from c1surf.construction.surface import Surface
     from c1surf.evaluation.adjacency import patch_adjacency
     from c1surf.evaluation.tessellate import tessellate_patches
     from c1surf.io.meshes.write import write_triangle_mesh
@@ -219,9 +193,10 @@ def work_c1surf(job):
     mesh = _load(job["path"])
     seconds["read"] = time.perf_counter() - start
     peak["read"] = _maxrss_mb()
-    surface, phases, build = _instrumented_build(
-        surface_module, lambda: surface_module.Surface(mesh.face_sizes, mesh.face_vertices, mesh.points))
-    seconds.update(phases)
+    start = time.perf_counter()
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points)
+    build = time.perf_counter() - start
+    seconds.update(_phases(surface, build))
     seconds["build"] = build
     peak["build"] = _maxrss_mb()
     resolution = job.get("resolution", 2)

@@ -4,6 +4,7 @@
     >>> surface, mesh = surface_from_file("sample_meshes/cube.obj", blend=0.5)
     >>> surface.bicubic.shape            # (Nc, 4, 4, 3) Bezier coefficients
     >>> surface.update_points(mesh.points * 2)   # same connectivity, new geometry
+    >>> S = surface.stencil()            # the whole construction as one sparse matrix: S @ points
 """
 from __future__ import annotations
 

@@ -12,7 +12,7 @@ import numpy as np  # noqa: E402
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 from c1surf.evaluation.bezier import bernstein_basis, raise_degree  # noqa: E402
-from c1surf.mesh.ghost_layer import add_ghost_layer  # noqa: E402
+from c1surf.mesh.ghost_layer import add_ghost_layer, ghost_points_matrix, reflex_corners  # noqa: E402
 from c1surf.mesh.repair import prepare_topology  # noqa: E402
 from c1surf.evaluation.adjacency import match_patch_sides, side_polygons  # noqa: E402
 from c1surf.construction.surface import Surface  # noqa: E402
@@ -33,8 +33,8 @@ vertices = np.concatenate(faces)
 surface = Surface(sizes, vertices, points)
 
 fig, ax = plt.subplots(figsize=(7, 5.5), dpi=110)
-layer = add_ghost_layer(prepare_topology(sizes, vertices, len(points))[0], points)
-ghost_points = layer.points_matrix @ points
+layer = add_ghost_layer(prepare_topology(sizes, vertices, len(points))[0])
+ghost_points = ghost_points_matrix(layer, reflex_corners(layer, points)) @ points
 mesh = layer.mesh
 for f in range(mesh.n_faces):
     corner = mesh.origin[mesh.face_offsets[f]: mesh.face_offsets[f + 1]]

@@ -4,7 +4,7 @@ The paper gives no boundary rule. c1surf closes each boundary loop with one
 ring of ghost quads: boundary half-edge a -> b of a real face gets the ghost
 quad (b, a, a', b'), where the ghost vertex a' = 2 a - m(a) reflects through a
 the mean m(a) of a's neighbours along interior edges (for a corner, a vertex
-in one face only: the centroid of that face). Every real boundary vertex
+in one face only: see ``ghost_points_matrix``). Every real boundary vertex
 then has a full fan, and the construction runs as for a closed mesh. Only the
 patches of refined vertices that lie in real faces are kept.
 
@@ -14,6 +14,10 @@ symmetric about each boundary vertex, and the cut between real and ghost
 patches is exactly the quadratic B-spline of the boundary polygon. A corner
 vertex (one face) gets valence 3, a triangular hole whose real patch keeps a
 visible corner; the interior is untouched, so it stays G1.
+
+The layer itself is integers (``add_ghost_layer``). The one rule that reads
+geometry, convex or reflex corner, takes the points as an explicit argument
+(``reflex_corners``), so a caller whose points move classifies again.
 """
 from __future__ import annotations
 
@@ -27,25 +31,34 @@ from .halfedges import HalfEdgeMesh, build_halfedges
 
 @dataclass(frozen=True)
 class GhostLayer:
-    """A mesh closed up by ghost quads, and how to place its ghost points.
+    """A mesh closed up by ghost quads (integers only).
 
+    Attributes
+    ----------
+    open_mesh : HalfEdgeMesh with V vertices, the mesh before closing
     mesh : HalfEdgeMesh with V + G vertices and F + B faces (ghost faces last)
     real_face : (F + B,) bool
-    points_matrix : (V + G, V) csr_matrix, ghosted points = points_matrix @ points
+    boundary_vertices : (G,) int, sorted; boundary vertex k has ghost vertex V + k
+    ghost : (V,) int, ghost vertex of each boundary vertex, -1 elsewhere
+    corners : (k,) int, sorted boundary vertices in a single face (no interior edge)
+    corner_halfedges : (k,) int, the one half-edge of ``open_mesh`` leaving each corner
     """
 
+    open_mesh: HalfEdgeMesh
     mesh: HalfEdgeMesh
     real_face: np.ndarray
-    points_matrix: csr_matrix
+    boundary_vertices: np.ndarray
+    ghost: np.ndarray
+    corners: np.ndarray
+    corner_halfedges: np.ndarray
 
 
-def add_ghost_layer(mesh: HalfEdgeMesh, points: np.ndarray) -> GhostLayer:
+def add_ghost_layer(mesh: HalfEdgeMesh) -> GhostLayer:
     """Close every boundary loop of ``mesh`` with a ring of ghost quads.
 
     Parameters
     ----------
     mesh : HalfEdgeMesh, oriented, every vertex one fan (``repair.prepare_topology``)
-    points : (V, 3) float, used once to tell convex from reflex single-face corners
     """
     n = mesh.n_vertices
     boundary = np.flatnonzero(mesh.twin < 0)  # half-edges a -> b with no face across
@@ -58,42 +71,75 @@ def add_ghost_layer(mesh: HalfEdgeMesh, points: np.ndarray) -> GhostLayer:
     face_vertices = np.concatenate([mesh.origin, quads.ravel()])
     ghosted = build_halfedges(face_sizes, face_vertices, n + boundary_vertices.size)
     real_face = np.r_[np.ones(mesh.n_faces, bool), np.zeros(boundary.size, bool)]
-    return GhostLayer(ghosted, real_face, ghost_points_matrix(mesh, boundary_vertices, ghost, points))
+    corners = boundary_vertices[_interior_neighbour_count(mesh)[boundary_vertices] == 0]
+    leaving = np.flatnonzero(np.isin(mesh.origin, corners))  # one half-edge leaves each corner
+    corner_halfedges = leaving[np.argsort(mesh.origin[leaving], kind="stable")]
+    return GhostLayer(mesh, ghosted, real_face, boundary_vertices, ghost, corners, corner_halfedges)
 
 
-def ghost_points_matrix(mesh: HalfEdgeMesh, boundary_vertices: np.ndarray, ghost: np.ndarray, points: np.ndarray) -> csr_matrix:
+def _interior_neighbour_count(mesh: HalfEdgeMesh) -> np.ndarray:
+    """(V,) int: neighbours of each vertex along interior edges (each interior edge once per direction)."""
+    return np.bincount(mesh.origin[mesh.twin >= 0], minlength=mesh.n_vertices)
+
+
+def reflex_corners(layer: GhostLayer, points: np.ndarray) -> np.ndarray:
+    """(k,) bool: is each single-face corner of ``layer`` reflex within its face?
+
+    The turn x -> a -> y at corner a (x before, y after it in the face) is
+    compared with the face's Newell normal. Only the corners' faces are read.
+
+    Parameters
+    ----------
+    layer : GhostLayer
+    points : (V, 3) float, positions of the open mesh's vertices
+    """
+    mesh, h = layer.open_mesh, layer.corner_halfedges
+    if h.size == 0:
+        return np.zeros(0, dtype=bool)
+    a, y, x = points[mesh.origin[h]], points[mesh.dest[h]], points[mesh.origin[mesh.prev[h]]]
+    faces, slot = np.unique(mesh.face[h], return_inverse=True)
+    sizes = mesh.face_sizes[faces]
+    first = np.repeat(mesh.face_offsets[faces] - np.cumsum(sizes) + sizes, sizes)
+    members = first + np.arange(sizes.sum())  # the half-edges of those faces, face by face
+    corner_points = points[mesh.origin[members]]
+    newell = np.cross(corner_points, points[mesh.origin[mesh.next[members]]])  # sums to twice the area vector
+    normal = np.zeros((faces.size, 3))
+    np.add.at(normal, np.repeat(np.arange(faces.size), sizes), newell)
+    turn = np.einsum("ij,ij->i", np.cross(a - x, y - a), normal[slot.ravel()])
+    return turn < 0
+
+
+def ghost_points_matrix(layer: GhostLayer, reflex: np.ndarray) -> csr_matrix:
     """(V + G, V) matrix: real points unchanged, ghost a' = 2 a - m(a).
 
     m(a) is the mean of the neighbours of a along interior edges. A vertex in a
     single face (a corner) has none: at a convex corner m(a) is the face's
     centroid; at a reflex one (which the centroid rule would push into the
     face) a' = x + y - a completes the parallelogram of its two neighbours
-    into the notch. Convex or reflex is decided once, from ``points``; the
-    matrix is then fixed, so ``update_points`` stays a sparse product.
+    into the notch.
+
+    Parameters
+    ----------
+    layer : GhostLayer
+    reflex : (k,) bool, which of ``layer.corners`` are reflex (``reflex_corners``)
     """
-    n = mesh.n_vertices
-    g = boundary_vertices.size
+    mesh, ghost, boundary_vertices = layer.open_mesh, layer.ghost, layer.boundary_vertices
+    n, g = mesh.n_vertices, boundary_vertices.size
     interior = mesh.twin >= 0
-    # neighbours along interior edges: each interior edge appears once per direction
     src, dst = mesh.origin[interior], mesh.dest[interior]
-    is_boundary_vertex = ghost >= 0
-    keep = is_boundary_vertex[src]
+    keep = ghost[src] >= 0
     src, dst = src[keep], dst[keep]
-    count = np.bincount(src, minlength=n)
+    count = _interior_neighbour_count(mesh)
     rows = [np.arange(n), ghost[boundary_vertices], ghost[src]]
     cols = [np.arange(n), boundary_vertices, dst]
     vals = [np.ones(n), np.full(g, 2.0), -1.0 / count[src]]
-    corners = boundary_vertices[count[boundary_vertices] == 0]
-    reflex = corners[reflex_corner(mesh, corners, points)]
-    corners = np.setdiff1d(corners, reflex)
-    if reflex.size:
-        h = np.flatnonzero(np.isin(mesh.origin, reflex))  # the one half-edge leaving each
-        rows += [ghost[reflex]] * 3
+    h = layer.corner_halfedges[reflex]
+    if h.size:  # 2 a - m(a) = x + y - a: m(a) = 3 a - x - y
+        rows += [ghost[mesh.origin[h]]] * 3
         cols += [mesh.origin[h], mesh.dest[h], mesh.origin[mesh.prev[h]]]
-        vals += [np.full(reflex.size, -1.0), np.ones(reflex.size), np.ones(reflex.size)]
-    if corners.size:
-        # a convex corner lies in one face: reflect that face's centroid
-        h = np.flatnonzero(np.isin(mesh.origin, corners))
+        vals += [np.full(h.size, -3.0), np.ones(h.size), np.ones(h.size)]
+    h = layer.corner_halfedges[~reflex]
+    if h.size:  # a convex corner lies in one face: reflect that face's centroid
         face = mesh.face[h]
         members = mesh.face_offsets[face][:, None] + np.arange(mesh.face_sizes.max())[None, :]
         valid = np.arange(mesh.face_sizes.max())[None, :] < mesh.face_sizes[face][:, None]
@@ -103,23 +149,3 @@ def ghost_points_matrix(mesh: HalfEdgeMesh, boundary_vertices: np.ndarray, ghost
     matrix = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n + g, n))
     matrix.sum_duplicates()
     return matrix
-
-
-def reflex_corner(mesh: HalfEdgeMesh, corners: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """(k,) bool: is each single-face corner vertex reflex within its face?
-
-    The turn x -> a -> y is compared with the face's (Newell) normal.
-    """
-    if corners.size == 0:
-        return np.zeros(0, dtype=bool)
-    h = np.flatnonzero(np.isin(mesh.origin, corners))
-    order = np.argsort(mesh.origin[h])
-    h = h[order][np.searchsorted(mesh.origin[h][order], corners)]
-    a, y, x = points[mesh.origin[h]], points[mesh.dest[h]], points[mesh.origin[mesh.prev[h]]]
-    corner_points = points[mesh.origin]
-    nxt = corner_points[mesh.next]
-    newell = np.cross(corner_points, nxt)  # sum over a face of p_k x p_k+1 is twice its area vector
-    normal = np.zeros((mesh.n_faces, 3))
-    np.add.at(normal, mesh.face, newell)
-    turn = np.einsum("ij,ij->i", np.cross(a - x, y - a), normal[mesh.face[h]])
-    return turn < 0

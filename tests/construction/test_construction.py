@@ -14,13 +14,14 @@ from scipy.interpolate import BSpline
 from scipy.spatial import cKDTree
 
 from c1surf.evaluation.bezier import evaluate_patches, raise_degree
-from c1surf.construction.stencils.patches import bicubic_hole_coefficients
+from c1surf.construction.stencils.bicubic import bicubic_hole_coefficients
 from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.tessellate import tessellate
 from c1surf.io.meshes.obj import read_obj
 
 from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, misprinted_bicubic, polygon_mesh, shared_mesh, slab_with_polygons, surface_of
+from reference import bicubic_stencil, biquadratic_stencil
 
 MAX_JUMP = 1e-10  # radians
 MAX_GAP = 1e-12  # relative to the bounding-box diagonal
@@ -124,10 +125,9 @@ def test_construction_is_linear_in_the_points():
 
 
 def total_operator(surface: Surface):
-    op = None
-    for m in surface.operators:
-        op = m if op is None else m @ op
-    return surface.quad_stencil @ op, surface.cubic_stencil @ op
+    op = surface.stencil()
+    rows = 9 * len(surface.biquadratic)
+    return op[:rows], op[rows:]
 
 
 @pytest.mark.parametrize("blend", [0.5, 0.0])
@@ -252,7 +252,7 @@ def test_refined_halfedges_by_arithmetic_match_a_fresh_sort(path):
     mesh = read_mesh(path if isinstance(path, Path) else shared_mesh(path))
     coarse, source, report = prepare_topology(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices)
     if report["boundary_edges"]:
-        coarse = add_ghost_layer(coarse, mesh.points[source][:, :3]).mesh
+        coarse = add_ghost_layer(coarse).mesh
     for _ in range(2):
         faces = refine_doo_sabin(coarse)
         fast = refined_halfedges(coarse, faces)
@@ -267,26 +267,30 @@ def test_patch_gathers_match_the_sparse_stencils(path):
     """A2 and A3 by gathers and dense products per block equal the plain per-patch sparse stencils."""
     surface = surface_of(path if isinstance(path, Path) else shared_mesh(path))
     x = surface.refined_points
-    direct = (surface.quad_stencil @ x).reshape(-1, 3, 3, x.shape[1])
+    direct = (biquadratic_stencil(surface.refined, surface.quad_frames) @ x).reshape(-1, 3, 3, x.shape[1])
     np.testing.assert_allclose(surface.biquadratic, direct, rtol=0, atol=1e-14 * np.abs(x).max())
     assert surface.bicubic.shape[0] > 0
-    direct = (surface.cubic_stencil @ x).reshape(-1, 4, 4, x.shape[1])
+    cubic = bicubic_stencil(surface.refined, surface.holes, surface.options.hole_rules().weights, surface.topology.cubic_keep)
+    direct = (cubic @ x).reshape(-1, 4, 4, x.shape[1])
     np.testing.assert_allclose(surface.bicubic, direct, rtol=0, atol=1e-13 * np.abs(x).max())
 
 
 def test_factored_doo_sabin_step_is_its_matrix():
     """The second refinement step applied factored, as a matrix, and composed, gives one map."""
-    from c1surf.construction.refine.doo_sabin import DooSabinStep
+    from c1surf.construction.stencils.doo_sabin import DooSabinStep
 
     surface = surface_of(SAMPLES / "high_valence.obj")
-    step = surface.operators[2]
-    assert isinstance(step, DooSabinStep)
+    step = surface.stage("doo_sabin_2")
+    assert isinstance(step, DooSabinStep) and step is surface.stages[2]
     x = np.random.default_rng(3).normal(size=(step.shape[1], 3))
-    matrix = step.tocsr()
-    results = [step @ x for _ in range(4)]  # factored first, then the cached matrix
+    factored = step.apply(x)
+    before = (surface.stages[1].matrix() @ surface.stages[0].matrix()).toarray()
+    factored_before = step.apply(before)  # the factored map on a matrix's columns
+    matrix = step.matrix()
+    results = [factored] + [step.apply(x) for _ in range(3)]  # factored first, then the kept matrix
     for y in results:
         np.testing.assert_allclose(y, matrix @ x, rtol=0, atol=1e-14)
-    before = surface.operators[1] @ surface.operators[0]
-    np.testing.assert_allclose((step @ before).toarray(),
-                               (matrix @ before).toarray(), atol=1e-15)
-    np.testing.assert_allclose((surface.quad_stencil @ step).toarray(), (surface.quad_stencil @ matrix).toarray(), atol=1e-15)
+    np.testing.assert_allclose(factored_before,
+                               (matrix @ before), atol=1e-15)
+    quad = surface.stage("patches").parts[0].matrix()
+    np.testing.assert_allclose(quad @ factored_before, (quad @ matrix).toarray() @ before, atol=1e-15)

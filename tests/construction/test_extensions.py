@@ -24,7 +24,8 @@ from scipy.spatial import cKDTree
 from c1surf.cli.main import main
 from c1surf.evaluation.bezier import bernstein_basis, evaluate_patches, raise_degree, unit_normals
 from c1surf.construction.stencils.blend import corner_ratios, second_step_corner_ratios
-from c1surf.construction.refine.doo_sabin import FACE_FROM_FACE, FACE_FROM_VERTEX, doo_sabin_matrix, refine_doo_sabin
+from c1surf.construction.refine.doo_sabin import FACE_FROM_FACE, FACE_FROM_VERTEX, refine_doo_sabin
+from c1surf.construction.stencils.doo_sabin import doo_sabin_matrix
 from c1surf.evaluation.rational import evaluate_rational
 from c1surf.evaluation.adjacency import match_patch_sides
 from c1surf.evaluation.smoothness import measure_smoothness
@@ -616,7 +617,7 @@ def test_rational_worked_example():
     r1 = int(R.dest[surface.quad_frames[0, 1]])  # the neighbour of r0 in the next row
     w = np.ones(len(x))
     w[[r0, r1]] = 3.0
-    homogeneous = (surface.quad_stencil @ np.c_[x * w[:, None], w]).reshape(-1, 3, 3, 4)
+    homogeneous = (surface.stage("patches").parts[0].matrix() @ np.c_[x * w[:, None], w]).reshape(-1, 3, 3, 4)
     weights = homogeneous[..., 3]
     assert row_curve_weights(R, surface.quad_frames, r0, weights, homogeneous) in EXAMPLE
     # conics: (1 1 2) an ellipse arc (w1^2 < w0 w2), (2 3 2) a hyperbola arc (w1^2 > w0 w2);
@@ -816,10 +817,8 @@ def test_attributes_follow_the_same_map_as_the_positions(extra):
     plain = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(**options), **kwargs)
     np.testing.assert_allclose(surface.bicubic[..., :3], plain.bicubic, atol=1e-13)
     if not kwargs:  # the very same sparse operator acts on every column
-        total = surface.operators[0]
-        for op in surface.operators[1:]:
-            total = op @ total
-        np.testing.assert_allclose(surface.bicubic[..., 3:].reshape(-1, 4), surface.cubic_stencil @ (total @ attributes), atol=1e-13)
+        total = surface.stencil()[9 * len(surface.biquadratic) :]  # the bicubic rows
+        np.testing.assert_allclose(surface.bicubic[..., 3:].reshape(-1, 4), total @ attributes, atol=1e-13)
 
 
 def test_attributes_are_written_to_ply_and_obj(tmp_path):

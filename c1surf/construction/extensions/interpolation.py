@@ -19,8 +19,9 @@ perturbation, the cell's corners C_l along the normal n by amounts t_l that
 are a pure first Fourier mode chosen to cancel that mode's component along n.
 A pure first mode sums to zero, so the centroid (S) stays; the C_l are no
 input to the perturbation, so G1 is untouched; and for fixed normals the move
-is linear in the points (it mixes the coordinates, so it is applied as a
-function, not a sparse row operator). Needs alpha > 0 (alpha = 0 gives a
+is linear in the points. It mixes the coordinates, so its matrix acts on the
+flattened points (``NormalConstraint.matrix``), not row by row; on rational
+surfaces it is linear for fixed weights. Needs alpha > 0 (alpha = 0 gives a
 singular point at S, without tangent plane).
 """
 from __future__ import annotations
@@ -30,8 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import csr_matrix, identity
 
-from ..refine.doo_sabin import FACE_FROM_VERTEX, RefinedFaces
 from ...mesh.halfedges import HalfEdgeMesh
+from ..refine.doo_sabin import FACE_FROM_VERTEX, RefinedFaces
+from ..refine.holes import cell_neighbourhood
 
 
 def vertex_interpolation_step(step1: csr_matrix, coarse: HalfEdgeMesh, faces1: RefinedFaces) -> csr_matrix:
@@ -75,30 +77,66 @@ class _CellGroup:
 
     n: int
     C: np.ndarray  # (k, n) refined vertices, cell corners in order
-    B1: np.ndarray | None  # (k, n) or None (quad cells and corner-only rules)
+    B1: np.ndarray | None  # (k, n) or None (the tangent datum does not use the B points)
     B2: np.ndarray | None
     normals: np.ndarray  # (k, 3) unit
     u: float  # weight of B_{l,2} + B_{l+1,1} in the tangent datum q_l
-    w: float  # weight of C_l + C_{l+1}; 0 means q_l = C_l (quad cells)
+    w: float  # weight of C_l + C_{l+1}; 0 means q_l = C_l
+
+    def phases(self) -> np.ndarray:
+        """(n,) complex, e^{i theta l}: the first Fourier mode around the cell."""
+        theta = 2 * np.pi / self.n
+        return np.exp(1j * theta * np.arange(self.n))
+
+    def factor(self) -> complex:
+        """First Fourier coefficient of q per unit first mode of the corners' moves."""
+        theta = 2 * np.pi / self.n
+        return 1.0 if self.w == 0.0 else self.w * (1 + np.exp(-1j * theta))
+
+    def local_points(self) -> np.ndarray:
+        """(k, m) int: the points q reads, [C] or [C, B1, B2]."""
+        return self.C if self.u == 0.0 else np.concatenate([self.C, self.B1, self.B2], axis=1)
+
+    def datum_weights(self) -> np.ndarray:
+        """(n, m) float: q_l as weights on ``local_points``."""
+        n, l = self.n, np.arange(self.n)
+        Q = np.zeros((n, n if self.u == 0.0 else 3 * n))
+        if self.w == 0.0:
+            Q[l, l] = 1.0
+            return Q
+        Q[l, l] += self.w
+        Q[l, (l + 1) % n] += self.w
+        if self.u != 0.0:
+            Q[l, 2 * n + l] += self.u  # B_{l,2}
+            Q[l, n + (l + 1) % n] += self.u  # B_{l+1,1}
+        return Q
 
 
 class NormalConstraint:
-    """Move cell corners along given normals so the surface's normal at the cell centre is n.
+    """A1a's vertex normals as a stage (``construction.stages.Stage``) on the refined points.
 
-    Built once per topology; ``apply(x)`` works on refined points (columns: 3
-    positions, then any extra columns, then the homogeneous weight when
-    ``rational``).
+    Moves cell corners along given normals so the surface's normal at the cell
+    centre is n. Built once per topology; ``apply(x)`` works on refined points
+    (columns: 3 positions, then any extra columns, then the homogeneous weight
+    when ``rational``). It mixes the coordinates (``mixes_coordinates``), so its
+    matrix acts on flattened points.
     """
 
-    def __init__(self, groups: list[_CellGroup], rational: bool):
+    mixes_coordinates = True
+
+    def __init__(self, groups: list[_CellGroup], rational: bool, n_points: int, name: str = "vertex_normals"):
+        self.name = name
         self.groups = groups
         self.rational = rational
+        self.n_points = n_points
+        self.shape = (n_points, n_points)
+        self._matrices = {}
 
     def apply(self, x: np.ndarray) -> np.ndarray:
+        """(N, D) refined points with the cell corners moved (a copy)."""
         x = np.array(x, dtype=np.float64, copy=True)
         for g in self.groups:
-            theta = 2 * np.pi / g.n
-            phase = np.exp(1j * theta * np.arange(g.n))  # e^{i theta l}
+            phase = g.phases()
             if g.w == 0.0:
                 q = x[g.C]  # (k, n, d)
             else:
@@ -111,14 +149,61 @@ class NormalConstraint:
                 s = centre[:, :3] / centre[:, -1:]
                 depth = depth - np.einsum("kd,kd->k", s, g.normals)[:, None] * q[..., -1]
             Y = depth @ phase  # (k,) first Fourier mode of the depths
-            factor = 1.0 if g.w == 0.0 else g.w * (1 + np.exp(-1j * theta))
-            T = -Y / factor
+            T = -Y / g.factor()
             t = (2.0 / g.n) * np.real(T[:, None] * np.conj(phase)[None, :])  # (k, n), a pure first mode
             x[g.C, :3] += t[..., None] * g.normals[:, None, :]
         return x
 
+    def matrix(self, columns: int = 3, weights: np.ndarray | None = None) -> csr_matrix:
+        """(N columns, N columns) csr_matrix M with ``apply(x).ravel() == M @ x.ravel()``.
 
-def normal_constraint(refined: HalfEdgeMesh, faces1: RefinedFaces, normals: np.ndarray, tangent_rule: str, parametric_triangles: bool, rational: bool) -> NormalConstraint | None:
+        Parameters
+        ----------
+        columns : int, the columns of x (3 positions first)
+        weights : (N,) float, x's last column (the homogeneous weights), needed when
+            ``rational``: the map is linear for fixed weights. Matrices without
+            weights are built once and kept.
+        """
+        if self.rational and weights is None:
+            raise ValueError("a rational surface's normal constraint is linear for fixed weights: pass them")
+        if not self.rational and columns in self._matrices:
+            return self._matrices[columns]
+        size = self.n_points * columns
+        matrix = identity(size, format="csr")
+        for g in self.groups:
+            matrix = matrix + _moves_matrix(g, columns, weights, size)
+        if not self.rational:
+            self._matrices[columns] = matrix
+        return matrix
+
+
+def _moves_matrix(g: _CellGroup, columns: int, weights: np.ndarray | None, size: int) -> csr_matrix:
+    """The corners' moves of one cell group as a sparse matrix on the flattened points.
+
+    With q = Q x[local] the tangent datum, depth_m = n . q_m (minus (n . s) q_m,w with
+    s the centre over its weight, rational), and the moves t = coef @ depth along n,
+    where coef[l, m] = (2 / n) Re(-e^{i theta (m - l)} / factor) (see ``apply``).
+    """
+    phase = g.phases()
+    coef = (2.0 / g.n) * np.real(-(np.conj(phase)[:, None] * phase[None, :]) / g.factor())  # (n, n)
+    local, Q = g.local_points(), g.datum_weights()  # (k, m), (n, m)
+    R = np.broadcast_to(Q, (local.shape[0],) + Q.shape)
+    if weights is not None:  # - (n . s) q_w with s = mean(x[C])[:3] / mean(x[C])_w: linear in x for fixed weights
+        q_weight = np.einsum("mj,kj->km", Q, weights[local])
+        centre_weight = weights[g.C].mean(axis=1)
+        on_corner = np.zeros(local.shape[1])
+        on_corner[: g.n] = 1.0 / g.n
+        R = R - (q_weight / centre_weight[:, None])[:, :, None] * on_corner[None, None, :]
+    M = np.einsum("lm,kmj->klj", coef, R)  # (k, n, m): t_l per unit of n . x[local_j]
+    xyz = np.arange(3)
+    rows = g.C[:, :, None, None, None] * columns + xyz[None, None, :, None, None]
+    cols = local[:, None, None, :, None] * columns + xyz[None, None, None, None, :]
+    vals = g.normals[:, None, :, None, None] * M[:, :, None, :, None] * g.normals[:, None, None, None, :]
+    rows, cols, vals = (a.ravel() for a in np.broadcast_arrays(rows, cols, vals))
+    return csr_matrix((vals, (rows, cols)), shape=(size, size))
+
+
+def normal_constraint(refined: HalfEdgeMesh, faces1: RefinedFaces, normals: np.ndarray, tangent_datum, rational: bool) -> NormalConstraint | None:
     """The ``NormalConstraint`` for the coarse vertices that have a normal.
 
     Parameters
@@ -126,8 +211,7 @@ def normal_constraint(refined: HalfEdgeMesh, faces1: RefinedFaces, normals: np.n
     refined : the twice-refined HalfEdgeMesh (its F-cell g is made from once-refined cell g)
     faces1 : RefinedFaces of the first step
     normals : (V, 3) float per coarse vertex, NaN rows where none is given
-    tangent_rule : "symmetric" or "corners" (A3 / A3a)
-    parametric_triangles : 3-sided holes use section 1.3.4 (tangents from the C_i only)
+    tangent_datum : callable n -> (u, w), the tangent datum of n-sided holes (``HoleRules.tangent_datum``)
     rational : points carry a homogeneous weight as last column
     """
     normals = np.asarray(normals, dtype=np.float64)
@@ -145,22 +229,9 @@ def normal_constraint(refined: HalfEdgeMesh, faces1: RefinedFaces, normals: np.n
         if np.any(length == 0):
             raise ValueError("a vertex normal has length zero")
         nv = nv / length
-        C = refined.origin[h]
-        if n == 4:
-            groups.append(_CellGroup(4, C, None, None, nv, 0.0, 0.0))
-            continue
-        if n == 3 and parametric_triangles:
-            groups.append(_CellGroup(3, C, None, None, nv, 0.0, 0.0))
-            continue
-        c = np.cos(2 * np.pi / n)
-        a = c / (1 - c)
-        if tangent_rule == "corners":
-            groups.append(_CellGroup(int(n), C, None, None, nv, 0.0, 0.5))
-            continue
-        t = refined.twin[h]
-        to_b2 = refined.next[t]
-        back = refined.twin[to_b2]
-        B1 = refined.origin[refined.next[refined.next[back]]]
-        B2 = refined.dest[to_b2]
-        groups.append(_CellGroup(int(n), C, B1, B2, nv, 1.0 / 12 - a / 6, 5.0 / 12 + a / 6))
-    return NormalConstraint(groups, rational)
+        u, w = (0.0, 0.0) if n == 4 else tangent_datum(int(n))  # a quad cell's corners are its tangent datum
+        B1 = B2 = None
+        if u != 0.0:
+            _, B1, B2, _, _, _ = cell_neighbourhood(refined, h)
+        groups.append(_CellGroup(int(n), refined.origin[h], B1, B2, nv, u, w))
+    return NormalConstraint(groups, rational, refined.n_vertices)

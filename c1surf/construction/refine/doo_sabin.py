@@ -1,4 +1,4 @@
-"""Step A1: Doo-Sabin refinement, as topology plus a sparse averaging matrix.
+"""Doo-Sabin refinement topology (dual quad quadrisection): integers only.
 
 One refinement makes a new point for every corner of every face, that is for
 every half-edge ``h`` of the coarse mesh (the corner at ``origin[h]`` in
@@ -8,19 +8,14 @@ every half-edge ``h`` of the coarse mesh (the corner at ``origin[h]`` in
 - an E-face per coarse interior edge (a quad),
 - a V-face per coarse vertex (as many sides as the vertex has faces).
 
-The point of corner ``h`` is ``(1 - a) V + a S`` with ``V = origin[h]``, ``S``
-the centroid of ``face[h]`` and ``a`` the ratio of that face (paper, A1), or
-of that corner when ratios are given per corner (per-vertex blend ratios,
-``core.blend``).
+Where the new points go is ``stencils.doo_sabin``.
 """
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import csr_matrix, issparse
 
-from ...parallel import for_each_range
 from ...mesh.halfedges import HalfEdgeMesh, face_cycles, outgoing_rings
 
 FACE_FROM_FACE, FACE_FROM_EDGE, FACE_FROM_VERTEX = 0, 1, 2
@@ -143,117 +138,3 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     before = mesh.prev[ring]
     twin[ring_start:] = n_half + 4 * edge_of[before] + np.where(is_rep[before], 3, 1)
     return HalfEdgeMesh(int(n_half), faces.face_sizes, offsets, faces.face_vertices, face, nxt, prv, twin)
-
-
-def doo_sabin_matrix(mesh: HalfEdgeMesh, ratio: np.ndarray, per_corner: bool = False) -> csr_matrix:
-    """Sparse averaging matrix of one Doo-Sabin step.
-
-    Parameters
-    ----------
-    mesh : HalfEdgeMesh with V vertices and H half-edges
-    ratio : (F,) float, the ratio ``a`` of each coarse face; or, with
-        ``per_corner``, (H,) float, the ratio of each corner (half-edge), so
-        corners of one face may differ (per-vertex blend ratios)
-    per_corner : bool
-
-    Returns
-    -------
-    (H, V) csr_matrix M: fine points = M @ coarse points.
-    """
-    ratio = np.asarray(ratio, dtype=np.float64)
-    corner_ratio = ratio if per_corner else ratio[mesh.face]
-    # Row h holds the n vertices of its face (a/n each) and 1 - a more at its own
-    # corner. Face f's n rows fill one n x n block of entries, so blocks start at
-    # the running sum of n^2; written straight into CSR arrays, faces grouped by size.
-    sizes = mesh.face_sizes
-    block = np.zeros(sizes.size + 1, dtype=np.int64)
-    np.cumsum(sizes * sizes, out=block[1:])
-    index = np.int32 if max(block[-1], mesh.n_vertices) < 2**31 else np.int64
-    indptr = np.empty(mesh.n_halfedges + 1, dtype=index)
-    indices = np.empty(block[-1], dtype=index)
-    data = np.empty(block[-1])
-    indptr[-1] = block[-1]
-    offsets = mesh.face_offsets
-    for n in np.unique(sizes):
-        faces = np.flatnonzero(sizes == n)
-        # faces of one size usually form one run (F-, E- and V-faces of a refined mesh):
-        # then their half-edges and entries are slices, else index arrays
-        if faces[-1] - faces[0] + 1 == faces.size:
-            rows = slice(offsets[faces[0]], offsets[faces[-1] + 1])
-            entries = slice(block[faces[0]], block[faces[-1] + 1])
-            indptr[rows] = np.arange(block[faces[0]], block[faces[-1] + 1], n)
-        else:
-            rows = (offsets[faces][:, None] + np.arange(n)).ravel()
-            entries = (block[faces][:, None] + np.arange(n * n)).ravel()
-            indptr[rows] = (block[faces][:, None] + n * np.arange(n)).ravel()
-        corners = mesh.origin[rows].reshape(-1, 1, n)
-        indices[entries] = np.broadcast_to(corners, (corners.shape[0], n, n)).ravel()
-        a = corner_ratio[rows].reshape(-1, n)
-        weights = np.empty((a.shape[0], n, n))
-        weights[:] = (a / n)[..., None]
-        weights[:, np.arange(n), np.arange(n)] += 1.0 - a  # row i's own corner is entry i
-        data[entries] = weights.ravel()
-    return csr_matrix((data, indices, indptr), shape=(mesh.n_halfedges, mesh.n_vertices))
-
-
-class DooSabinStep:
-    """One Doo-Sabin step kept factored: ``fine = (1 - a) x[origin] + a centroid(face)``.
-
-    The same linear map as ``doo_sabin_matrix(mesh, ratio, per_corner=True)``,
-    applied from the mesh's own arrays: no matrix with n entries per fine
-    point is built or stored (for the second step that matrix is the largest
-    object of the construction). ``step @ points`` applies it, ``tocsr()``
-    gives the matrix, and ``matrix @ step`` / ``step @ matrix`` compose it
-    with sparse matrices like any operator of ``Surface.operators``.
-
-    Parameters
-    ----------
-    mesh : HalfEdgeMesh with V vertices and H half-edges
-    ratio : (H,) float, the ratio of every corner
-    """
-
-    def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray):
-        self.mesh = mesh
-        self.ratio = np.asarray(ratio, dtype=np.float64)
-        self.shape = (mesh.n_halfedges, mesh.n_vertices)
-        self._applied = 0
-        self._matrix = None
-
-    def __matmul__(self, x):
-        if issparse(x):
-            return self.tocsr() @ x
-        # The factored form is cheapest to set up, the matrix ~3x faster to apply:
-        # a surface built once uses the first, ``update_points`` called again
-        # and again (animation, optimisation) builds and keeps the second.
-        self._applied += 1
-        if self._matrix is None and self._applied > 2:
-            self._matrix = self.tocsr()
-        if self._matrix is not None:
-            return self._matrix @ x
-        x = np.asarray(x, dtype=np.float64)
-        flat = np.ascontiguousarray(x.reshape(x.shape[0], -1))
-        mesh, ratio = self.mesh, self.ratio
-        offsets = mesh.face_offsets
-        out = np.empty((mesh.n_halfedges, flat.shape[1]))
-
-        def faces(first: int, last: int) -> None:  # faces first:last, by blocks that stay in cache
-            for f0 in range(first, last, 1 << 14):
-                f1 = min(last, f0 + (1 << 14))
-                h0, h1 = offsets[f0], offsets[f1]
-                corners = np.take(flat, mesh.origin[h0:h1], axis=0, mode="clip")  # x at every corner, face by face
-                centroids = np.add.reduceat(corners, offsets[f0:f1] - h0, axis=0)
-                centroids /= mesh.face_sizes[f0:f1, None]
-                block = out[h0:h1]
-                np.multiply(corners, (1.0 - ratio[h0:h1])[:, None], out=block)
-                block += ratio[h0:h1, None] * np.take(centroids, mesh.face[h0:h1] - f0, axis=0, mode="clip")
-
-        for_each_range(mesh.n_faces, faces, minimum=1 << 14)
-        return out.reshape((mesh.n_halfedges,) + x.shape[1:])
-
-    def __rmatmul__(self, other):
-        return other @ self.tocsr()
-
-    def tocsr(self) -> csr_matrix:
-        if self._matrix is not None:
-            return self._matrix
-        return doo_sabin_matrix(self.mesh, self.ratio, per_corner=True)

@@ -7,7 +7,7 @@ refinements guarantee):
 
 - R1: every vertex has four cells (closed meshes: no boundary);
 - every non-quadrilateral cell (a *hole*) is surrounded by quads: the quads
-  beside its edges and at its corners (``patches.hole_neighbourhoods``);
+  beside its edges and at its corners (``holes.hole_neighbourhoods``);
 - R2/R3: no vertex is a corner of two holes, and the edge neighbours
   (B points) of a hole's corners are corners of no hole, so every patch
   beside a hole is biquadratic. (A hole's diagonal point A may be the
@@ -20,10 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .doo_sabin import refine_doo_sabin, refined_halfedges
 from ...mesh.errors import TopologyError
-from ..stencils.patches import hole_neighbourhoods
 from ...mesh.halfedges import HalfEdgeMesh
+from .doo_sabin import FACE_FROM_FACE, FACE_FROM_VERTEX, refine_doo_sabin, refined_halfedges
+from .holes import hole_neighbourhoods
 
 
 def structure_problem(mesh: HalfEdgeMesh) -> str | None:
@@ -75,29 +75,32 @@ def check_refinements(mesh: HalfEdgeMesh, k: int) -> None:
                             "use --refinements 2 (the paper's two steps) or auto")
 
 
-def fewer_refinement_sources(surface, centre: np.ndarray):
-    """``Surface.patch_sources`` after 0 or 1 refinement steps.
+def fewer_refinement_sources(topology, centre: np.ndarray):
+    """``SurfaceTopology.patch_sources`` after 0 or 1 refinement steps.
 
     One step: a refined vertex is an input corner (f, v): its biquadratic
     patch comes from face f, the bicubic patches of a hole from the input
     element the hole was made from (face f, or vertex v for a V-cell). No
     step: biquadratic patches come from input vertices, bicubic ones from
     input faces.
-    """
-    from .doo_sabin import FACE_FROM_FACE, FACE_FROM_VERTEX
 
-    n_quad = surface.quad_frames.shape[0]
-    cells = np.concatenate([g.cells for g in surface.holes]) if surface.holes else np.zeros(0, np.int64)
-    hole_cell = cells[surface.cubic_hole]
+    Parameters
+    ----------
+    topology : SurfaceTopology
+    centre : (P,) int, the refined vertex of every patch
+    """
+    n_quad = topology.quad_frames.shape[0]
+    cells = np.concatenate([g.cells for g in topology.holes]) if topology.holes else np.zeros(0, np.int64)
+    hole_cell = cells[topology.cubic_hole]
     kind = np.full(centre.size, FACE_FROM_FACE, dtype=np.int8)
-    if surface.refinements == 0:
+    if topology.refinements == 0:
         kind[:n_quad] = FACE_FROM_VERTEX
-        index = np.r_[surface.vertex_source[centre[:n_quad]], hole_cell]
+        index = np.r_[topology.vertex_source[centre[:n_quad]], hole_cell]
     else:
-        coarse = surface.input
+        coarse = topology.input
         index = coarse.face[centre].astype(np.int64)
-        from_vertex = surface.faces1.kind[hole_cell] == FACE_FROM_VERTEX
+        from_vertex = topology.faces1.kind[hole_cell] == FACE_FROM_VERTEX
         kind[n_quad:][from_vertex] = FACE_FROM_VERTEX
-        index[n_quad:][from_vertex] = surface.vertex_source[surface.faces1.parent[hole_cell[from_vertex]]]
-        index[n_quad:][~from_vertex] = surface.faces1.parent[hole_cell[~from_vertex]]
+        index[n_quad:][from_vertex] = topology.vertex_source[topology.faces1.parent[hole_cell[from_vertex]]]
+        index[n_quad:][~from_vertex] = topology.faces1.parent[hole_cell[~from_vertex]]
     return kind, index, np.full((centre.size, 2), -1, dtype=np.int64)

@@ -75,26 +75,6 @@ def corner_ratios(mesh: HalfEdgeMesh, face_ratio: np.ndarray, vertex_ratio: np.n
     return ratio
 
 
-def refined_cell_ratios(face_sizes: np.ndarray, face_vertices: np.ndarray, corner_ratio: np.ndarray) -> np.ndarray:
-    """Mean ratio of the input corners each once-refined cell is made of (a summary per cell).
-
-    Parameters
-    ----------
-    face_sizes, face_vertices : the once-refined cells (``RefinedFaces``); their
-        vertices are input corners (half-edges)
-    corner_ratio : (H,) float, from ``corner_ratios``
-
-    Returns
-    -------
-    (F',) float (exactly the common value where all corners agree)
-    """
-    values = corner_ratio[face_vertices]
-    offsets = np.concatenate([[0], np.cumsum(face_sizes)[:-1]])
-    mean = np.add.reduceat(values, offsets) / face_sizes
-    low, high = np.minimum.reduceat(values, offsets), np.maximum.reduceat(values, offsets)
-    return np.where(low == high, low, mean)
-
-
 def second_step_corner_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, corner_ratio: np.ndarray) -> np.ndarray:
     """Ratio of every corner (half-edge) of the once-refined mesh in the second step.
 

@@ -7,7 +7,7 @@ bicubics to each other with psi_i = id + t1 (1 - t2)^2 [2c, 0]: a
 reparametrization that is the identity at M_i (where four patches meet, as
 in a regular grid) and turns by 2c at the centre S.
 
-In the naming of ``patches`` (P_00 = L_i, P_30 = M_i, P_33 = S, edge
+In the naming of ``bicubic`` (P_00 = L_i, P_30 = M_i, P_33 = S, edge
 P_3k,i = P_k3,i+1 shared by p_i and p_i+1, t = 0 at M_i, t = 1 at S):
 
 - boundary rows: A3's P_k0, P_0k, and P_k1, P_1k with a = 0 (the identity
@@ -35,7 +35,7 @@ derived from the join condition and measured G1 at machine precision.
 """
 from __future__ import annotations
 
-import numpy as np
+from .bicubic import boundary_rows, shift
 
 
 def triangle_hole_coefficients(A, B1, B2, C, paper_twist: bool = False):
@@ -43,7 +43,7 @@ def triangle_hole_coefficients(A, B1, B2, C, paper_twist: bool = False):
 
     Parameters
     ----------
-    A, B1, B2, C : (..., 3, d) float, points around the hole (names as in ``patches``)
+    A, B1, B2, C : (..., 3, d) float, points around the hole (names as in ``bicubic``)
     paper_twist : bool, use the transcription's printed P_22 (for the test that shows it is wrong)
 
     Returns
@@ -53,27 +53,10 @@ def triangle_hole_coefficients(A, B1, B2, C, paper_twist: bool = False):
     if C.shape[-2] != 3:
         raise ValueError("section 1.3.4 is for 3-sided holes")
     c = -0.5
-
-    def shift(x, s):  # x_{i+s}
-        return np.roll(x, -s, axis=-2)
-
+    # A3's rows next to the biquadratic patches with a = 0: the identity connecting map
+    P, _ = boundary_rows(A, B1, B2, C, 0.0)
+    M = P[..., 3, 0, :]
     C_next, C_prev = shift(C, 1), shift(C, -1)
-    B1_next, B2_prev = shift(B1, 1), shift(B2, -1)
-    P = np.zeros(C.shape[:-1] + (4, 4) + C.shape[-1:])
-    P[..., 0, 0, :] = (B2 + B1 + C + A) / 4
-    P[..., 1, 0, :] = (5 * B2 + B1 + 5 * C + A) / 12
-    P[..., 2, 0, :] = (5 * B2 + B1_next + 5 * C + C_next) / 12
-    P[..., 3, 0, :] = M = (B2 + B1_next + C + C_next) / 4
-    P[..., 0, 1, :] = (5 * B1 + B2 + 5 * C + A) / 12
-    P[..., 0, 2, :] = (5 * B1 + B2_prev + 5 * C + C_prev) / 12
-    P[..., 0, 3, :] = shift(M, -1)
-    # A3 with a = 0: the identity connecting map to the biquadratic neighbours
-    P[..., 1, 1, :] = (5 * B2 + 5 * B1 + A + 25 * C) / 36
-    P[..., 2, 1, :] = (5 * B2 + 5 * C_next + B1_next + 25 * C) / 36
-    P[..., 1, 2, :] = (5 * B1 + 5 * C_prev + B2_prev + 25 * C) / 36
-    P31 = (B2 + B1_next + 5 * C_next + 5 * C) / 12
-    P[..., 3, 1, :] = P31
-    P[..., 1, 3, :] = shift(P31, -1)
     S = C.mean(axis=-2, keepdims=True)
     P32 = (4 * C + 4 * C_next + C_prev) / 9
     P[..., 3, 3, :] = S

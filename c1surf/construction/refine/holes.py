@@ -1,0 +1,139 @@
+"""Which refined points feed which patch: hole neighbourhoods and patch frames (integers only).
+
+Names follow the paper and NOTES-ON-THE-SEED.md: an n-sided cell (a *hole*)
+has corners C_1..C_n; B_{i,1} and B_{i,2} are the edge neighbours of C_i on the
+C_{i-1} and C_{i+1} side, A_i is diagonal to C_i.
+
+Every patch belongs to one vertex of the refined mesh and is described by that
+vertex's four outgoing half-edges ``e0..e3`` in counter-clockwise order: its
+corner [0,0] is the centroid of face(e2), [d,0] of face(e3), [d,d] of face(e0)
+and [0,d] of face(e1). Its side u=1 crosses edge e0, v=1 crosses e1, u=0
+crosses e2 and v=0 crosses e3. A biquadratic patch sits at every vertex whose
+four faces are quads (A2); bicubic patch p_i sits at corner C_i of a hole with
+``e0`` the hole's half-edge C_i -> C_{i+1} (A3).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ...mesh.errors import TopologyError
+from ...mesh.halfedges import HalfEdgeMesh, first_outgoing
+
+
+@dataclass(frozen=True)
+class HoleGroup:
+    """All n-sided holes of the refined mesh, for one n.
+
+    Attributes
+    ----------
+    n : int
+    cells : (k,) int, refined face index of each hole
+    halfedges : (k, n) int, half-edge C_i -> C_{i+1} of each hole
+    A, B1, B2, C : (k, n) int, refined vertex indices of A_i, B_{i,1}, B_{i,2}, C_i
+    """
+
+    n: int
+    cells: np.ndarray
+    halfedges: np.ndarray
+    A: np.ndarray
+    B1: np.ndarray
+    B2: np.ndarray
+    C: np.ndarray
+
+
+def cell_neighbourhood(mesh: HalfEdgeMesh, h: np.ndarray):
+    """The points A, B1, B2, C around cells whose half-edges C_i -> C_{i+1} are ``h``.
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh, every cell next to the given ones a quad
+    h : (k, n) int
+
+    Returns
+    -------
+    A, B1, B2, C : (k, n) int, refined vertices
+    corner_quads, side_quads : (k, n) int, the faces at corner C_i and beside edge i
+    """
+    t = mesh.twin[h]  # C_{i+1} -> C_i in the quad beside edge i
+    to_b2 = mesh.next[t]  # C_i -> B_{i,2}
+    back = mesh.twin[to_b2]  # B_{i,2} -> C_i in the corner quad
+    A = mesh.origin[mesh.prev[back]]
+    B1 = mesh.origin[mesh.next[mesh.next[back]]]
+    return A, B1, mesh.dest[to_b2], mesh.origin[h], mesh.face[back], mesh.face[t]
+
+
+def hole_neighbourhoods(mesh: HalfEdgeMesh, wanted_vertex=None) -> list[HoleGroup]:
+    """Find the A, B, C points around every non-quadrilateral cell, grouped by n.
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh, the twice-refined mesh (every vertex used by a patch 4-valent)
+    wanted_vertex : (V,) bool or None; if given, only holes with a wanted corner
+        (open meshes: holes that reach into the real surface)
+    """
+    groups = []
+    for n, cells, h in mesh.faces_by_size():
+        if n == 4:
+            continue
+        if wanted_vertex is not None:
+            keep = wanted_vertex[mesh.origin[h]].any(axis=1)
+            cells, h = cells[keep], h[keep]
+            if cells.size == 0:
+                continue
+        A, B1, B2, C, corner_quads, side_quads = cell_neighbourhood(mesh, h)
+        if np.any(mesh.face_sizes[corner_quads] != 4) or np.any(mesh.face_sizes[side_quads] != 4):
+            raise TopologyError("internal: a hole of the refined mesh is not surrounded by quads")
+        groups.append(HoleGroup(n=n, cells=cells, halfedges=h, A=A, B1=B1, B2=B2, C=C))
+    return groups
+
+
+def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:
+    """Four outgoing half-edges e0..e3 counter-clockwise, starting at ``first``.
+
+    Parameters
+    ----------
+    first : (k,) int, outgoing half-edges of 4-valent vertices
+
+    Returns
+    -------
+    (k, 4) int
+    """
+    e = [first]
+    for _ in range(3):
+        e.append(mesh.rotate(e[-1]))
+    frames = np.stack(e, axis=1)
+    if np.any(frames < 0) or np.any(mesh.rotate(frames[:, 3]) != first):
+        raise TopologyError("internal: a refined vertex is not 4-valent")
+    return frames
+
+
+def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None):
+    """Frames (e0..e3) of all biquadratic and all bicubic patches.
+
+    Parameters
+    ----------
+    wanted_vertex : (V,) bool or None, refined vertices that get a biquadratic patch if regular
+
+    Returns
+    -------
+    quad_frames : (Nq, 4) int, one per regular (wanted) refined vertex, in vertex order
+    cubic_frames : (Nc, 4) int, for the holes in ``holes`` order, corner by corner
+    """
+    first = first_outgoing(mesh)
+    irregular = np.zeros(mesh.n_vertices, dtype=bool)
+    for g in holes:
+        irregular[g.C.ravel()] = True
+    wanted = (first >= 0) if wanted_vertex is None else (first >= 0) & wanted_vertex
+    regular = np.flatnonzero(wanted & ~irregular)
+    # Every corner of a kept hole is irregular, so a regular vertex has four quads
+    # around it as long as no vertex is a corner of two holes (R3):
+    if irregular.sum() != sum(g.C.size for g in holes):
+        raise TopologyError("internal: a refined vertex touches two holes")
+    quad_frames = vertex_frames(mesh, first[regular])
+    if holes:
+        cubic_frames = vertex_frames(mesh, np.concatenate([g.halfedges.ravel() for g in holes]).astype(mesh.twin.dtype))
+    else:
+        cubic_frames = np.zeros((0, 4), dtype=quad_frames.dtype)
+    return quad_frames, cubic_frames

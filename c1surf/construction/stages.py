@@ -1,0 +1,210 @@
+"""The stages of a Surface: every geometry step behind one interface.
+
+A stage maps points to points linearly (Theorem 1.3.3: the construction is
+linear in the input points) and says so twice: ``apply`` is its fastest way
+to map one set of points, ``matrix()`` the same map as a scipy.sparse matrix,
+built when first asked for and kept. ``Surface.update_points`` is one loop of
+``apply`` over ``Surface.stages``; ``Surface.stencil()`` multiplies the matrices.
+
+In order (``STAGE_BUILDERS``; a builder returns None where its step does not apply):
+
+- ``place``: input points to the coarse mesh (vertex copies of the repairs, ghost points);
+- ``doo_sabin_1``: the first Doo-Sabin step, with A1a's vertex interpolation folded in;
+- ``doo_sabin_2``: the second step, kept factored (``stencils.doo_sabin.DooSabinStep``);
+- ``perturbation``: A1's perturbation of the B points of even holes;
+- ``vertex_normals``: A1a's normal constraint; it mixes the coordinates, so its
+  matrix acts on flattened points (``mixes_coordinates``);
+- ``patches``: A2 and A3 side by side, the coefficient rows of all biquadratic
+  patches, then of all bicubic ones.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+from scipy.sparse import csr_matrix, vstack
+
+from ..mesh.ghost_layer import ghost_points_matrix, reflex_corners
+from .extensions.interpolation import normal_constraint, vertex_interpolation_step
+from .refine.doo_sabin import FACE_FROM_VERTEX
+from .stencils.bicubic import bicubic_layout
+from .stencils.biquadratic import biquadratic_layout
+from .stencils.blend import second_step_corner_ratios
+from .stencils.doo_sabin import DooSabinStep, doo_sabin_matrix
+from .stencils.hole_rules import HoleRules
+from .stencils.perturbation import perturbation_matrix
+from .topology import SurfaceTopology
+
+
+@runtime_checkable
+class Stage(Protocol):
+    """One linear geometry step of a Surface.
+
+    name : str
+    shape : (rows out, rows in)
+    mixes_coordinates : bool; False: the same map on every column of the points,
+        ``matrix()`` is (rows out, rows in); True: ``matrix(d, weights=None)`` acts
+        on the flattened points, (rows out * d, rows in * d), and a rational
+        surface's passes the (fixed) weight column it is applied to
+    apply(points) : (rows in, d) float -> (rows out, d) float
+    matrix() : scipy.sparse matrix of the same map (built on demand, kept)
+    """
+
+    name: str
+    shape: tuple
+    mixes_coordinates: bool
+
+    def apply(self, points: np.ndarray) -> np.ndarray: ...
+
+    def matrix(self): ...
+
+
+class MatrixStage:
+    """A stage that is its sparse matrix."""
+
+    mixes_coordinates = False
+
+    def __init__(self, name: str, matrix):
+        self.name = name
+        self._matrix = matrix.tocsr()
+        self.shape = self._matrix.shape
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        return self._matrix @ points
+
+    def matrix(self) -> csr_matrix:
+        return self._matrix
+
+
+class PlacementStage:
+    """Input points to the coarse mesh's points: each repaired vertex's input point, then the ghost points.
+
+    The ghost points of open meshes follow a rule that reads the geometry once
+    (convex or reflex single-face corners, ``mesh.ghost_layer``): ``follow``
+    classifies the corners again for new points and rebuilds the matrix when
+    the classification changed, so moved points give what a fresh Surface gives.
+    """
+
+    name = "place"
+    mixes_coordinates = False
+
+    def __init__(self, topology: SurfaceTopology, points: np.ndarray):
+        self._select = topology.select_matrix()
+        self._layer = topology.ghost
+        self._source = topology.vertex_source
+        self.reflex = None  # (k,) bool per ghost corner, or None (closed input)
+        self._matrix = self._select
+        self.follow(points)
+        self.shape = self._matrix.shape
+
+    def follow(self, points: np.ndarray) -> bool:
+        """Classify the ghost corners for input ``points`` (V, d); True if the matrix changed."""
+        if self._layer is None:
+            return False
+        reflex = reflex_corners(self._layer, points[self._source, :3])
+        if self.reflex is not None and np.array_equal(reflex, self.reflex):
+            return False
+        self.reflex = reflex
+        self._matrix = ghost_points_matrix(self._layer, reflex) @ self._select
+        return True
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        return self._matrix @ points
+
+    def matrix(self) -> csr_matrix:
+        return self._matrix
+
+
+class StackedStage:
+    """Stages applied to the same points, their output rows one after the other (``patches``: A2, then A3).
+
+    Each part is a ``stencils.layout.PatchLayout`` (``apply`` writes into the rows given).
+    """
+
+    mixes_coordinates = False
+
+    def __init__(self, name: str, parts):
+        self.name = name
+        self.parts = tuple(parts)
+        self.shape = (sum(part.shape[0] for part in self.parts), self.parts[0].shape[1])
+        self._matrix = None
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        out = np.empty((self.shape[0], points.shape[1]))
+        start = 0
+        for part in self.parts:
+            part.apply(points, out=out[start : start + part.shape[0]])
+            start += part.shape[0]
+        return out
+
+    def matrix(self) -> csr_matrix:
+        if self._matrix is None:
+            self._matrix = vstack([part.matrix() for part in self.parts], format="csr")
+        return self._matrix
+
+
+@dataclass(frozen=True)
+class StageInputs:
+    """What the stages need besides the topology (validated, in the coarse mesh's numbering).
+
+    points : (V, d) float, the input points (the ghost-corner rule reads them)
+    corner_ratio : (H,) float, first-step blend ratio of every corner of the coarse mesh (``stencils.blend``)
+    hole_rules : HoleRules, the A3 rule of every hole size and its shape parameters
+    interpolate_vertices : bool, A1a
+    vertex_normals : (Vc, 3) float or None, NaN rows where unset
+    rational : bool, points carry a homogeneous weight as last column
+    """
+
+    points: np.ndarray
+    corner_ratio: np.ndarray
+    hole_rules: HoleRules
+    interpolate_vertices: bool = False
+    vertex_normals: np.ndarray | None = None
+    rational: bool = False
+
+
+def placement_stage(topology: SurfaceTopology, inputs: StageInputs) -> PlacementStage:
+    return PlacementStage(topology, inputs.points)
+
+
+def first_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:
+    """A1's first Doo-Sabin step; with A1a every V-cell gets its input vertex as centroid."""
+    if topology.refinements == 0:
+        return None
+    step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
+    if inputs.interpolate_vertices:
+        step = vertex_interpolation_step(step, topology.input, topology.faces1)
+    return MatrixStage("doo_sabin_1", step)
+
+
+def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabinStep | None:
+    """A1's second step: a once-refined vertex keeps its first-step ratio, V-cells the minimum."""
+    if topology.refinements < 2:
+        return None
+    is_vertex_cell = topology.faces1.kind == FACE_FROM_VERTEX
+    return DooSabinStep(topology.level1, second_step_corner_ratios(topology.level1, is_vertex_cell, inputs.corner_ratio))
+
+
+def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:
+    matrix = perturbation_matrix(topology.refined, topology.holes)
+    return None if matrix is None else MatrixStage("perturbation", matrix)
+
+
+def normal_stage(topology: SurfaceTopology, inputs: StageInputs):
+    """A1a's normal constraint, where vertex normals are given."""
+    if inputs.vertex_normals is None or topology.faces1 is None:
+        return None
+    return normal_constraint(topology.refined, topology.faces1, inputs.vertex_normals, inputs.hole_rules.tangent_datum,
+                             inputs.rational)
+
+
+def patch_stage(topology: SurfaceTopology, inputs: StageInputs) -> StackedStage:
+    """A2 and A3: refined points to the coefficient rows of every kept patch."""
+    refined = topology.refined
+    biquadratic = biquadratic_layout(refined, topology.quad_frames)
+    bicubic = bicubic_layout(topology.holes, inputs.hole_rules.weights, refined.n_vertices, topology.cubic_keep)
+    return StackedStage("patches", (biquadratic, bicubic))
+
+
+STAGE_BUILDERS = (placement_stage, first_step_stage, second_step_stage, perturbation_stage, normal_stage, patch_stage)

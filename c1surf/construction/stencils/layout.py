@@ -1,0 +1,125 @@
+"""Patch coefficients as gathers of refined points and one small dense product per group (A2, A3).
+
+Every patch of a group reads m refined points (its *slots*) and has r
+coefficients, each a fixed combination of those points: the group is one
+(r, m) weight matrix and an (m, k) table of point indices. Applying it gathers
+the points block by block and multiplies (``gathered_products``); the same map
+as a sparse matrix (``gathered_matrix``) is built only when asked for.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import csr_matrix, vstack
+
+from ...parallel import for_each_range
+
+
+def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray, out: np.ndarray) -> np.ndarray:
+    """out[p] = weights @ points[slots[:, p]] for every patch p: a small stencil applied to gathered rows.
+
+    Blocks of patches that stay in cache, on the thread pool: gather slot by slot
+    (each into a contiguous row of the block), one (r x m) @ (m x block d) product,
+    one strided copy into the output. mode="clip": no bounds check, no buffering
+    (the indices are valid by construction).
+
+    Parameters
+    ----------
+    points : (V, d) float
+    slots : (m, k) int, slots[j, p] is the row of points that is input j of patch p
+    weights : (r, m) float
+    out : (k, r, d) float, filled and returned
+    """
+    points = np.ascontiguousarray(points)
+    m, k = slots.shape
+    d = points.shape[1]
+    step = max(1, (1 << 15) // m)
+
+    def fill(first: int, last: int) -> None:
+        gathered = np.empty((m, min(step, last - first), d))
+        product = np.empty((weights.shape[0], gathered.shape[1] * d))
+        for start in range(first, last, step):
+            stop = min(last, start + step)
+            g = gathered[:, : stop - start]
+            for j in range(m):
+                np.take(points, slots[j, start:stop], axis=0, out=g[j], mode="clip")
+            q = np.matmul(weights, g.reshape(m, -1), out=product[:, : (stop - start) * d])
+            out[start:stop] = q.reshape(weights.shape[0], -1, d).transpose(1, 0, 2)
+
+    for_each_range(k, fill, minimum=max(1, (1 << 19) // m), uses_blas=True)
+    return out
+
+
+def gathered_matrix(slots: np.ndarray, weights: np.ndarray, n_points: int) -> csr_matrix:
+    """The map of ``gathered_products`` as a (k r, n_points) csr_matrix: row ``r p + i`` is coefficient i of patch p.
+
+    Written straight into CSR arrays (every patch has the same pattern of non-zero weights).
+
+    Parameters
+    ----------
+    slots : (m, k) int
+    weights : (r, m) float
+    n_points : int
+    """
+    k = slots.shape[1]
+    i, j = np.nonzero(weights)  # row by row, so each patch's entries are in row order
+    index = np.int32 if max(n_points, k * i.size) < 2**31 else np.int64
+    per_row = np.bincount(i, minlength=weights.shape[0])
+    indptr = np.zeros(k * weights.shape[0] + 1, dtype=index)
+    np.cumsum(np.tile(per_row, k), out=indptr[1:])
+    columns = np.ascontiguousarray(slots[j].T, dtype=index).ravel()  # (k, nnz): patch by patch
+    return csr_matrix((np.tile(weights[i, j], k), columns, indptr), shape=(k * weights.shape[0], n_points))
+
+
+class PatchLayout:
+    """Patch coefficient rows from refined points, by groups that share a weight matrix (a ``Stage``).
+
+    Parameters
+    ----------
+    name : str
+    groups : sequence of (slots, weights): slots (m, k) int, the refined points each
+        of the group's k items reads (a patch for A2, a hole of n patches for A3);
+        weights (r, m) float, the item's r coefficient rows on those points
+    n_points : int, refined points
+    coefficients : int, rows per patch (9 for A2, 16 for A3)
+    keep : (P,) bool or None, the patches kept, P = all patches of all groups
+        (open meshes: those at real corners); None keeps all
+    """
+
+    mixes_coordinates = False
+
+    def __init__(self, name: str, groups, n_points: int, coefficients: int, keep=None):
+        self.name = name
+        self.groups = tuple(groups)
+        self.n_points = int(n_points)
+        self.coefficients = coefficients
+        self.keep = None if keep is None or np.all(keep) else np.asarray(keep, dtype=bool)
+        self.n_rows = sum(slots.shape[1] * weights.shape[0] for slots, weights in self.groups)  # before ``keep``
+        kept = self.n_rows if self.keep is None else int(self.keep.sum()) * coefficients
+        self.shape = (kept, self.n_points)
+        self._matrix = None
+
+    def apply(self, points: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """(rows, d) coefficients from refined ``points`` (n_points, d), written into ``out`` if given."""
+        d = points.shape[1]
+        if out is None:
+            out = np.empty((self.shape[0], d))
+        every = out if self.keep is None else np.empty((self.n_rows, d))
+        start = 0
+        for slots, weights in self.groups:  # m points in, r coefficients out per item
+            rows = slots.shape[1] * weights.shape[0]
+            gathered_products(points, slots, weights, every[start : start + rows].reshape(-1, weights.shape[0], d))
+            start += rows
+        if self.keep is not None:
+            out[:] = every.reshape(self.keep.size, -1)[self.keep].reshape(out.shape)
+        return out
+
+    def matrix(self) -> csr_matrix:
+        """(rows, n_points) csr_matrix, built on the first call and kept."""
+        if self._matrix is None:
+            parts = [gathered_matrix(slots, weights, self.n_points) for slots, weights in self.groups]
+            matrix = vstack(parts, format="csr") if parts else csr_matrix((0, self.n_points))
+            if self.keep is not None:
+                rows = np.flatnonzero(self.keep)[:, None] * self.coefficients + np.arange(self.coefficients)
+                matrix = matrix[rows.ravel()]
+            self._matrix = matrix
+        return self._matrix

@@ -1,0 +1,81 @@
+"""Step A1's perturbation of the B points of even holes with n > 4, as a sparse matrix."""
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import coo_matrix, csr_matrix, identity
+from scipy.sparse.csgraph import connected_components
+
+from ...mesh.halfedges import HalfEdgeMesh
+from ..refine.holes import HoleGroup
+
+
+def perturbation_matrix(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
+    """Step A1's perturbation of the B points of even holes with n > 4.
+
+    Each such hole needs the alternating sum r . B = sum_ij (-1)^(i+j) B_ij to
+    vanish. The paper corrects each hole alone; holes can share B points
+    (NOTES, item 4), so this takes the least-norm joint correction
+    dB = -A^+ (A B), which is the paper's rule for an isolated hole.
+
+    Returns
+    -------
+    (V, V) csr_matrix ``I - A^T (A A^T)^-1 A``, or None when no hole needs it.
+    """
+    rows, cols, vals = [], [], []
+    count = 0
+    for g in holes:
+        if g.n % 2 or g.n <= 4:
+            continue
+        k = g.cells.size
+        sign = np.where(np.arange(g.n) % 2 == 0, 1.0, -1.0)
+        hole = count + np.arange(k)[:, None]
+        rows += [np.broadcast_to(hole, (k, g.n)).ravel()] * 2
+        cols += [g.B1.ravel(), g.B2.ravel()]
+        vals += [np.broadcast_to(sign, (k, g.n)).ravel(), np.broadcast_to(-sign, (k, g.n)).ravel()]
+        count += k
+    if count == 0:
+        return None
+    constraints = coo_matrix(
+        (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(count, mesh.n_vertices)
+    ).tocsr()
+    constraints.sum_duplicates()
+    inverse_gram = block_diagonal_inverse((constraints @ constraints.T).tocoo())
+    return (identity(mesh.n_vertices, format="csr") - constraints.T @ (inverse_gram @ constraints)).tocsr()
+
+
+def block_diagonal_inverse(matrix: coo_matrix) -> csr_matrix:
+    """Inverse of a sparse symmetric matrix made of small diagonal blocks.
+
+    Even holes couple only where they share B points, so A A^T splits into
+    tiny blocks (almost all 1 x 1). Blocks of one size are inverted together.
+
+    Parameters
+    ----------
+    matrix : (m, m) coo_matrix
+
+    Returns
+    -------
+    (m, m) csr_matrix
+    """
+    m = matrix.shape[0]
+    _, label = connected_components(matrix, directed=False)
+    order = np.argsort(label, kind="stable")
+    sizes = np.bincount(label)
+    start = np.concatenate([[0], np.cumsum(sizes)])
+    position = np.empty(m, dtype=np.int64)
+    position[order] = np.arange(m) - start[label[order]]
+    rows, cols, vals = [], [], []
+    for size in np.unique(sizes):
+        components = np.flatnonzero(sizes == size)
+        slot = np.full(sizes.size, -1)
+        slot[components] = np.arange(components.size)
+        blocks = np.zeros((components.size, size, size))
+        keep = sizes[label[matrix.row]] == size
+        r, c = matrix.row[keep], matrix.col[keep]
+        np.add.at(blocks, (slot[label[r]], position[r], position[c]), matrix.data[keep])
+        inverse = np.linalg.inv(blocks)
+        members = order[start[components][:, None] + np.arange(size)]  # (k, size) global indices
+        rows.append(np.repeat(members, size, axis=1).ravel())
+        cols.append(np.tile(members, (1, size)).ravel())
+        vals.append(inverse.ravel())
+    return csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(m, m))

@@ -1,0 +1,189 @@
+"""Everything about a Surface that depends on the connectivity alone: integers, computed once.
+
+``build_topology`` runs the steps in order: repair the input (orientation,
+pinched vertices, the double cover of a non-orientable mesh), close its
+boundaries with a ghost layer, choose the number of refinements, refine, and
+find the holes and the patch frames. Geometry never enters: the one rule
+that reads points (convex or reflex ghost corners) is a stage
+(``stages.PlacementStage``).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import csr_matrix
+
+from ..mesh.errors import TopologyError
+from ..mesh.ghost_layer import GhostLayer, add_ghost_layer
+from ..mesh.halfedges import HalfEdgeMesh
+from ..mesh.repair import check_valence, prepare_topology
+from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_VERTEX, RefinedFaces, refine_doo_sabin, refined_halfedges
+from .refine.fewer_steps import check_refinements, fewer_refinement_sources, refinements_needed
+from .refine.holes import HoleGroup, hole_neighbourhoods, patch_frames
+
+
+@dataclass(frozen=True)
+class SurfaceTopology:
+    """The refined connectivity of a Surface and which patches it has.
+
+    Attributes
+    ----------
+    n_input_vertices, n_input_faces : int
+    repairs : dict, ``repair.prepare_topology``'s report (without ``second_sheet``)
+    vertex_source : (V',) int, input vertex of every vertex of the repaired mesh
+    second_sheet : (F',) bool, faces of the double cover's second sheet (non-orientable input)
+    ghost : GhostLayer or None (closed input)
+    input : HalfEdgeMesh, the coarse mesh: repaired, and closed by the ghost layer
+    real_face : (Fc,) bool, faces of ``input`` whose patches are kept
+    refinements : int, 0, 1 or 2
+    faces1 : RefinedFaces or None, the faces of the first refinement
+    level1 : HalfEdgeMesh or None, the once-refined mesh
+    refined : HalfEdgeMesh, the mesh A2 and A3 read (twice refined, or fewer)
+    real_vertex : (Vr,) bool, refined vertices inside real faces
+    holes : list of HoleGroup, the holes with a real corner
+    quad_frames : (Nq, 4) int, frames of the biquadratic patches
+    cubic_frames : (Nc, 4) int, frames of the kept bicubic patches
+    cubic_keep : (sum over holes of n,) bool or None, which bicubic patches are kept (None: all)
+    cubic_hole : (Nc,) int, hole (in ``holes`` order) of every kept bicubic patch
+    """
+
+    n_input_vertices: int
+    n_input_faces: int
+    repairs: dict
+    vertex_source: np.ndarray
+    second_sheet: np.ndarray
+    ghost: GhostLayer | None
+    input: HalfEdgeMesh
+    real_face: np.ndarray
+    refinements: int
+    faces1: RefinedFaces | None
+    level1: HalfEdgeMesh | None
+    refined: HalfEdgeMesh
+    real_vertex: np.ndarray
+    holes: list[HoleGroup]
+    quad_frames: np.ndarray
+    cubic_frames: np.ndarray
+    cubic_keep: np.ndarray | None
+    cubic_hole: np.ndarray
+
+    @property
+    def frames(self) -> np.ndarray:
+        """(Nq + Nc, 4) int: half-edges e0..e3 of every patch, biquadratic first."""
+        return np.concatenate([self.quad_frames, self.cubic_frames])
+
+    def select_matrix(self) -> csr_matrix:
+        """(V', V) csr_matrix: the input point of every vertex of the repaired mesh."""
+        source = self.vertex_source
+        return csr_matrix((np.ones(source.size), (np.arange(source.size), source)), shape=(source.size, self.n_input_vertices))
+
+    def per_coarse_vertex(self, values: np.ndarray | None) -> np.ndarray | None:
+        """(V, ...) values per input vertex -> (Vc, ...) per vertex of ``input`` (ghost vertices: NaN)."""
+        if values is None:
+            return None
+        pad = np.full((self.input.n_vertices - self.vertex_source.size,) + values.shape[1:], np.nan)
+        return np.concatenate([values[self.vertex_source], pad])
+
+    def per_coarse_face(self, values: np.ndarray, fill: float) -> np.ndarray:
+        """(F,) values per input face -> (Fc,) per face of ``input``: both sheets alike, ``fill`` on ghost faces."""
+        if self.second_sheet.any():
+            values = np.r_[values, values]
+        return np.r_[values, np.full(self.input.n_faces - values.size, fill)]
+
+    def patch_sources(self):
+        """Which input element each patch comes from, in the input's numbering.
+
+        Returns
+        -------
+        kind : (P,) int8, FACE_FROM_FACE / FACE_FROM_EDGE / FACE_FROM_VERTEX
+        index : (P,) int, input face or input vertex (-1 for edges)
+        edge : (P, 2) int, the input edge's two vertices (-1 unless an edge)
+        """
+        centre = self.refined.origin[self.frames[:, 0]]
+        if self.refinements < 2:
+            return fewer_refinement_sources(self, centre)
+        face1 = self.level1.face[centre]
+        kind, parent = self.faces1.kind[face1], self.faces1.parent[face1]
+        is_vertex, is_edge = kind == FACE_FROM_VERTEX, kind == FACE_FROM_EDGE
+        index = parent.copy()
+        index[is_vertex] = self.vertex_source[parent[is_vertex]]
+        index[is_edge] = -1
+        edge = np.full((kind.size, 2), -1, dtype=np.int64)
+        h = parent[is_edge]
+        edge[is_edge] = self.vertex_source[np.stack([self.input.origin[h], self.input.dest[h]], axis=1)]
+        return kind, index, edge
+
+
+def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto", interpolate_vertices: bool = False) -> SurfaceTopology:
+    """Repair, close, refine and lay out the patches of a polygon mesh.
+
+    Parameters
+    ----------
+    face_sizes : (F,) int
+    face_vertices : (sum(face_sizes),) int
+    n_vertices : int, input vertices
+    refinements : 0, 1, 2 or "auto" (``SurfaceOptions.refinements``)
+    interpolate_vertices : bool, A1a (needs at least one refinement)
+    """
+    face_sizes = np.asarray(face_sizes, dtype=np.int64)
+    prepared, vertex_source, repairs = prepare_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), n_vertices)
+    # A non-orientable input comes back as its orientation double cover:
+    # both sheets are refined, the patches of the second are dropped.
+    second_sheet = repairs.pop("second_sheet")
+    check_valence(prepared, vertex_source)
+    ghost = add_ghost_layer(prepared) if repairs["boundary_edges"] else None
+    coarse = prepared if ghost is None else ghost.mesh
+    real_face = np.ones(coarse.n_faces, bool) if ghost is None else ghost.real_face.copy()
+    real_face[: second_sheet.size] &= ~second_sheet
+    closed = real_face.all() and not repairs["boundary_edges"]
+    levels = refinement_count(coarse, refinements, closed, interpolate_vertices)
+    faces1, level1, refined = refine(coarse, levels)
+    real_vertex = real_refined_vertices(coarse, level1, refined, real_face, levels)
+    holes = hole_neighbourhoods(refined, None if real_face.all() else real_vertex)
+    quad_frames, cubic_frames = patch_frames(refined, holes, real_vertex)
+    real_cubic = real_vertex[refined.origin[cubic_frames[:, 0]]]  # bicubic patches at real corners only
+    sizes = np.concatenate([np.full(g.cells.size, g.n) for g in holes]) if holes else np.zeros(0, dtype=np.int64)
+    return SurfaceTopology(
+        n_input_vertices=int(n_vertices), n_input_faces=int(face_sizes.size), repairs=repairs,
+        vertex_source=vertex_source, second_sheet=second_sheet, ghost=ghost, input=coarse, real_face=real_face,
+        refinements=levels, faces1=faces1, level1=level1, refined=refined, real_vertex=real_vertex, holes=holes,
+        quad_frames=quad_frames, cubic_frames=cubic_frames[real_cubic], cubic_keep=None if real_cubic.all() else real_cubic,
+        cubic_hole=np.repeat(np.arange(sizes.size), sizes)[real_cubic],
+    )
+
+
+def refinement_count(coarse: HalfEdgeMesh, requested, closed: bool, interpolate_vertices: bool) -> int:
+    """The number of Doo-Sabin steps: ``requested``, or with "auto" the fewest after which A2/A3 apply.
+
+    Fewer than two steps need a closed, orientable mesh that satisfies R1-R3 after
+    them (Prop. 1.3.1); otherwise a one-line TopologyError.
+    """
+    if requested == "auto":
+        return refinements_needed(coarse, 1 if interpolate_vertices else 0) if closed else 2
+    if requested < 2:
+        if not closed:
+            raise TopologyError(f"--refinements {requested} needs a closed, orientable mesh: use 2 or auto")
+        check_refinements(coarse, requested)  # fewer steps (Prop. 1.3.1), or a one-line error
+    return requested
+
+
+def refine(coarse: HalfEdgeMesh, levels: int):
+    """(faces1, level1, refined): the first step's faces and mesh (None without refinement), and the last mesh."""
+    if levels == 0:
+        return None, None, coarse
+    faces1 = refine_doo_sabin(coarse)
+    level1 = refined_halfedges(coarse, faces1)
+    refined = level1 if levels == 1 else refined_halfedges(level1, refine_doo_sabin(level1))
+    return faces1, level1, refined
+
+
+def real_refined_vertices(coarse: HalfEdgeMesh, level1, refined: HalfEdgeMesh, real_face: np.ndarray, levels: int) -> np.ndarray:
+    """(Vr,) bool: refined vertices inside real (not ghost, first-sheet) faces.
+
+    After two steps a refined vertex is a corner of a corner of a coarse face:
+    real if that face is. Fewer steps are for closed meshes only, where every
+    vertex is real.
+    """
+    if levels < 2:
+        return np.ones(refined.n_vertices, dtype=bool)
+    return real_face[coarse.face[level1.origin[np.arange(refined.n_vertices)]]]
