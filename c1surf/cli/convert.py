@@ -10,9 +10,9 @@ from ..mesh.errors import TopologyError
 from ..construction.surface import Surface, SurfaceOptions
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
-from ..io.meshes.attribute_mesh import ATTRIBUTE_FORMATS, write_attribute_mesh
-from ..io.meshes.write import MESH_FORMATS, write_triangle_mesh
-from ..io.patches.formats import PATCH_WRITERS
+from ..io.meshes.write import write_attribute_mesh, write_triangle_mesh
+from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
+from ..io.patches.formats import write_surface_patches
 from ..io.patches.iges import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import surface_data
@@ -63,8 +63,8 @@ def extension_setup(mesh, output_suffix_: str | None, blend, alpha, beta, tangen
         raise click.BadParameter("--interpolate-vertices/--interpolate-normals need --beta 0 (beta moves cell centres off the vertices)")
     if interpolate_normals and alpha == 0:
         raise click.BadParameter("--interpolate-normals needs --alpha > 0")
-    if attributes and output_suffix_ is not None and output_suffix_ not in ATTRIBUTE_FORMATS:
-        raise click.BadParameter(f"--attributes needs an --output in {', '.join(ATTRIBUTE_FORMATS)}")
+    if attributes and output_suffix_ is not None and output_suffix_ not in MESH_WRITERS.holding("attributes"):
+        raise click.BadParameter(f"--attributes needs an --output in {', '.join(MESH_WRITERS.holding('attributes'))}")
     if interpolate and refinements == "0":
         raise click.BadParameter("--interpolate-vertices needs at least one refinement step (--refinements 1, 2 or auto)")
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
@@ -89,9 +89,9 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @click.command()
 @click.argument("input_path", metavar="INPUT", type=click.Path(dir_okay=False))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
-              help=f"Tessellated mesh to write; the suffix picks the format ({', '.join(sorted(MESH_FORMATS))}).")
+              help=f"Tessellated mesh to write; the suffix picks the format ({suffix_list(MESH_WRITERS)}).")
 @click.option("--patches", "patches_paths", type=click.Path(dir_okay=False), multiple=True,
-              help=f"Also write the Bezier patches; the suffix picks the format ({', '.join(sorted(PATCH_WRITERS))}); "
+              help=f"Also write the Bezier patches; the suffix picks the format ({suffix_list(PATCH_WRITERS)}); "
                    "repeat for several formats.")
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="Samples per patch side: each patch becomes an N x N grid of welded vertices.")
@@ -121,12 +121,12 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     (shared patch edges share vertices, so a closed input gives a watertight
     output, with exact normals), and optionally the patches themselves.
     """
-    mesh_suffix = output_suffix(output, MESH_FORMATS, "--output")
+    mesh_suffix = output_suffix(output, MESH_WRITERS, "--output")
     patch_suffixes = [output_suffix(p, PATCH_WRITERS, "--patches") for p in patches_paths]
     targets = [os.path.abspath(p) for p in (output, *patches_paths)]
     if len(set(targets)) != len(targets):
         raise click.BadParameter("--output and --patches must name different files")
-    if curvature and mesh_suffix != ".ply":
+    if curvature and mesh_suffix not in MESH_WRITERS.holding("properties"):
         raise click.BadParameter("--curvature needs a .ply --output (per-vertex properties)")
     if curvature and attributes:
         raise click.BadParameter("--curvature and --attributes both write vertex colours: choose one")
@@ -164,7 +164,7 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:
         if attributes:  # texture coordinates / colours ride along as extra columns of the points
             write_attribute_mesh(mesh_tmp, tess.points[:, :3], tess.triangles, tess.normals, tess.points[:, 3:],
-                                 data.attribute_names, data.colour_scale, suffix=mesh_suffix)
+                                 data.attribute_names, data.colour_scale, suffix=mesh_suffix, float32=float32)
         else:
             write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix, float32=float32, **extra)
         del tess, extra  # written: leave its memory to the patch writers
@@ -172,7 +172,7 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
             for patches_path, patch_suffix in zip(patches_paths, patch_suffixes):
                 progress.phase(f"writing {patches_path}")
                 patch_tmp = patch_files.enter_context(atomic_output(patches_path, inputs=[input_path]))
-                PATCH_WRITERS[patch_suffix](patch_tmp, surface, input_path=str(input_path), adjacency=adjacency,
-                                            file_name=os.path.basename(patches_path), units=units, group=not no_group,
-                                            merged=merged)
+                write_surface_patches(patch_tmp, surface, patch_suffix, input_path=str(input_path), adjacency=adjacency,
+                                      file_name=os.path.basename(patches_path), units=units, group=not no_group,
+                                      merged=merged)
     progress.done()

@@ -5,9 +5,11 @@ import numpy as np
 import pytest
 from plyfile import PlyData
 
-from c1surf.io.meshes.fast_out import format_fixed, write_obj, write_ply_plain
-from c1surf.io.meshes.write import write_triangle_mesh
+from c1surf.io.meshes.number_text import format_fixed
 from c1surf.io.meshes.obj import read_obj
+from c1surf.io.meshes.obj_out import write_obj
+from c1surf.io.meshes.ply_out import write_ply
+from c1surf.io.meshes.write import TriangleMesh, write_triangle_mesh
 
 
 def _mesh(scale=1.0, v=500):
@@ -31,7 +33,7 @@ def test_fixed_point_text():
 def test_obj_round_trip(tmp_path, scale, float32):
     points, triangles, normals = _mesh(scale)
     path = tmp_path / "m.obj"
-    write_obj(path, points, triangles, normals, float32=float32)
+    write_obj(path, TriangleMesh(points, triangles, normals), float32=float32)
     mesh = read_obj(path)
     relative = np.abs(mesh.points - points).max() / np.abs(points).max()
     assert relative < (1e-7 if float32 else 1e-14)
@@ -43,7 +45,7 @@ def test_obj_round_trip(tmp_path, scale, float32):
 def test_ply_round_trip(tmp_path, float32):
     points, triangles, normals = _mesh()
     path = tmp_path / "m.ply"
-    write_ply_plain(path, points, triangles, normals, float32=float32)
+    write_ply(path, TriangleMesh(points, triangles, normals), float32=float32)
     ply = PlyData.read(str(path))
     vertex = ply["vertex"]
     assert vertex["x"].dtype == (np.float32 if float32 else np.float64)
