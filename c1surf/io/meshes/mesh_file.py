@@ -90,12 +90,6 @@ class MeshFile:
         np.cumsum(self.face_sizes, out=offs[1:])
         return offs
 
-    def face_line(self, face: int) -> int | None:
-        """1-based source line of face ``face``, or None if not known."""
-        if self.face_lines is None:
-            return None
-        return int(self.face_lines[face])
-
 
 def collapse_repeated_corners(face_sizes: np.ndarray, face_vertices: np.ndarray):
     """Drop corners that repeat the previous corner (zero-length edges, e.g. ``f 4 3 5 5``).

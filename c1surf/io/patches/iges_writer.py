@@ -377,13 +377,15 @@ def bezier_patches_to_surfaces(points_array: Any, weights: Any = None) -> list[d
 
 
 
-def _group_form(group: bool | str) -> int:
-    """Form of the group entity 402: 7 (unordered), 15 (ordered) or 0 (no group)."""
+def _group_form(group: bool | str, n_surfaces: int) -> int:
+    """Form of the group entity 402: 7 (unordered), 15 (ordered) or 0 (no group, also of no surfaces)."""
     if isinstance(group, str):
         if group not in ("unordered", "ordered"):
             raise ValueError(f"group must be a bool, 'unordered' or 'ordered', not {group!r}")
-        return 7 if group == "unordered" else 15
-    return 7 if group else 0
+        form = 7 if group == "unordered" else 15
+    else:
+        form = 7 if group else 0
+    return form if n_surfaces else 0
 
 
 def _extent(kinds: list[_Kind]) -> tuple[float, float]:
@@ -405,6 +407,13 @@ def _start_lines(description: str) -> list[str]:
     for para in ascii_text(description).splitlines() or [""]:
         lines.extend(textwrap.wrap(para, SG_COLS) or [""])
     return lines
+
+
+def _default_description(bspline: np.ndarray, group_form: int) -> str:
+    """Start section text when the caller gives none: the entity counts."""
+    return (f"c1surf surface: {bspline.size} rational B-spline surface entities (type 128), "
+            f"{int((~bspline).sum())} of them Bezier patches"
+            + (f", collected in one group (type 402 form {group_form})." if group_form else "."))
 
 
 def _directory(pdw: ParameterWriter, bspline: np.ndarray, group_form: int) -> bytes:
@@ -495,9 +504,7 @@ def write_iges(
         raise ValueError(f"unknown units {units!r}; use one of {sorted(UNITS)}")
     surfaces = list(surfaces)
     normalised = _normalise(surfaces)
-    group_form = _group_form(group)
-    if not surfaces:
-        group_form = 0  # no group of nothing
+    group_form = _group_form(group, len(surfaces))
     if 2 * (len(surfaces) + (1 if group_form else 0)) > 9_999_999:
         raise ValueError("too many entities for one IGES file")
     max_coord, diag = _extent(normalised[0])
@@ -505,23 +512,10 @@ def write_iges(
     if not (np.isfinite(resolution) and resolution > 0):
         raise ValueError("resolution must be positive")
     fname = os.path.basename(os.fspath(path)) if file_name is None else str(file_name)
-    stamp = _timestamp_string(timestamp)
     bspline = np.array([s.get("knots_u") is not None for s in surfaces], dtype=bool)
-    if description is None:
-        description = (
-            f"c1surf surface: {len(surfaces)} rational B-spline surface entities (type 128), "
-            f"{int((~bspline).sum())} of them Bezier patches"
-            + (f", collected in one group (type 402 form {group_form})." if group_form else ".")
-        )
-    gparams = _global_params(
-        file_name=fname,
-        product_id=os.path.splitext(fname)[0] if product_id is None else str(product_id),
-        units=ukey,
-        author=author,
-        organization=organization,
-        stamp=stamp,
-        resolution=resolution,
-        max_coord=max_coord,
-    )
+    description = _default_description(bspline, group_form) if description is None else description
+    gparams = _global_params(file_name=fname, product_id=os.path.splitext(fname)[0] if product_id is None else str(product_id),
+                             units=ukey, author=author, organization=organization, stamp=_timestamp_string(timestamp), resolution=resolution,
+                             max_coord=max_coord)
     with open(path, "wb") as fh:
         _write_sections(fh, _start_lines(description), pack_text_params(gparams, SG_COLS), normalised, bspline, group_form)
