@@ -40,14 +40,14 @@ __all__ = ["Format", "FormatTable", "UnsupportedFormat", "suffix_of", "suffix_li
 class Format:
     """One file format of a table.
 
-    suffix : str, lower case with the dot (".obj")
+    suffixes : tuple of str, lower case with the dot (".igs", ".iges"): the first is the usual one
     target : str, "module:function" of the reader or writer
     description : str, what the file holds, in a few words
     holds : frozenset of str, optional per-vertex data the format keeps (mesh writers):
         "attributes" (texture coordinates and colours), "properties" (named scalars, e.g. curvature)
     """
 
-    suffix: str
+    suffixes: tuple
     target: str
     description: str
     holds: frozenset = field(default_factory=frozenset)
@@ -68,7 +68,7 @@ class FormatTable(Mapping):
 
     def __init__(self, noun: str, verb: str, formats: list[Format]):
         self.noun, self.verb = noun, verb
-        self._formats = {f.suffix: f for f in formats}
+        self._formats = {suffix: f for f in formats for suffix in f.suffixes}
 
     def __getitem__(self, suffix: str) -> Format:
         return self._formats[suffix]
@@ -123,35 +123,32 @@ _MESHES, _PATCHES, _IMAGES = "c1surf.io.meshes.", "c1surf.io.patches.", "c1surf.
 _BOTH = frozenset({"attributes", "properties"})
 
 MESH_READERS = FormatTable("mesh format", "reads", [
-    Format(".obj", _MESHES + "obj:read_obj", "Wavefront OBJ: polygons of any size, vt/vn, v x y z w weights, groups"),
-    Format(".ply", _MESHES + "ply:read_ply", "PLY (ASCII or binary): polygons, normals, uv, weight, blend, colours"),
+    Format((".obj",), _MESHES + "obj:read_obj", "Wavefront OBJ: polygons of any size, vt/vn, v x y z w weights, groups"),
+    Format((".ply",), _MESHES + "ply:read_ply", "PLY (ASCII or binary): polygons, normals, uv, weight, blend, colours"),
 ])
 
 MESH_WRITERS = FormatTable("mesh format", "writes", [
-    Format(".obj", _MESHES + "obj_out:write_obj", "Wavefront OBJ text: v, vt, vn, f", frozenset({"attributes"})),
-    Format(".ply", _MESHES + "ply_out:write_ply", "binary PLY: positions, normals, any per-vertex properties", _BOTH),
-    Format(".stl", _MESHES + "write:write_stl", "binary STL (float32, through trimesh)"),
-    Format(".glb", _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)"),
-    Format(".off", _MESHES + "write:write_off", "OFF text (through trimesh)"),
+    Format((".obj",), _MESHES + "obj_out:write_obj", "Wavefront OBJ text: v, vt, vn, f", frozenset({"attributes"})),
+    Format((".ply",), _MESHES + "ply_out:write_ply", "binary PLY: positions, normals, any per-vertex properties", _BOTH),
+    Format((".stl",), _MESHES + "write:write_stl", "binary STL (float32, through trimesh)"),
+    Format((".glb",), _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)"),
+    Format((".off",), _MESHES + "write:write_off", "OFF text (through trimesh)"),
 ])
 
 PATCH_READERS = FormatTable("patch format", "reads", [
-    Format(".json", _PATCHES + "json_patches:read_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
-    Format(".npz", _PATCHES + "npz:read_patch_set_npz", "c1surf patch file as NumPy arrays"),
-    Format(".igs", _PATCHES + "iges:read_patch_set_iges", "IGES 5.3 Bezier and B-spline surfaces (type 128)"),
-    Format(".iges", _PATCHES + "iges:read_patch_set_iges", "IGES 5.3 Bezier and B-spline surfaces (type 128)"),
+    Format((".json",), _PATCHES + "json_patches:read_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
+    Format((".npz",), _PATCHES + "npz:read_patch_set_npz", "c1surf patch file as NumPy arrays"),
+    Format((".igs", ".iges"), _PATCHES + "iges:read_patch_set_iges", "IGES 5.3 Bezier patches and merged B-splines"),
 ])
 
 PATCH_WRITERS = FormatTable("patch format", "writes", [
-    Format(".json", _PATCHES + "json_patches:write_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
-    Format(".npz", _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays"),
-    Format(".igs", _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)"),
-    Format(".iges", _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)"),
-    Format(".step", _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)"),
-    Format(".stp", _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)"),
+    Format((".json",), _PATCHES + "json_patches:write_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
+    Format((".npz",), _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays"),
+    Format((".igs", ".iges"), _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)"),
+    Format((".step", ".stp"), _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)"),
 ])
 
 IMAGE_WRITERS = FormatTable("image format", "writes", [
-    Format(".exr", _IMAGES + "exr:write_exr", "OpenEXR: float32 channels (colour, depth, normals, curvature)"),
-    Format(".png", _IMAGES + "png:write_png", "PNG preview (8-bit sRGB)"),
+    Format((".exr",), _IMAGES + "exr:write_exr", "OpenEXR: float32 channels (colour, depth, normals, curvature)"),
+    Format((".png",), _IMAGES + "png:write_png", "PNG preview (8-bit sRGB)"),
 ])

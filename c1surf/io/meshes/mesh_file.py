@@ -144,6 +144,23 @@ def collapse_repeated_corners_or_refuse(face_sizes, face_vertices, path, line_of
     return sizes, vertices, keep, collapsed
 
 
+def refuse_repeated_vertex(face_sizes, face_vertices, path, line_of_face, face_name, vertex_base: int = 0) -> None:
+    """Refuse the first face (in file order) that visits a vertex twice, in the file's own numbering.
+
+    Parameters
+    ----------
+    line_of_face : callable, face index -> 1-based line (or None) for the error
+    face_name : callable, face index -> how the message names it ("face", "face 7")
+    vertex_base : 1 where the file numbers vertices from 1 (OBJ)
+    """
+    repeat = find_repeated_vertex(face_sizes, face_vertices)
+    if repeat is not None:
+        face, vertex, first, second = repeat
+        raise MeshInputError(
+            path, f"{face_name(face)} visits vertex {vertex + vertex_base} twice (corners {first + 1} and {second + 1}): "
+            "a polygon must not repeat a vertex; remove the duplicate or split the face", line_of_face(face))
+
+
 def find_repeated_vertex(face_sizes: np.ndarray, face_vertices: np.ndarray):
     """Find the first face (in file order) that visits a vertex twice.
 

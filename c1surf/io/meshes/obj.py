@@ -19,7 +19,7 @@ import os
 import numpy as np
 
 from ..errors import MeshInputError
-from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, find_repeated_vertex
+from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, refuse_repeated_vertex
 from .obj_text import ABSENT, F, V, VN, VT, WHITESPACE, ObjText
 
 __all__ = ["read_obj", "parse_obj"]
@@ -32,7 +32,7 @@ def read_obj(path) -> MeshFile:
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str or os.PathLike, an OBJ text file
 
     Returns
     -------
@@ -79,7 +79,7 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
     face_vertices = _resolve(raw_v, v_lines.size, corners, V, "vertex", path)
     sizes, face_vertices, kept, collapsed = collapse_repeated_corners_or_refuse(
         corners.sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1)
-    _refuse_repeated_vertex(sizes, face_vertices, f_lines, path)
+    refuse_repeated_vertex(sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1, lambda f: "face", vertex_base=1)
     if collapsed:  # the texture and normal indices of the corners that remain
         raw_vt = None if raw_vt is None else raw_vt[kept]
         raw_vn = None if raw_vn is None else raw_vn[kept]
@@ -160,17 +160,6 @@ def _face_sizes(text: ObjText, f_lines, path: str) -> np.ndarray:
             "needs at least 3 (remove this line, or use `l` for a line)",
             int(f_lines[small[0]]) + 1)
     return sizes
-
-
-def _refuse_repeated_vertex(sizes, face_vertices, f_lines, path: str) -> None:
-    """Refuse the first face that visits a vertex twice (not in a row: those were collapsed)."""
-    rep = find_repeated_vertex(sizes, face_vertices)
-    if rep is not None:
-        face, vert, p1, p2 = rep
-        raise MeshInputError(
-            path, f"face visits vertex {vert + 1} twice (corners {p1 + 1} "
-            f"and {p2 + 1}): a polygon must not repeat a vertex; remove the "
-            "duplicate or split the face", int(f_lines[face]) + 1)
 
 
 def _uv_table(text: ObjText) -> np.ndarray:

@@ -17,7 +17,7 @@ from plyfile import (PlyData, PlyElementParseError, PlyHeaderParseError,
                      PlyListProperty, PlyParseError)
 
 from ..errors import MeshInputError
-from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, find_repeated_vertex
+from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, refuse_repeated_vertex
 
 __all__ = ["read_ply"]
 
@@ -33,7 +33,7 @@ def read_ply(path) -> MeshFile:
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str or os.PathLike, an ASCII or binary PLY file
 
     Returns
     -------
@@ -156,13 +156,7 @@ def _face_data(path: str, face, n_vert: int, rows: _Rows) -> dict:
     _check_indices(path, sizes, face_vertices, n_vert, rows)
     sizes, face_vertices, _, collapsed = collapse_repeated_corners_or_refuse(
         sizes, face_vertices, path, lambda f: rows.line("face", f))
-    rep = find_repeated_vertex(sizes, face_vertices)
-    if rep is not None:
-        f, v, p1, p2 = rep
-        raise MeshInputError(
-            path, f"face {f} visits vertex {v} twice (corners {p1 + 1} and "
-            f"{p2 + 1}): a polygon must not repeat a vertex; remove the "
-            "duplicate or split the face", rows.line("face", f))
+    refuse_repeated_vertex(sizes, face_vertices, path, lambda f: rows.line("face", f), lambda f: f"face {f}")
     face_lines = rows.first["face"] + np.arange(sizes.size, dtype=np.int64) if rows.text else None
     return {"face_sizes": sizes, "face_vertices": face_vertices, "face_lines": face_lines,
             "face_attributes": _extras(face, fdata, {index_name}), "collapsed_corners": collapsed}
@@ -275,6 +269,15 @@ def _load(path: str, binary: bool, header_lines: int, elements) -> PlyData:
                              "re-export the file") from None
 
 
+# plyfile's element error messages -> what to tell the user
+_ELEMENT_ERRORS = {
+    "early end-of-file": "the file ends early, inside {where} of {count}: it is truncated; re-export or re-download it",
+    "early end-of-line": "{where} has too few values{prop}: every line must list all properties declared in the header",
+    "expected end-of-line": "{where} has more values than the header declares: fix the line or the header",
+    "malformed input": "cannot read {where}{prop}: the value is not a number of the declared type",
+}
+
+
 def _element_error(exc: PlyElementParseError) -> str:
     """One line for a plyfile element error (row numbers are 0-based)."""
     elt = exc.element.name if exc.element is not None else "element"
@@ -282,18 +285,9 @@ def _element_error(exc: PlyElementParseError) -> str:
     row = exc.row
     prop = f" (property '{exc.prop.name}')" if exc.prop is not None else ""
     where = f"{elt} {row}" if row is not None else elt
-    if exc.message == "early end-of-file":
-        return (f"the file ends early, inside {where} of {count}: it is "
-                "truncated; re-export or re-download it")
-    if exc.message == "early end-of-line":
-        return (f"{where} has too few values{prop}: every line must list "
-                "all properties declared in the header")
-    if exc.message == "expected end-of-line":
-        return (f"{where} has more values than the header declares: fix "
-                "the line or the header")
-    if exc.message == "malformed input":
-        return (f"cannot read {where}{prop}: the value is not a number of "
-                "the declared type")
+    template = _ELEMENT_ERRORS.get(exc.message)
+    if template is not None:
+        return template.format(where=where, count=count, prop=prop)
     return f"cannot read {where}{prop}: {exc.message}"
 
 

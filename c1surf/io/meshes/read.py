@@ -17,7 +17,7 @@ def read_mesh(path) -> MeshFile:
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str or os.PathLike, a mesh file whose suffix names its format
 
     Returns
     -------

@@ -55,12 +55,13 @@ def write_mesh(path, mesh: TriangleMesh, suffix: str | None = None, float32: boo
     io.registry.UnsupportedFormat for a suffix c1surf does not write;
     ValueError when the format cannot keep what the mesh carries (attributes, properties)
     """
-    fmt = MESH_WRITERS[suffix or suffix_of(path, MESH_WRITERS)]
+    suffix = suffix or suffix_of(path, MESH_WRITERS)
+    fmt = MESH_WRITERS[suffix]
     if mesh.has_attributes and "attributes" not in fmt.holds:
         raise ValueError(f"texture coordinates and colours are written to {', '.join(MESH_WRITERS.holding('attributes'))} "
                          "files only")
     if mesh.properties and "properties" not in fmt.holds:
-        raise ValueError(f"per-vertex properties need a .ply output, not {fmt.suffix}")
+        raise ValueError(f"per-vertex properties need a {', '.join(MESH_WRITERS.holding('properties'))} output, not {suffix}")
     fmt.function(path, mesh, float32=float32)
 
 

@@ -42,18 +42,8 @@ __all__ = ["write_iges", "bezier_patches_to_surfaces", "UNITS"]
 
 #: accepted ``units`` names -> (IGES units flag, IGES units name)
 UNITS: dict[str, tuple[int, str]] = {
-    "in": (1, "INCH"),
-    "inch": (1, "INCH"),
-    "mm": (2, "MM"),
-    "ft": (4, "FT"),
-    "mi": (5, "MI"),
-    "m": (6, "M"),
-    "km": (7, "KM"),
-    "mil": (8, "MIL"),
-    "um": (9, "UM"),
-    "micron": (9, "UM"),
-    "cm": (10, "CM"),
-    "uin": (11, "UIN"),
+    "in": (1, "INCH"), "inch": (1, "INCH"), "mm": (2, "MM"), "ft": (4, "FT"), "mi": (5, "MI"), "m": (6, "M"),
+    "km": (7, "KM"), "mil": (8, "MIL"), "um": (9, "UM"), "micron": (9, "UM"), "cm": (10, "CM"), "uin": (11, "UIN"),
 }
 
 _BIG_ENTITY = 1024  # entities with more tokens are packed on their own
