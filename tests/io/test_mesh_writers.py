@@ -9,7 +9,7 @@ from c1surf.io.meshes.number_text import format_fixed
 from c1surf.io.meshes.obj import read_obj
 from c1surf.io.meshes.obj_out import write_obj
 from c1surf.io.meshes.ply_out import write_ply
-from c1surf.io.meshes.write import TriangleMesh, write_triangle_mesh
+from c1surf.io.meshes.write import TriangleMesh, write_attribute_mesh, write_triangle_mesh
 
 
 def _mesh(scale=1.0, v=500):
@@ -62,3 +62,66 @@ def test_mesh_out_uses_the_fast_writers(tmp_path):
     assert b"property float x" in (tmp_path / "b.ply").read_bytes()[:400]
     write_triangle_mesh(tmp_path / "c.obj", points, triangles, normals)
     assert (tmp_path / "c.obj").read_text().startswith("# c1surf\n")
+
+
+def _attributes(v):
+    rng = np.random.default_rng(4)
+    return np.c_[rng.uniform(0, 1, (v, 2)), rng.uniform(0, 255, (v, 4))], ["u", "v", "red", "green", "blue", "alpha"]
+
+
+def test_attribute_obj_honours_float32(tmp_path):
+    """--attributes --float32 to OBJ: float32 digits (it kept every double digit before, ignoring the flag)."""
+    points, triangles, normals = _mesh(scale=3.7e2)
+    attributes, names = _attributes(len(points))
+    exact, small = tmp_path / "exact.obj", tmp_path / "small.obj"
+    write_attribute_mesh(exact, points, triangles, normals, attributes, names)
+    write_attribute_mesh(small, points, triangles, normals, attributes, names, float32=True)
+    assert small.stat().st_size < 0.8 * exact.stat().st_size
+    full, short = read_obj(exact), read_obj(small)
+    assert np.array_equal(full.points, points)  # shortest round-trip text: the same doubles
+    assert np.array_equal(full.vertex_uvs, attributes[:, :2])
+    assert np.abs(short.points - points).max() / np.abs(points).max() < 1e-7
+    assert np.abs(short.vertex_uvs - attributes[:, :2]).max() < 1e-7
+    assert np.abs(short.vertex_normals - normals).max() < 1e-7
+    for mesh in (full, short):  # colours 0..1 with 6 digits, alpha left out (OBJ has none)
+        assert np.abs(np.c_[[mesh.vertex_attributes[c] for c in ("red", "green", "blue")]].T - attributes[:, 2:5] / 255).max() < 1e-6
+    plain = tmp_path / "plain.obj"
+    write_triangle_mesh(plain, points, triangles, normals, float32=True)
+    v_lines = [line for line in small.read_text().splitlines() if line.startswith(("v ", "vn "))]
+    plain_lines = [line for line in plain.read_text().splitlines() if line.startswith(("v ", "vn "))]
+    assert [" ".join(line.split()[:4]) for line in v_lines] == plain_lines  # the same digits as without attributes
+
+
+@pytest.mark.parametrize("float32", [False, True])
+def test_attribute_ply_layout(tmp_path, float32):
+    points, triangles, normals = _mesh()
+    attributes, names = _attributes(len(points))
+    path = tmp_path / "a.ply"
+    write_attribute_mesh(path, points, triangles, normals, attributes, names, float32=float32)
+    data = path.read_bytes()
+    header = data[: data.index(b"end_header\n")].decode().splitlines()
+    real = "float" if float32 else "double"
+    assert header[2:] == ["element vertex 500", f"property {real} x", f"property {real} y", f"property {real} z",
+                          "property float nx", "property float ny", "property float nz", "property float s",
+                          "property float t", "property uchar red", "property uchar green", "property uchar blue",
+                          "property uchar alpha", "element face 1000", "property list uchar int vertex_indices"]
+    vertex = PlyData.read(str(path))["vertex"]
+    assert np.array_equal(vertex["red"], np.rint(attributes[:, 2] / 255 * 255).astype(np.uint8))
+    assert np.abs(np.c_[vertex["x"], vertex["y"], vertex["z"]] - points).max() <= (1e-6 if float32 else 0.0)
+
+
+def test_curvature_ply_layout(tmp_path):
+    points, triangles, normals = _mesh()
+    values = {"kmax": np.arange(500.0), "K": np.ones(500), "H": -np.ones(500), "quality": np.arange(500.0)}
+    colours = np.tile(np.array([[1, 2, 3]], dtype=np.uint8), (500, 1))
+    write_triangle_mesh(tmp_path / "c.ply", points, triangles, normals, vertex_properties=values, vertex_colors=colours)
+    data = (tmp_path / "c.ply").read_bytes()
+    header = data[: data.index(b"end_header\n")].decode().splitlines()
+    assert header[2:4] == ["comment c1surf", "element vertex 500"]
+    assert header[4:] == [f"property double {a}" for a in ("x", "y", "z", "nx", "ny", "nz")] + [
+        f"property float {a}" for a in values] + [f"property uchar {a}" for a in ("red", "green", "blue")] + [
+        "element face 1000", "property list uchar int vertex_indices"]
+    vertex = PlyData.read(str(tmp_path / "c.ply"))["vertex"]
+    assert np.array_equal(vertex["kmax"], np.arange(500.0)) and np.array_equal(vertex["blue"], colours[:, 2])
+    with pytest.raises(ValueError, match="need a .ply output"):
+        write_triangle_mesh(tmp_path / "c.obj", points, triangles, normals, vertex_properties=values)
