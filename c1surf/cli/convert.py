@@ -107,8 +107,8 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @surface_options
 @extension_options
 @click.option("--merge", is_flag=True,
-              help="JSON/IGES patch files: also merge rectangles of biquadratic patches into B-spline surfaces "
-                   "(JSON key \"merged\"; IGES writes them instead of their patches).")
+              help="Patch files: also merge rectangles of biquadratic patches into B-spline surfaces "
+                   "(JSON key \"merged\", NPZ merged_* arrays; IGES and STEP write them instead of their patches).")
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
