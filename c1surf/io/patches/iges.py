@@ -133,20 +133,22 @@ def read_patch_set_iges(path) -> PatchSet:
     """
     sections = _records(path)
     patches, weights, pieces = [], [], []
+    n_biquadratic = 0  # biquadratic patches so far: a piece's patches are numbered among them
     for line, (knots_u, knots_v, w, points) in _surfaces(path, sections):
         if _single_span(knots_u, points.shape[0] - 1) and _single_span(knots_v, points.shape[1] - 1):
             patches.append(points)
             weights.append(w)
+            n_biquadratic += points.shape[:2] == (3, 3)
             continue
         if not (points.shape[0] >= 3 and is_piece_knots(knots_u) and is_piece_knots(knots_v)
                 and knots_u.size == points.shape[0] + 3 and knots_v.size == points.shape[1] + 3):
             raise MeshInputError(str(path), "the B-spline surface (type 128) has interior knots and is not a merged "
                                  "c1surf surface (degree (2, 2), knots 0 0 0 1 ... m m m): c1surf reads only such "
                                  "surfaces and single Bezier patches", line)
-        first = sum(p.shape[:2] == (3, 3) for p in patches)  # numbers of the piece's patches among the biquadratic ones
         m, n = points.shape[0] - 2, points.shape[1] - 2
-        piece = MergedPiece(points, w, knots_u, knots_v, first + np.arange(m * n).reshape(m, n),
+        piece = MergedPiece(points, w, knots_u, knots_v, n_biquadratic + np.arange(m * n).reshape(m, n),
                             np.zeros((m, n), dtype=np.int64))
+        n_biquadratic += m * n
         cut, cut_weights = piece_patches(piece)
         pieces.append(piece)
         patches.extend(cut)

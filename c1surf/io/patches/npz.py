@@ -98,11 +98,6 @@ def _merged_members(pieces):
         yield f"merged_{name}", np.concatenate([np.ravel(getattr(piece, name)) for piece in pieces])
 
 
-def patch_set_arrays(patch_set: PatchSet) -> dict:
-    """The NPZ members of a PatchSet (c1surf surfaces: degrees (2, 2) and (3, 3) only)."""
-    return dict(_members(patch_set))
-
-
 def write_patch_set_npz(path, patch_set: PatchSet, **_options) -> None:
     """Write a PatchSet as an uncompressed, byte-reproducible ``.npz`` (weights and merged pieces included).
 
@@ -250,4 +245,4 @@ def _merged(path, data: dict, n_biquadratic: int) -> list:
         raise MeshInputError(str(path), f"malformed merged pieces ({e})") from None
 
 
-__all__ = ["write_patch_set_npz", "read_patch_set_npz", "patch_set_arrays"]
+__all__ = ["write_patch_set_npz", "read_patch_set_npz"]
