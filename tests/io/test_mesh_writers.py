@@ -125,3 +125,28 @@ def test_curvature_ply_layout(tmp_path):
     assert np.array_equal(vertex["kmax"], np.arange(500.0)) and np.array_equal(vertex["blue"], colours[:, 2])
     with pytest.raises(ValueError, match="need a .ply output"):
         write_triangle_mesh(tmp_path / "c.obj", points, triangles, normals, vertex_properties=values)
+
+
+def test_convert_attributes_float32(tmp_path):
+    """``convert --attributes --float32``: the flag reaches the attribute writers (OBJ and PLY)."""
+    from click.testing import CliRunner
+
+    from c1surf.cli.main import main
+    from conftest import SAMPLES
+
+    mesh = read_obj(SAMPLES / "twisted.obj")
+    offsets = mesh.face_offsets()
+    source = tmp_path / "uv.obj"
+    source.write_text("".join(f"v {x!r} {y!r} {z!r}\nvt {x + y!r} {y - z!r}\n" for x, y, z in mesh.points.tolist())
+                      + "".join("f " + " ".join(f"{v + 1}/{v + 1}" for v in mesh.face_vertices[a:b]) + "\n"
+                                for a, b in zip(offsets[:-1], offsets[1:])))
+    sizes = {}
+    for suffix in (".obj", ".ply"):
+        for flag in ([], ["--float32"]):
+            out = tmp_path / f"out{len(flag)}{suffix}"
+            result = CliRunner().invoke(main, ["convert", str(source), "-o", str(out), "--attributes", "-q", *flag])
+            assert result.exit_code == 0, result.output
+            sizes[out.name] = out.stat().st_size
+    assert sizes["out1.obj"] < 0.8 * sizes["out0.obj"] and sizes["out1.ply"] < sizes["out0.ply"]
+    assert b"property float x" in (tmp_path / "out1.ply").read_bytes()[:300]
+    assert b"property double x" in (tmp_path / "out0.ply").read_bytes()[:300]

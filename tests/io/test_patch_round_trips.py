@@ -106,10 +106,18 @@ def test_iges_gives_back_merged_pieces_and_their_patches(tmp_path, rational):
         assert all(np.array_equal(a, b) for a, b in zip(read, written))
 
 
-def test_convert_merge_writes_pieces_to_every_patch_format(tmp_path):
-    """convert --merge: JSON and NPZ hold every patch and the pieces; IGES the pieces and the rest."""
+@pytest.mark.parametrize("rational", [False, True])
+def test_convert_merge_writes_pieces_to_every_patch_format(tmp_path, rational):
+    """convert --merge: JSON and NPZ hold every patch and the pieces; IGES the pieces and the rest; all keep weights."""
+    mesh = read_obj(SAMPLES / "cube.obj")
+    weights = np.linspace(0.5, 2.0, mesh.n_vertices) if rational else np.ones(mesh.n_vertices)
+    source = tmp_path / "cube.obj"
+    offsets = mesh.face_offsets()
+    source.write_text("".join(f"v {x!r} {y!r} {z!r} {w!r}\n" for (x, y, z), w in zip(mesh.points.tolist(), weights.tolist()))
+                      + "".join("f " + " ".join(str(v + 1) for v in mesh.face_vertices[a:b]) + "\n"
+                                for a, b in zip(offsets[:-1], offsets[1:])))
     paths = [tmp_path / f"s{suffix}" for suffix in (".json", ".npz", ".igs")]
-    args = ["convert", str(SAMPLES / "cube.obj"), "-o", str(tmp_path / "s.ply"), "--merge", "-q"]
+    args = ["convert", str(source), "-o", str(tmp_path / "s.ply"), "--merge", "-q"]
     for path in paths:
         args += ["--patches", str(path)]
     assert CliRunner().invoke(main, args, catch_exceptions=False).exit_code == 0
@@ -117,6 +125,8 @@ def test_convert_merge_writes_pieces_to_every_patch_format(tmp_path):
     assert_same_pieces(npz_set.merged, json_set.merged)
     assert_same_pieces(iges_set.merged, json_set.merged, bookkeeping=False)
     assert iges_set.n_patches == json_set.n_patches
+    assert all((s.weights is not None) == rational for s in (json_set, npz_set, iges_set))
+    assert (json_set.merged[0].weights is not None) == rational
 
 
 # ----------------------------------------------------------------------------
