@@ -23,9 +23,7 @@ from pathlib import Path
 
 import click
 
-from ..io.meshes.write import MESH_FORMATS
-from ..io.patches.formats import PATCH_WRITERS
-from ..io.meshes.read import SUPPORTED_SUFFIXES
+from ..io.registry import MESH_READERS, MESH_WRITERS, PATCH_WRITERS
 from .common import friendly_errors, shows_progress, terminal_bar
 from .options import surface_options
 
@@ -37,7 +35,7 @@ def expand_inputs(patterns) -> list[Path]:
         matches = glob.glob(pattern, recursive=True) if glob.has_magic(pattern) else [pattern]
         for m in matches:
             p = Path(m)
-            if p.is_file() and p.suffix.lower() in SUPPORTED_SUFFIXES:
+            if p.is_file() and p.suffix.lower() in MESH_READERS:
                 found.add(p)
     return sorted(found)
 
@@ -170,7 +168,7 @@ class NoBar:
               help="Folder for the outputs (created if missing): OUTDIR/<input stem><format>.")
 @click.option("-j", "--jobs", type=click.IntRange(1, None), default=None,
               help="Conversions at once (default: the number of cores; each needs the memory of one `convert`).")
-@click.option("-f", "--format", "mesh_suffix", type=click.Choice(sorted(MESH_FORMATS)), default=".ply", show_default=True,
+@click.option("-f", "--format", "mesh_suffix", type=click.Choice(sorted(MESH_WRITERS)), default=".ply", show_default=True,
               help="Tessellated mesh format of every output.")
 @click.option("--patches", "patch_suffixes", type=click.Choice(sorted(PATCH_WRITERS)), multiple=True,
               help="Also write each surface's Bezier patches in this format (repeat for several).")

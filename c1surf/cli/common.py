@@ -5,12 +5,12 @@ import functools
 import sys
 import time
 import traceback
-from pathlib import Path
 
 import click
 
 from ..mesh.errors import TopologyError
 from ..io.errors import C1SurfFileError
+from ..io.registry import UnsupportedFormat, suffix_of
 
 
 class Failure(click.ClickException):
@@ -172,9 +172,9 @@ class Progress:
         self.bar = None
 
 
-def output_suffix(path, allowed: dict, what: str) -> str:
-    """Lower-case suffix of ``path``; a usage error unless it is in ``allowed``."""
-    suffix = Path(path).suffix.lower()
-    if suffix not in allowed:
-        raise click.BadParameter(f"{what} must end in one of {', '.join(sorted(allowed))} (got {Path(path).name!r})")
-    return suffix
+def output_suffix(path, allowed, what: str) -> str:
+    """Lower-case suffix of ``path``; a usage error unless ``allowed`` (an ``io.registry`` table) has it."""
+    try:
+        return suffix_of(path, allowed)
+    except UnsupportedFormat as e:
+        raise click.BadParameter(f"{what}: {e}") from None

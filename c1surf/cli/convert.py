@@ -11,9 +11,9 @@ from ..construction.surface import Surface, SurfaceOptions
 from ..evaluation.merge import merge_biquadratic
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
-from ..io.meshes.attribute_mesh import ATTRIBUTE_FORMATS, write_attribute_mesh
-from ..io.meshes.write import MESH_FORMATS, write_triangle_mesh
-from ..io.patches.formats import PATCH_WRITERS
+from ..io.meshes.write import write_attribute_mesh, write_triangle_mesh
+from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
+from ..io.patches.formats import write_surface_patches
 from ..io.patches.iges import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import surface_data
@@ -69,8 +69,8 @@ def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_r
         raise click.BadParameter("--interpolate-vertices/--interpolate-normals need --beta 0 (beta moves cell centres off the vertices)")
     if interpolate_normals and alpha == 0:
         raise click.BadParameter("--interpolate-normals needs --alpha > 0")
-    if attributes and mesh_suffix is not None and mesh_suffix not in ATTRIBUTE_FORMATS:
-        raise click.BadParameter(f"--attributes needs an --output in {', '.join(ATTRIBUTE_FORMATS)}")
+    if attributes and mesh_suffix is not None and mesh_suffix not in MESH_WRITERS.holding("attributes"):
+        raise click.BadParameter(f"--attributes needs an --output in {', '.join(MESH_WRITERS.holding('attributes'))}")
     if interpolate and refinements == "0":
         raise click.BadParameter("--interpolate-vertices needs at least one refinement step (--refinements 1, 2 or auto)")
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
@@ -95,9 +95,9 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @click.command()
 @click.argument("input_path", metavar="INPUT", type=click.Path(dir_okay=False))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
-              help=f"Tessellated mesh to write; the suffix picks the format ({', '.join(sorted(MESH_FORMATS))}).")
+              help=f"Tessellated mesh to write; the suffix picks the format ({suffix_list(MESH_WRITERS)}).")
 @click.option("--patches", "patches_paths", type=click.Path(dir_okay=False), multiple=True,
-              help=f"Also write the Bezier patches; the suffix picks the format ({', '.join(sorted(PATCH_WRITERS))}); "
+              help=f"Also write the Bezier patches; the suffix picks the format ({suffix_list(PATCH_WRITERS)}); "
                    "repeat for several formats.")
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="Samples per patch side: each patch becomes an N x N grid of welded vertices.")
@@ -113,8 +113,8 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @surface_options
 @extension_options
 @click.option("--merge", is_flag=True,
-              help="JSON/IGES patch files: also merge rectangles of biquadratic patches into B-spline surfaces "
-                   "(JSON key \"merged\"; IGES writes them instead of their patches).")
+              help="Patch files: also merge rectangles of biquadratic patches into B-spline surfaces "
+                   "(JSON key \"merged\", NPZ merged_* arrays; IGES and STEP write them instead of their patches).")
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
@@ -164,12 +164,12 @@ def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: P
 
 def output_formats(output, patches_paths, curvature: bool, attributes: bool) -> tuple[str, list[str]]:
     """The suffixes of ``--output`` and of each ``--patches``; usage errors for what cannot be written."""
-    mesh_suffix = output_suffix(output, MESH_FORMATS, "--output")
+    mesh_suffix = output_suffix(output, MESH_WRITERS, "--output")
     patch_suffixes = [output_suffix(p, PATCH_WRITERS, "--patches") for p in patches_paths]
     targets = [os.path.abspath(p) for p in (output, *patches_paths)]
     if len(set(targets)) != len(targets):
         raise click.BadParameter("--output and --patches must name different files")
-    if curvature and mesh_suffix != ".ply":
+    if curvature and mesh_suffix not in MESH_WRITERS.holding("properties"):
         raise click.BadParameter("--curvature needs a .ply --output (per-vertex properties)")
     if curvature and attributes:
         raise click.BadParameter("--curvature and --attributes both write vertex colours: choose one")
@@ -185,7 +185,7 @@ def write_mesh(path, suffix: str, tess, extra: dict, attribute_data, float32: bo
     """Write the tessellation ``tess``; with ``attribute_data`` (a SurfaceData) its extra point columns too."""
     if attribute_data is not None:  # texture coordinates / colours ride along as extra columns of the points
         write_attribute_mesh(path, tess.points[:, :3], tess.triangles, tess.normals, tess.points[:, 3:],
-                             attribute_data.attribute_names, attribute_data.colour_scale, suffix=suffix)
+                             attribute_data.attribute_names, attribute_data.colour_scale, suffix=suffix, float32=float32)
     else:
         write_triangle_mesh(path, tess.points, tess.triangles, tess.normals, suffix=suffix, float32=float32, **extra)
 
@@ -200,5 +200,5 @@ def write_patch_files(targets, surface: Surface, input_path, patch_options: dict
         for patches_path, patch_suffix in targets:
             progress.phase(f"writing {patches_path}")
             patch_tmp = patch_files.enter_context(atomic_output(patches_path, inputs=[input_path]))
-            PATCH_WRITERS[patch_suffix](patch_tmp, surface, input_path=str(input_path),
-                                        file_name=os.path.basename(patches_path), **patch_options)
+            write_surface_patches(patch_tmp, surface, patch_suffix, input_path=str(input_path),
+                                  file_name=os.path.basename(patches_path), **patch_options)

@@ -5,8 +5,8 @@ import click
 
 from ..evaluation.tessellate import tessellate_patches
 from ..io.atomic import atomic_output
-from ..io.meshes.write import MESH_FORMATS, write_triangle_mesh
-from ..io.patches.formats import PATCH_LOADERS
+from ..io.meshes.write import write_triangle_mesh
+from ..io.registry import MESH_WRITERS, PATCH_READERS, suffix_list
 from .common import Failure, Progress, friendly_errors, output_suffix
 from .convert import check_tessellation_size
 
@@ -14,7 +14,7 @@ from .convert import check_tessellation_size
 @click.command()
 @click.argument("patches_path", metavar="PATCHES", type=click.Path(dir_okay=False))
 @click.option("-o", "--output", required=True, type=click.Path(dir_okay=False),
-              help=f"Triangle mesh to write; the suffix picks the format ({', '.join(sorted(MESH_FORMATS))}).")
+              help=f"Triangle mesh to write; the suffix picks the format ({suffix_list(MESH_WRITERS)}).")
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="Samples per patch side: each patch becomes an N x N grid of welded vertices.")
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
@@ -30,8 +30,8 @@ def tessellate(patches_path, output, resolution, force, quiet):
     patch geometry (points within 1e-9 of the bounding box), which for a
     c1surf surface gives the same welding.
     """
-    mesh_suffix = output_suffix(output, MESH_FORMATS, "--output")
-    patch_suffix = output_suffix(patches_path, PATCH_LOADERS, "PATCHES")
+    mesh_suffix = output_suffix(output, MESH_WRITERS, "--output")
+    patch_suffix = output_suffix(patches_path, PATCH_READERS, "PATCHES")
     progress = Progress(quiet)
     progress.phase(f"reading {patches_path}")
     patch_set = load_tessellable(patches_path, patch_suffix)
@@ -49,7 +49,7 @@ def tessellate(patches_path, output, resolution, force, quiet):
 
 def load_tessellable(patches_path, patch_suffix: str):
     """The PatchSet of a patch file; a failure when it holds no patch or one of degree above 3."""
-    patch_set = PATCH_LOADERS[patch_suffix](patches_path)
+    patch_set = PATCH_READERS[patch_suffix].function(patches_path)
     if patch_set.n_patches == 0:
         raise Failure(f"{patches_path}: the patch file holds no patches")
     dims = {g.shape[1:3] for g in patch_set.groups}

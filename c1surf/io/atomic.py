@@ -49,12 +49,21 @@ def atomic_output(path, inputs=()):
     target = Path(os.fspath(path))
     path_str = str(target)
     _check_target(target, path_str, inputs)
-    directory = target.parent
+    tmp = _create_temporary(target, path_str)
+    try:
+        yield tmp
+        _move_into_place(tmp, target, path_str)
+    except BaseException:
+        with contextlib.suppress(OSError):
+            os.unlink(tmp)
+        raise
 
-    tmp = None
+
+def _create_temporary(target: Path, path_str: str) -> str:
+    """Create an empty file named ``.tmp-c1surf-<random>.<name>`` beside ``target``; return its path."""
+    directory = target.parent
     for _ in range(100):  # name clashes are astronomically unlikely
-        name = f"{_PREFIX}{secrets.token_hex(4)}.{target.name}"
-        candidate = directory / name
+        candidate = directory / f"{_PREFIX}{secrets.token_hex(4)}.{target.name}"
         try:
             # 0o666 & ~umask, like any newly written file (mkstemp would
             # give 0o600).
@@ -68,32 +77,26 @@ def atomic_output(path, inputs=()):
                 f"({exc.strerror or exc}): choose another output folder"
                 ) from None
         os.close(fd)
-        tmp = str(candidate)
-        break
-    if tmp is None:
-        raise OutputError(path_str, "cannot pick a temporary file name: "
-                          f"clean up {_PREFIX}* files in the output folder")
+        return str(candidate)
+    raise OutputError(path_str, "cannot pick a temporary file name: "
+                      f"clean up {_PREFIX}* files in the output folder")
 
+
+def _move_into_place(tmp: str, target: Path, path_str: str) -> None:
+    """Flush the finished temporary file and rename it onto ``target`` (keeping the permissions of a file replaced)."""
+    if not os.path.isfile(tmp):
+        raise OutputError(
+            path_str, "the writer did not produce the temporary file: "
+            "this is a bug in c1surf; please report it")
+    if target.exists():
+        os.chmod(tmp, stat.S_IMODE(os.stat(target).st_mode))
+    _fsync(tmp)
     try:
-        yield tmp
-        if not os.path.isfile(tmp):
-            raise OutputError(
-                path_str, "the writer did not produce the temporary file: "
-                "this is a bug in c1surf; please report it")
-        if target.exists():
-            # Keep the permissions of the file being replaced.
-            os.chmod(tmp, stat.S_IMODE(os.stat(target).st_mode))
-        _fsync(tmp)
-        try:
-            os.replace(tmp, target)
-        except OSError as exc:
-            raise OutputError(
-                path_str, f"cannot move the finished file into place "
-                f"({exc.strerror or exc}): check the output path") from None
-    except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
-        raise
+        os.replace(tmp, target)
+    except OSError as exc:
+        raise OutputError(
+            path_str, f"cannot move the finished file into place "
+            f"({exc.strerror or exc}): check the output path") from None
 
 
 def _check_target(target: Path, path_str: str, inputs) -> None:

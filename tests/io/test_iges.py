@@ -15,12 +15,8 @@ import time
 import numpy as np
 import pytest
 
-from c1surf.io.patches.iges_writer import (
-    UNITS,
-    _format_reals,
-    bezier_patches_to_surfaces,
-    write_iges,
-)
+from c1surf.io.patches.iges_numbers import format_reals
+from c1surf.io.patches.iges_writer import UNITS, bezier_patches_to_surfaces, write_iges
 
 try:  # Open CASCADE; missing -> the OCC tests fail with this message
     from OCP.BRep import BRep_Tool
@@ -333,7 +329,7 @@ def _check_entity_128(params: list[str], surf: dict) -> None:
 # format / structure tests (no Open CASCADE needed)
 
 
-def test_format_reals_round_trip_exactly():
+def testformat_reals_round_trip_exactly():
     rng = np.random.default_rng(7)
     x = np.concatenate(
         [
@@ -348,7 +344,7 @@ def test_format_reals_round_trip_exactly():
              9999999999999998.0, 5e-324, 2.2250738585072014e-308, 1.7976931348623157e308],
         ]
     )
-    chars, off, lens = _format_reals(x)
+    chars, off, lens = format_reals(x)
     assert lens.max() <= 24
     longer = 0
     for v, c, o, n in zip(x.tolist(), chars, off.tolist(), lens.tolist()):

@@ -626,7 +626,7 @@ def test_random_meshes_roundtrip(tmp_path, mesh, style, relative, crlf, order):
                                              max_size=12))
 def test_random_obj_slow_path_agrees(mesh, forms):
     """The corner-by-corner fallback gives what the bulk parse gives."""
-    import c1surf.io.meshes.obj as obj_module
+    import c1surf.io.meshes.obj_text as obj_module
     points, faces = mesh
     lines = ["v " + " ".join(repr(float(c)) for c in p) for p in points]
     lines += ["vt 0.5 0.25", "vn 0 0 1"]

@@ -184,11 +184,16 @@ def test_tessellate_errors_are_one_line(tmp_path):
     trimmed = tmp_path / "bspline.igs"
     P = np.random.default_rng(1).standard_normal((5, 4, 3))
     write_iges(trimmed, [{"points": P, "knots_u": [0, 0, 0, 0, 0.5, 1, 1, 1, 1], "knots_v": [0, 0, 0, 0, 1, 1, 1, 1], "degree": (3, 3)}])
-    rational = tmp_path / "rational.igs"
-    write_iges(rational, [{"points": P[:4], "weights": np.linspace(1, 2, 16).reshape(4, 4)}])
+    # rational patches are read now (test_rational_and_merged_iges_read_back); a transformation matrix is not
+    moved = tmp_path / "moved.igs"
+    write_iges(moved, [{"points": P[:4]}], group=False)
+    lines = moved.read_text().splitlines(keepends=True)
+    first_de = next(k for k, line in enumerate(lines) if line[72] == "D")
+    lines[first_de] = lines[first_de][:48] + f"{1:8d}" + lines[first_de][56:]  # DE field 7: transformation matrix
+    moved.write_text("".join(lines))
     text = tmp_path / "text.json"
     text.write_text("{nope")
-    cases = [(bad, "not an NPZ patch file"), (trimmed, "interior knots"), (rational, "rational"),
+    cases = [(bad, "not an NPZ patch file"), (trimmed, "interior knots"), (moved, "transformation matrix"),
              (text, "not a JSON patch file"), (tmp_path / "missing.json", "no such file")]
     for path, words in cases:
         code, lines = one_line(tmp_path, "tessellate", path, "-o", tmp_path / "x.obj")

@@ -90,12 +90,6 @@ class MeshFile:
         np.cumsum(self.face_sizes, out=offs[1:])
         return offs
 
-    def face_line(self, face: int) -> int | None:
-        """1-based source line of face ``face``, or None if not known."""
-        if self.face_lines is None:
-            return None
-        return int(self.face_lines[face])
-
 
 def collapse_repeated_corners(face_sizes: np.ndarray, face_vertices: np.ndarray):
     """Drop corners that repeat the previous corner (zero-length edges, e.g. ``f 4 3 5 5``).
@@ -148,6 +142,23 @@ def collapse_repeated_corners_or_refuse(face_sizes, face_vertices, path, line_of
         f = int(np.argmax(sizes < 3))
         raise MeshInputError(path, "face has fewer than 3 distinct vertices: a polygon needs at least 3 (remove this face)", line_of_face(f))
     return sizes, vertices, keep, collapsed
+
+
+def refuse_repeated_vertex(face_sizes, face_vertices, path, line_of_face, face_name, vertex_base: int = 0) -> None:
+    """Refuse the first face (in file order) that visits a vertex twice, in the file's own numbering.
+
+    Parameters
+    ----------
+    line_of_face : callable, face index -> 1-based line (or None) for the error
+    face_name : callable, face index -> how the message names it ("face", "face 7")
+    vertex_base : 1 where the file numbers vertices from 1 (OBJ)
+    """
+    repeat = find_repeated_vertex(face_sizes, face_vertices)
+    if repeat is not None:
+        face, vertex, first, second = repeat
+        raise MeshInputError(
+            path, f"{face_name(face)} visits vertex {vertex + vertex_base} twice (corners {first + 1} and {second + 1}): "
+            "a polygon must not repeat a vertex; remove the duplicate or split the face", line_of_face(face))
 
 
 def find_repeated_vertex(face_sizes: np.ndarray, face_vertices: np.ndarray):

@@ -1,11 +1,10 @@
 """Vectorized reader for Wavefront OBJ polygon meshes.
 
-The whole file is handled as one ``uint8`` array: line and token
-boundaries, record keywords and token counts come from array operations,
-and all numbers of one record kind are parsed in a single
-``np.fromstring`` call.  A Python loop over lines runs only when that bulk
-parse fails, to find the offending line for the error message (or to
-accept rare-but-legal spellings such as ``f 1/ 2/ 3/``).
+``obj_text.ObjText`` finds lines, tokens and record kinds with array
+operations and parses all numbers of one record kind at once; this module
+turns the records into a :class:`MeshFile`: vertices, faces (corner indices
+resolved, repeated corners collapsed, checked), per-vertex texture
+coordinates and normals from the face corners, and groups.
 
 Records used: ``v`` (x y z [w], or x y z r g b), ``vt``, ``vn``, ``f``
 (``v``, ``v/vt``, ``v//vn``, ``v/vt/vn``, negative = relative), ``g`` and
@@ -16,30 +15,16 @@ Records used: ``v`` (x y z [w], or x y z r g b), ``vt``, ``vn``, ``f``
 from __future__ import annotations
 
 import os
-import re
-import warnings
 
 import numpy as np
 
 from ..errors import MeshInputError
-from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, find_repeated_vertex
+from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, refuse_repeated_vertex
+from .obj_text import ABSENT, F, V, VN, VT, WHITESPACE, ObjText
 
 __all__ = ["read_obj", "parse_obj"]
 
-# ASCII whitespace as bytes.split() and np.fromstring understand it.
-_WS = np.zeros(256, dtype=bool)
-_WS[[9, 10, 11, 12, 13, 32]] = True
-
-# Marks a missing /vt or /vn part of a face corner (0 is a real, if
-# invalid, OBJ index, so it cannot be used).
-_ABSENT = np.iinfo(np.int64).min
-
-_OTHER, _V, _VT, _VN, _F, _GROUP = range(6)
-_KEYWORD = {_V: "v", _VT: "vt", _VN: "vn", _F: "f"}
-
-_INT_RE = re.compile(rb"[+-]?[0-9]+\Z")
-
-_FORMS = "write v, v/vt, v//vn or v/vt/vn with whole numbers"
+_KEYWORD = {V: "v", VT: "vt", VN: "vn"}
 
 
 def read_obj(path) -> MeshFile:
@@ -47,7 +32,7 @@ def read_obj(path) -> MeshFile:
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str or os.PathLike, an OBJ text file
 
     Returns
     -------
@@ -86,11 +71,41 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
     """
     path = os.fspath(path)
     _check_text(data, path)
-    text = _ObjText(data, path)
-    kind = text.kind
+    text = ObjText(data, path)
+    v_lines, f_lines = _record_lines(text, path)
+    points, weights, vertex_attributes = _vertices(text, v_lines, path)
+    corners = _FaceCorners(text, f_lines, _face_sizes(text, f_lines, path))
+    raw_v, raw_vt, raw_vn = text.face_corners(f_lines, corners.sizes)
+    face_vertices = _resolve(raw_v, v_lines.size, corners, V, "vertex", path)
+    sizes, face_vertices, kept, collapsed = collapse_repeated_corners_or_refuse(
+        corners.sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1)
+    refuse_repeated_vertex(sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1, lambda f: "face", vertex_base=1)
+    if collapsed:  # the texture and normal indices of the corners that remain
+        raw_vt = None if raw_vt is None else raw_vt[kept]
+        raw_vn = None if raw_vn is None else raw_vn[kept]
+        corners = _FaceCorners(text, f_lines, sizes)
+    uvs = normals = None
+    if raw_vt is not None:
+        uvs = _per_vertex(face_vertices, _resolve(raw_vt, np.count_nonzero(text.kind == VT), corners, VT,
+                                                  "texture coordinate", path), _uv_table(text), v_lines.size)
+    if raw_vn is not None:
+        normals = _per_vertex(face_vertices, _resolve(raw_vn, np.count_nonzero(text.kind == VN), corners, VN, "normal",
+                                                      path), _normal_table(text), v_lines.size)
+    face_groups, group_names = text.groups(f_lines)
+    return MeshFile(path=path, points=points, face_sizes=sizes.astype(np.int64, copy=False),
+                    face_vertices=face_vertices, face_lines=(f_lines + 1).astype(np.int64), vertex_weights=weights,
+                    vertex_normals=normals, vertex_uvs=uvs, vertex_attributes=vertex_attributes,
+                    face_groups=face_groups, group_names=group_names, collapsed_corners=collapsed)
 
-    v_lines = np.flatnonzero(kind == _V)
-    f_lines = np.flatnonzero(kind == _F)
+
+# ----------------------------------------------------------------------
+# records
+
+
+def _record_lines(text: ObjText, path: str):
+    """(v lines, f lines): 0-based line numbers of the vertex and face records; refuses a file without either."""
+    v_lines = np.flatnonzero(text.kind == V)
+    f_lines = np.flatnonzero(text.kind == F)
     if v_lines.size == 0 and f_lines.size == 0:
         raise MeshInputError(
             path, "no `v` vertex or `f` face lines found: this is not an "
@@ -103,10 +118,12 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
         raise MeshInputError(
             path, "has vertices but no faces: c1surf needs polygon faces "
             "(`f` lines), not a point cloud or curves")
+    return v_lines, f_lines
 
-    # -- vertices -------------------------------------------------------
-    vals, counts = text.numbers(v_lines, min_count=3,
-                                need="a vertex needs x y z")
+
+def _vertices(text: ObjText, v_lines, path: str):
+    """Positions (V, 3), weights (V,) or None (``v x y z w``) and colours (``v x y z r g b``) of the v records."""
+    vals, counts = text.numbers(v_lines, min_count=3, need="a vertex needs x y z")
     n_vert = v_lines.size
     off = np.cumsum(counts) - counts
     uniform = bool((counts == counts[0]).all())
@@ -117,7 +134,6 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
         points = vals[off[:, None] + np.arange(3)]
     _check_finite(points, v_lines, path, "vertex has a NaN or infinite "
                   "coordinate: fix or remove this `v` line")
-
     weights = None
     has_w = counts == 4  # x y z w; six numbers mean x y z r g b instead
     if has_w.any():
@@ -130,8 +146,11 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
     if uniform and counts[0] == 6:
         for col, name in zip((3, 4, 5), ("red", "green", "blue")):
             vertex_attributes[name] = table[:, col].copy()
+    return points, weights, vertex_attributes
 
-    # -- faces ----------------------------------------------------------
+
+def _face_sizes(text: ObjText, f_lines, path: str) -> np.ndarray:
+    """Corners of each f record; refuses a face of fewer than 3."""
     sizes = text.ntok[f_lines] - 1
     small = np.flatnonzero(sizes < 3)
     if small.size:
@@ -140,75 +159,49 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
             path, f"face has {k} {'vertex' if k == 1 else 'vertices'}: a polygon "
             "needs at least 3 (remove this line, or use `l` for a line)",
             int(f_lines[small[0]]) + 1)
+    return sizes
 
-    corners = text.face_corners(f_lines, sizes)
-    raw_v, raw_vt, raw_vn = corners
-    offs = np.zeros(sizes.size + 1, dtype=np.int64)
-    np.cumsum(sizes, out=offs[1:])
 
-    def line_of_corner(c):
-        face = int(np.searchsorted(offs, c, side="right")) - 1
-        return int(f_lines[face]) + 1
+def _uv_table(text: ObjText) -> np.ndarray:
+    """(n_vt, 2) texture coordinates of the vt records (v = 0 where only u is given)."""
+    vt_lines = np.flatnonzero(text.kind == VT)
+    tvals, tcounts = text.numbers(vt_lines, min_count=1, need="a texture coordinate needs u [v]")
+    toff = np.cumsum(tcounts) - tcounts
+    uv = np.zeros((vt_lines.size, 2))
+    uv[:, 0] = tvals[toff]
+    has_v = tcounts >= 2
+    uv[has_v, 1] = tvals[toff[has_v] + 1]
+    return uv
 
-    def before(kind_code):
-        # Records of this kind above each face line, repeated per corner
-        # (negative indices count back from there).
-        cum = np.cumsum(kind == kind_code)
-        return np.repeat(cum[f_lines], sizes)
 
-    face_vertices = _resolve(raw_v, n_vert, lambda: before(_V), "vertex",
-                             "v", line_of_corner, path)
-    sizes, face_vertices, kept, collapsed = collapse_repeated_corners_or_refuse(sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1)
-    rep = find_repeated_vertex(sizes, face_vertices)
-    if rep is not None:
-        face, vert, p1, p2 = rep
-        raise MeshInputError(
-            path, f"face visits vertex {vert + 1} twice (corners {p1 + 1} "
-            f"and {p2 + 1}): a polygon must not repeat a vertex; remove the "
-            "duplicate or split the face", int(f_lines[face]) + 1)
+def _normal_table(text: ObjText) -> np.ndarray:
+    """(n_vn, 3) normals of the vn records."""
+    vn_lines = np.flatnonzero(text.kind == VN)
+    nvals, ncounts = text.numbers(vn_lines, min_count=3, need="a normal needs x y z")
+    noff = np.cumsum(ncounts) - ncounts
+    return nvals[noff[:, None] + np.arange(3)]
 
-    if collapsed:
-        raw_vt = None if raw_vt is None else raw_vt[kept]
-        raw_vn = None if raw_vn is None else raw_vn[kept]
-    uvs = normals = None
-    if raw_vt is not None:
-        vt_lines = np.flatnonzero(kind == _VT)
-        vt_idx = _resolve(raw_vt, vt_lines.size, lambda: before(_VT),
-                          "texture coordinate", "vt", line_of_corner, path)
-        tvals, tcounts = text.numbers(vt_lines, min_count=1,
-                                      need="a texture coordinate needs u [v]")
-        toff = np.cumsum(tcounts) - tcounts
-        uv = np.zeros((vt_lines.size, 2))
-        uv[:, 0] = tvals[toff]
-        has_v = tcounts >= 2
-        uv[has_v, 1] = tvals[toff[has_v] + 1]
-        uvs = _per_vertex(face_vertices, vt_idx, uv, n_vert)
-    if raw_vn is not None:
-        vn_lines = np.flatnonzero(kind == _VN)
-        vn_idx = _resolve(raw_vn, vn_lines.size, lambda: before(_VN),
-                          "normal", "vn", line_of_corner, path)
-        nvals, ncounts = text.numbers(vn_lines, min_count=3,
-                                      need="a normal needs x y z")
-        noff = np.cumsum(ncounts) - ncounts
-        normals = _per_vertex(face_vertices, vn_idx,
-                              nvals[noff[:, None] + np.arange(3)], n_vert)
 
-    face_groups, group_names = text.groups(f_lines)
+class _FaceCorners:
+    """Where each face corner stands in the file: its line, and the records of a kind above it.
 
-    return MeshFile(
-        path=path,
-        points=points,
-        face_sizes=sizes.astype(np.int64, copy=False),
-        face_vertices=face_vertices,
-        face_lines=(f_lines + 1).astype(np.int64),
-        vertex_weights=weights,
-        vertex_normals=normals,
-        vertex_uvs=uvs,
-        vertex_attributes=vertex_attributes,
-        face_groups=face_groups,
-        group_names=group_names,
-        collapsed_corners=collapsed,
-    )
+    sizes : (F,) int, corners per face (of the corner arrays being resolved)
+    """
+
+    def __init__(self, text: ObjText, f_lines, sizes):
+        self.kind, self.f_lines, self.sizes = text.kind, f_lines, sizes
+        self.offsets = np.zeros(sizes.size + 1, dtype=np.int64)
+        np.cumsum(sizes, out=self.offsets[1:])
+
+    def line(self, corner: int) -> int:
+        """1-based line of the face holding ``corner``."""
+        face = int(np.searchsorted(self.offsets, corner, side="right")) - 1
+        return int(self.f_lines[face]) + 1
+
+    def records_above(self, kind_code: int) -> np.ndarray:
+        """(C,) records of ``kind_code`` above each corner's line (negative indices count back from there)."""
+        cum = np.cumsum(self.kind == kind_code)
+        return np.repeat(cum[self.f_lines], self.sizes)
 
 
 # ----------------------------------------------------------------------
@@ -239,31 +232,12 @@ def _check_text(data: bytes, path: str) -> None:
     # Not UTF-8: tolerate a few Latin-1 bytes (names, comments), refuse
     # anything that is mostly non-text.
     head = arr[:65536]
-    odd = (head >= 128) | ((head < 32) & ~_WS[head])
+    odd = (head >= 128) | ((head < 32) & ~WHITESPACE[head])
     if odd.mean() > 0.1:
         raise MeshInputError(
             path, "not an OBJ text file (it is not readable as text): "
             "export the mesh as text OBJ or as PLY")
 
-
-def _numbers(text: bytes, dtype, expected: int):
-    """Parse whitespace-separated numbers; None unless exactly `expected`.
-
-    Returns
-    -------
-    ndarray, shape (expected,), or None
-    """
-    if expected == 0:
-        # np.fromstring returns a bogus value for blank input.
-        return np.empty(0, dtype=dtype)
-    with warnings.catch_warnings():
-        # Trailing garbage is a DeprecationWarning (future ValueError).
-        warnings.simplefilter("error", DeprecationWarning)
-        try:
-            vals = np.fromstring(text, dtype=dtype, sep=" ")
-        except (ValueError, DeprecationWarning):
-            return None
-    return vals if vals.size == expected else None
 
 
 def _check_finite(values, lines, path, message):
@@ -273,37 +247,38 @@ def _check_finite(values, lines, path, message):
         raise MeshInputError(path, message, int(lines[np.argmin(ok)]) + 1)
 
 
-def _resolve(raw, total, before, what, keyword, line_of_corner, path):
+def _resolve(raw, total, corners: _FaceCorners, kind_code: int, what: str, path):
     """Turn 1-based / negative OBJ indices into 0-based ones, checking range.
 
     Parameters
     ----------
     raw : ndarray, shape (C,), int64
-        Indices as written; ``_ABSENT`` where a corner has none.
+        Indices as written; ``ABSENT`` where a corner has none.
     total : int
         Number of records of this kind in the file.
-    before : callable returning ndarray, shape (C,)
-        Records of this kind above each corner's line (lazy: only needed
-        when the file uses negative indices).
+    corners : _FaceCorners
+        Lines of the corners, and records of ``kind_code`` above them
+        (only needed when the file uses negative indices).
 
     Returns
     -------
     ndarray, shape (C,), int64
-        0-based indices, -1 where ``raw`` is ``_ABSENT``.
+        0-based indices, -1 where ``raw`` is ``ABSENT``.
     """
-    present = raw != _ABSENT
+    present = raw != ABSENT
     res = np.where(raw > 0, raw - 1, -1)
     neg = (raw < 0) & present
     n_before = None
+    keyword = _KEYWORD[kind_code]
     if neg.any():
-        n_before = before()
+        n_before = corners.records_above(kind_code)
         res[neg] = n_before[neg] + raw[neg]
     bad = present & ((raw == 0) | (res < 0) | (res >= total))
     if not bad.any():
         return res
     c = int(np.argmax(bad))
     r = int(raw[c])
-    line = line_of_corner(c)
+    line = corners.line(c)
     if r == 0:
         msg = (f"face uses {what} index 0: OBJ indices start at 1 "
                f"(negative ones count back from the last `{keyword}` line)")
@@ -338,330 +313,3 @@ def _per_vertex(face_vertices, attr_idx, attr_values, n_vert):
     out = np.full((n_vert, attr_values.shape[1]), np.nan)
     out[uniq] = attr_values[attr_idx[present][first]]
     return out
-
-
-class _ObjText:
-    """Line/token structure of an OBJ file held as a ``uint8`` array.
-
-    Attributes
-    ----------
-    buf : ndarray, shape (N,), uint8
-        File bytes with comments and record keywords blanked to spaces.
-    starts, ends : ndarray, shape (L,), int64
-        Byte range of each line (``ends`` excludes the newline).
-    ntok : ndarray, shape (L,), int64
-        Tokens per line, keyword included.
-    kind : ndarray, shape (L,), int8
-        Record kind of each line (``_V``, ``_F``, ...).
-    kw_pos : ndarray, shape (L,), int64
-        Byte offset of each line's keyword (-1 for blank lines).
-    """
-
-    def __init__(self, data: bytes, path: str):
-        self.path = path
-        buf = np.frombuffer(data, dtype=np.uint8).copy()
-        if data.startswith(b"\xef\xbb\xbf"):  # UTF-8 byte order mark
-            buf[:3] = 32
-        if b"\n" not in data and b"\r" in data:  # classic Mac line ends
-            buf[buf == 13] = 10
-        n = buf.size
-        nl = np.flatnonzero(buf == 10)
-        self.starts = np.concatenate(([0], nl + 1))
-        self.ends = np.concatenate((nl, [n]))
-        self.buf = buf
-
-        self._blank_comments(nl)
-        self._refuse_continuations(nl)
-
-        # Control bytes count as blanks here (a 256-entry table lookup
-        # costs 10x more); one inside a number still fails the parse.
-        nonws = buf > 32
-        first = nonws.copy()
-        first[1:] &= ~nonws[:-1]
-        ts = np.flatnonzero(first)
-        last = nonws
-        last[:-1] &= ~nonws[1:]  # reuses nonws: not needed any more
-        te = np.flatnonzero(last) + 1
-        del first, last, nonws
-
-        tok0 = np.searchsorted(ts, self.starts)
-        self.ntok = np.diff(np.append(tok0, ts.size))
-        lines = np.flatnonzero(self.ntok > 0)
-        k0 = ts[tok0[lines]]
-        klen = te[tok0[lines]] - k0
-        c0 = buf[k0]
-        c1 = buf[np.minimum(k0 + 1, n - 1)]
-        one, two = klen == 1, klen == 2
-        is_v = c0 == ord("v")
-        kind = np.zeros(self.starts.size, dtype=np.int8)
-        kind[lines[one & is_v]] = _V
-        kind[lines[one & (c0 == ord("f"))]] = _F
-        kind[lines[two & is_v & (c1 == ord("t"))]] = _VT
-        kind[lines[two & is_v & (c1 == ord("n"))]] = _VN
-        kind[lines[one & ((c0 == ord("g")) | (c0 == ord("o")))]] = _GROUP
-        self.kind = kind
-        self.kw_pos = np.full(self.starts.size, -1, dtype=np.int64)
-        self.kw_pos[lines] = k0
-
-        # Blank the keywords so a record's bytes are just its numbers.
-        kw1 = self.kw_pos[(kind == _V) | (kind == _F)]
-        kw2 = self.kw_pos[(kind == _VT) | (kind == _VN)]
-        buf[kw1] = 32
-        buf[kw2] = 32
-        buf[kw2 + 1] = 32
-
-    def _blank_comments(self, nl):
-        """Blank everything from the first '#' of a line to its end."""
-        buf = self.buf
-        hashes = np.flatnonzero(buf == 35)
-        if hashes.size == 0:
-            return
-        hline = np.searchsorted(nl, hashes)  # line of each '#'
-        first = np.flatnonzero(np.diff(hline, prepend=-1))
-        begin = hashes[first]
-        length = self.ends[hline[first]] - begin
-        # Byte offsets of all comment text, in O(comment bytes) rather
-        # than O(file bytes).
-        skip = np.cumsum(length) - length
-        idx = np.arange(int(length.sum())) + np.repeat(begin - skip, length)
-        buf[idx] = 32
-
-    def _refuse_continuations(self, nl):
-        """Refuse lines ending in a backslash (continued on the next)."""
-        buf = self.buf
-        slashes = np.flatnonzero(buf == 92)
-        if slashes.size == 0:
-            return
-        lines = np.searchsorted(nl, slashes)
-        # Loop only over backslashes, which are rare in OBJ files.
-        for pos, li in zip(slashes.tolist(), lines.tolist()):
-            if _WS[buf[pos + 1:self.ends[li]]].all():
-                raise MeshInputError(
-                    self.path, "line continuation with '\\' is not "
-                    "supported: join this line with the next one", li + 1)
-
-    def gather(self, lines):
-        """Bytes of the given lines (with newlines), in file order.
-
-        Returns
-        -------
-        data : ndarray, shape (M,), uint8
-        offsets : ndarray, shape (len(lines) + 1,), int64
-            Where each line starts in ``data``.
-        """
-        lengths = np.diff(np.append(self.starts, self.buf.size))
-        mask = np.zeros(self.starts.size, dtype=bool)
-        mask[lines] = True
-        offsets = np.zeros(lines.size + 1, dtype=np.int64)
-        np.cumsum(lengths[lines], out=offsets[1:])
-        return self.buf[np.repeat(mask, lengths)], offsets
-
-    def numbers(self, lines, min_count, need):
-        """Parse the numbers of records on ``lines`` (all of one kind).
-
-        Returns
-        -------
-        vals : ndarray, shape (sum(counts),), float64
-        counts : ndarray, shape (len(lines),), int64
-            Numbers per record.
-        """
-        counts = self.ntok[lines] - 1
-        short = np.flatnonzero(counts < min_count)
-        if short.size:
-            li = int(lines[short[0]])
-            k = int(counts[short[0]])
-            kw = _KEYWORD[int(self.kind[li])]
-            raise MeshInputError(
-                self.path, f"`{kw}` line has {k} number{'s' if k != 1 else ''}"
-                f": {need}", li + 1)
-        data, offsets = self.gather(lines)
-        vals = _numbers(data.tobytes(), np.float64, int(counts.sum()))
-        if vals is None:
-            # Re-parse in chunks so only one chunk goes line by line.
-            parts = []
-            for a, b in _chunks(lines.size):
-                piece = data[offsets[a]:offsets[b]].tobytes()
-                got = _numbers(piece, np.float64, int(counts[a:b].sum()))
-                parts.append(got if got is not None
-                             else self._slow_numbers(lines[a:b]))
-            vals = np.concatenate(parts)
-        return vals, counts
-
-    def _slow_numbers(self, lines):
-        """Line-by-line parse, only to name the line with a bad number."""
-        out = []
-        for li in lines.tolist():
-            text = self.buf[self.starts[li]:self.ends[li]].tobytes()
-            toks = text.split()
-            vals = _numbers(text, np.float64, len(toks))
-            if vals is None:
-                kw = _KEYWORD[int(self.kind[li])]
-                bad = next((t for t in toks
-                            if _numbers(t, np.float64, 1) is None), text)
-                raise MeshInputError(
-                    self.path, f"cannot read {_show(bad)} as a number in a "
-                    f"`{kw}` line: write plain decimal numbers such as 1.5 "
-                    "or -2e-3", li + 1)
-            out.append(vals)
-        return np.concatenate(out)
-
-    def face_corners(self, f_lines, sizes):
-        """Raw vertex / texture / normal indices of every face corner.
-
-        Returns
-        -------
-        v : ndarray, shape (C,), int64
-        vt, vn : ndarray, shape (C,), int64, or None
-            ``_ABSENT`` where a corner has no such index; None if no
-            corner has one.
-        """
-        data, offsets = self.gather(f_lines)
-        got = _fast_corners(data, int(sizes.sum()))
-        if got is None:
-            # Chunks that fail the bulk parse go corner by corner: that
-            # names a bad token, or accepts legal oddities such as "1/".
-            parts = []
-            for a, b in _chunks(f_lines.size):
-                piece = _fast_corners(data[offsets[a]:offsets[b]],
-                                      int(sizes[a:b].sum()))
-                if piece is None:
-                    piece = self._slow_corners(f_lines[a:b])
-                parts.append(piece)
-            got = tuple(
-                np.concatenate([
-                    np.full(p[0].size, _ABSENT, dtype=np.int64)
-                    if p[i] is None else p[i] for p in parts])
-                for i in range(3))
-        v, vt, vn = got
-        if vt is not None and (vt == _ABSENT).all():
-            vt = None
-        if vn is not None and (vn == _ABSENT).all():
-            vn = None
-        return v, vt, vn
-
-    def _slow_corners(self, f_lines):
-        """Corner-by-corner parse: names the bad token, accepts ``1/``."""
-        out = []
-        for li in f_lines.tolist():
-            text = self.buf[self.starts[li]:self.ends[li]].tobytes()
-            for tok in text.split():
-                parts = tok.split(b"/")
-                if len(parts) > 3:
-                    raise MeshInputError(
-                        self.path, f"face corner {_show(tok)} has too many "
-                        f"'/' parts: {_FORMS}", li + 1)
-                if not parts[0]:
-                    raise MeshInputError(
-                        self.path, f"face corner {_show(tok)} has no vertex "
-                        f"index: {_FORMS}", li + 1)
-                row = [_ABSENT, _ABSENT, _ABSENT]
-                for i, part in enumerate(parts):
-                    if not part:
-                        continue
-                    if not _INT_RE.match(part):
-                        raise MeshInputError(
-                            self.path, f"face corner {_show(tok)}: "
-                            f"{_show(part)} is not a whole number: {_FORMS}",
-                            li + 1)
-                    # Clamp absurd values; the range check reports them.
-                    row[i] = max(-2**62, min(2**62, int(part)))
-                out.append(row)
-        arr = np.array(out, dtype=np.int64).reshape(-1, 3)
-        return arr[:, 0].copy(), arr[:, 1].copy(), arr[:, 2].copy()
-
-    def groups(self, f_lines):
-        """Group of each face from the nearest ``g``/``o`` line above it.
-
-        Returns
-        -------
-        face_groups : ndarray, shape (F,), int64, or None
-        group_names : list of str
-            In order of first use; faces above any group are "default".
-        """
-        g_lines = np.flatnonzero(self.kind == _GROUP)
-        if g_lines.size == 0:
-            return None, []
-        table: dict[str, int] = {}
-        ids = []
-        for li in g_lines.tolist():  # group lines are few
-            raw = self.buf[self.kw_pos[li] + 1:self.ends[li]].tobytes()
-            name = b" ".join(raw.split()).decode("utf-8", "replace")
-            ids.append(table.setdefault(name or "default", len(table)))
-        default = table.setdefault("default", len(table))
-        ids = np.array(ids + [default], dtype=np.int64)
-        which = np.searchsorted(g_lines, f_lines) - 1  # -1: above all groups
-        per_face = ids[which]  # which == -1 picks the appended default
-        uniq, first, inverse = np.unique(per_face, return_index=True,
-                                         return_inverse=True)
-        order = np.argsort(first)
-        rank = np.empty_like(order)
-        rank[order] = np.arange(order.size)
-        names = {i: nm for nm, i in table.items()}
-        group_names = [names[int(uniq[o])] for o in order]
-        return rank[inverse].astype(np.int64), group_names
-
-
-def _fast_corners(fbytes, total):
-    """Bulk parse of all face corners; None if anything is unusual.
-
-    Parameters
-    ----------
-    fbytes : ndarray, shape (M,), uint8
-        The bytes of all ``f`` lines, keywords blanked.
-    total : int
-        Number of corners (tokens) expected.
-    """
-    slashes = np.flatnonzero(fbytes == 47)
-    if slashes.size == 0:  # plain vertex indices
-        v = _numbers(fbytes.tobytes(), np.int64, total)
-        return None if v is None else (v, None, None)
-    nonws = fbytes > 32
-    first = nonws.copy()
-    first[1:] &= ~nonws[:-1]
-    ts = np.flatnonzero(first)
-    last = nonws
-    last[:-1] &= ~nonws[1:]
-    te = np.flatnonzero(last) + 1
-    if ts.size != total:
-        return None
-    # Fields per corner = 1 + slashes inside the token.  Usual files use
-    # one form throughout: check that cheaply before counting per token.
-    k, rem = divmod(slashes.size, total)
-    rows = slashes.reshape(total, k) if rem == 0 and k in (1, 2) else None
-    if rows is not None and ((rows[:, 0] > ts) & (rows[:, -1] < te)).all():
-        nf = np.full(total, k + 1, dtype=np.int64)
-    else:
-        owner = np.searchsorted(ts, slashes, side="right") - 1
-        nf = np.bincount(owner, minlength=total) + 1
-    if nf.max() > 3:
-        return None
-    raw = fbytes.tobytes()
-    n_dd = raw.count(b"//")
-    # "v//vn" -> "v 0 vn" keeps three fields; a literal 0 is caught below.
-    vals = _numbers(raw.replace(b"//", b"/0/").replace(b"/", b" "),
-                    np.int64, int(nf.sum()))
-    if vals is None:  # e.g. an empty field such as "1/"
-        return None
-    off = np.cumsum(nf) - nf
-    v = vals[off]
-    vt = np.full(total, _ABSENT, dtype=np.int64)
-    vn = np.full(total, _ABSENT, dtype=np.int64)
-    m2, m3 = nf >= 2, nf == 3
-    vt[m2] = vals[off[m2] + 1]
-    vn[m3] = vals[off[m3] + 2]
-    dd = m3 & (vt == 0)
-    if int(dd.sum()) != n_dd:  # some 0 was written, not inserted by us
-        return None
-    vt[dd] = _ABSENT
-    return v, vt, vn
-
-
-def _chunks(n: int, size: int = 4096):
-    """(start, stop) pairs covering range(n) in blocks of ``size``."""
-    return [(a, min(a + size, n)) for a in range(0, n, size)]
-
-
-def _show(tok: bytes) -> str:
-    """A token for an error message, quoted and shortened."""
-    s = tok.decode("utf-8", "replace")
-    return repr(s if len(s) <= 40 else s[:37] + "...")

@@ -17,7 +17,7 @@ from plyfile import (PlyData, PlyElementParseError, PlyHeaderParseError,
                      PlyListProperty, PlyParseError)
 
 from ..errors import MeshInputError
-from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, find_repeated_vertex
+from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, refuse_repeated_vertex
 
 __all__ = ["read_ply"]
 
@@ -33,7 +33,7 @@ def read_ply(path) -> MeshFile:
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str or os.PathLike, an ASCII or binary PLY file
 
     Returns
     -------
@@ -49,6 +49,32 @@ def read_ply(path) -> MeshFile:
         The file cannot be read or is not a valid PLY polygon mesh.
     """
     path = os.fspath(path)
+    ply, rows = _open(path)
+    vertex = _vertex_data(path, ply["vertex"], rows)
+    return MeshFile(path=path, **vertex, **_face_data(path, ply["face"], vertex["points"].shape[0], rows))
+
+
+class _Rows:
+    """1-based lines of element rows (ASCII files with a header found: one row per line).
+
+    text : bool, whether rows have lines at all
+    first : dict element name -> line of its row 0
+    """
+
+    def __init__(self, ply: PlyData, header_lines: int):
+        self.text = ply.text and header_lines > 0
+        self.first, line = {}, header_lines + 1
+        for element in ply.elements:
+            self.first[element.name] = line
+            line += element.count
+
+    def line(self, name: str, row) -> int | None:
+        """Line of row ``row`` of element ``name``, or None (binary file)."""
+        return self.first[name] + int(row) if self.text else None
+
+
+def _open(path: str):
+    """(PlyData, _Rows) of the file; refuses what is not a PLY file with vertices and faces."""
     head = _read_head(path)
     if not head or head.isspace():
         raise MeshInputError(
@@ -59,7 +85,6 @@ def read_ply(path) -> MeshFile:
             "check the file, or give it the suffix of its real format")
     header_lines, binary, sniffed = _sniff_header(head)
     ply = _load(path, binary, header_lines, sniffed)
-
     if "vertex" not in ply:
         raise MeshInputError(
             path, "the PLY file has no 'vertex' element: c1surf needs "
@@ -68,35 +93,23 @@ def read_ply(path) -> MeshFile:
         raise MeshInputError(
             path, "has vertices but no faces: c1surf needs polygon faces "
             "(the PLY file has no 'face' element)")
-    vert, face = ply["vertex"], ply["face"]
-    vdata, fdata = vert.data, face.data
-    n_vert, n_face = len(vdata), len(fdata)
+    return ply, _Rows(ply, header_lines)
 
-    # 1-based line of row k of an element (ASCII: one row per line).
-    first_line = {}
-    line = header_lines + 1
-    for elt in ply.elements:
-        first_line[elt.name] = line
-        line += elt.count
 
-    # Line numbers only for ASCII data, and only if the header was found.
-    text_lines = ply.text and header_lines > 0
-
-    def row_line(name, row):
-        return first_line[name] + int(row) if text_lines else None
-
-    # -- vertices -------------------------------------------------------
+def _vertex_data(path: str, vert, rows: _Rows) -> dict:
+    """The MeshFile fields of the vertex element: points (V, 3), normals, uvs, weights, other scalar properties."""
+    vdata = vert.data
     vnames = set(vdata.dtype.names or ())
     missing = [c for c in "xyz" if c not in vnames]
     if missing:
         raise MeshInputError(
             path, f"the 'vertex' element has no {'/'.join(missing)} "
             "property: vertices need x, y and z coordinates")
-    if n_vert == 0:
+    if len(vdata) == 0:
         raise MeshInputError(
             path, "the PLY file has no vertices ('element vertex 0'): "
             "export the mesh with its vertices")
-    points = np.empty((n_vert, 3))
+    points = np.empty((len(vdata), 3))
     for col, name in enumerate("xyz"):
         points[:, col] = _scalar(vdata, name, path)
     ok = np.isfinite(points).all(axis=1)
@@ -104,21 +117,23 @@ def read_ply(path) -> MeshFile:
         bad = int(np.argmin(ok))
         raise MeshInputError(
             path, f"vertex {bad} has a NaN or infinite coordinate: fix or "
-            "remove it", row_line("vertex", bad))
-
+            "remove it", rows.line("vertex", bad))
     normals = None
     if {"nx", "ny", "nz"} <= vnames:
-        normals = np.stack([_scalar(vdata, c, path) for c in
-                            ("nx", "ny", "nz")], axis=1)
+        normals = np.stack([_scalar(vdata, c, path) for c in ("nx", "ny", "nz")], axis=1)
     uvs = None
     uv_pair = next((p for p in _UV_NAMES if set(p) <= vnames), None)
     if uv_pair is not None:
         uvs = np.stack([_scalar(vdata, c, path) for c in uv_pair], axis=1)
     weights = _scalar(vdata, "weight", path) if "weight" in vnames else None
-    skip = _RESERVED_VERTEX | set(uv_pair or ())
-    vertex_attributes = _extras(vert, vdata, skip)
+    attributes = _extras(vert, vdata, _RESERVED_VERTEX | set(uv_pair or ()))
+    return {"points": points, "vertex_normals": normals, "vertex_uvs": uvs, "vertex_weights": weights,
+            "vertex_attributes": attributes}
 
-    # -- faces ----------------------------------------------------------
+
+def _face_data(path: str, face, n_vert: int, rows: _Rows) -> dict:
+    """The MeshFile fields of the face element: sizes (F,), vertices (sum(sizes),), lines, other properties."""
+    fdata = face.data
     index_name = next((n for n in _INDEX_NAMES
                        if n in (fdata.dtype.names or ())), None)
     if index_name is None or not isinstance(face.ply_property(index_name),
@@ -126,56 +141,39 @@ def read_ply(path) -> MeshFile:
         raise MeshInputError(
             path, "the 'face' element has no 'vertex_indices' list "
             "property: c1surf needs faces given as lists of vertex indices")
-    if n_face == 0:
+    if len(fdata) == 0:
         raise MeshInputError(
             path, "has vertices but no faces: c1surf needs polygon faces "
             "('element face 0')")
     sizes, face_vertices = _face_lists(fdata[index_name], path)
-
     small = np.flatnonzero(sizes < 3)
     if small.size:
         f = int(small[0])
         k = int(sizes[f])
         raise MeshInputError(
             path, f"face {f} has {k} {'vertex' if k == 1 else 'vertices'}: "
-            "a polygon needs at least 3; remove it", row_line("face", f))
+            "a polygon needs at least 3; remove it", rows.line("face", f))
+    _check_indices(path, sizes, face_vertices, n_vert, rows)
+    sizes, face_vertices, _, collapsed = collapse_repeated_corners_or_refuse(
+        sizes, face_vertices, path, lambda f: rows.line("face", f))
+    refuse_repeated_vertex(sizes, face_vertices, path, lambda f: rows.line("face", f), lambda f: f"face {f}")
+    face_lines = rows.first["face"] + np.arange(sizes.size, dtype=np.int64) if rows.text else None
+    return {"face_sizes": sizes, "face_vertices": face_vertices, "face_lines": face_lines,
+            "face_attributes": _extras(face, fdata, {index_name}), "collapsed_corners": collapsed}
+
+
+def _check_indices(path: str, sizes, face_vertices, n_vert: int, rows: _Rows) -> None:
+    """Refuse the first face that names a vertex outside 0 .. n_vert - 1."""
     bad = (face_vertices < 0) | (face_vertices >= n_vert)
     if bad.any():
         c = int(np.argmax(bad))
-        offs = np.zeros(n_face + 1, dtype=np.int64)
+        offs = np.zeros(sizes.size + 1, dtype=np.int64)
         np.cumsum(sizes, out=offs[1:])
         f = int(np.searchsorted(offs, c, side="right")) - 1
         raise MeshInputError(
             path, f"face {f} refers to vertex {int(face_vertices[c])} but "
             f"the file has {n_vert} vertices (valid: 0..{n_vert - 1}): fix "
-            "the index", row_line("face", f))
-    sizes, face_vertices, _, collapsed = collapse_repeated_corners_or_refuse(sizes, face_vertices, path, lambda f: row_line("face", f))
-    rep = find_repeated_vertex(sizes, face_vertices)
-    if rep is not None:
-        f, v, p1, p2 = rep
-        raise MeshInputError(
-            path, f"face {f} visits vertex {v} twice (corners {p1 + 1} and "
-            f"{p2 + 1}): a polygon must not repeat a vertex; remove the "
-            "duplicate or split the face", row_line("face", f))
-
-    face_attributes = _extras(face, fdata, {index_name})
-    face_lines = None
-    if text_lines:
-        face_lines = first_line["face"] + np.arange(n_face, dtype=np.int64)
-
-    return MeshFile(
-        path=path,
-        points=points,
-        face_sizes=sizes,
-        face_vertices=face_vertices,
-        face_lines=face_lines,
-        vertex_weights=weights,
-        vertex_normals=normals,
-        vertex_uvs=uvs,
-        face_attributes=face_attributes,
-        vertex_attributes=vertex_attributes,
-        collapsed_corners=collapsed,
-    )
+            "the index", rows.line("face", f))
 
 
 def _read_head(path: str) -> bytes:
@@ -271,6 +269,15 @@ def _load(path: str, binary: bool, header_lines: int, elements) -> PlyData:
                              "re-export the file") from None
 
 
+# plyfile's element error messages -> what to tell the user
+_ELEMENT_ERRORS = {
+    "early end-of-file": "the file ends early, inside {where} of {count}: it is truncated; re-export or re-download it",
+    "early end-of-line": "{where} has too few values{prop}: every line must list all properties declared in the header",
+    "expected end-of-line": "{where} has more values than the header declares: fix the line or the header",
+    "malformed input": "cannot read {where}{prop}: the value is not a number of the declared type",
+}
+
+
 def _element_error(exc: PlyElementParseError) -> str:
     """One line for a plyfile element error (row numbers are 0-based)."""
     elt = exc.element.name if exc.element is not None else "element"
@@ -278,18 +285,9 @@ def _element_error(exc: PlyElementParseError) -> str:
     row = exc.row
     prop = f" (property '{exc.prop.name}')" if exc.prop is not None else ""
     where = f"{elt} {row}" if row is not None else elt
-    if exc.message == "early end-of-file":
-        return (f"the file ends early, inside {where} of {count}: it is "
-                "truncated; re-export or re-download it")
-    if exc.message == "early end-of-line":
-        return (f"{where} has too few values{prop}: every line must list "
-                "all properties declared in the header")
-    if exc.message == "expected end-of-line":
-        return (f"{where} has more values than the header declares: fix "
-                "the line or the header")
-    if exc.message == "malformed input":
-        return (f"cannot read {where}{prop}: the value is not a number of "
-                "the declared type")
+    template = _ELEMENT_ERRORS.get(exc.message)
+    if template is not None:
+        return template.format(where=where, count=count, prop=prop)
     return f"cannot read {where}{prop}: {exc.message}"
 
 

@@ -1,64 +1,83 @@
-"""A vectorized binary PLY writer for triangle meshes with extra per-vertex properties.
+"""The binary PLY writer for triangle meshes (tessellations), vectorized.
 
-Used for tessellations that carry curvature (``convert --curvature``): besides
-``x y z nx ny nz`` each vertex gets float properties (``kmax K H``), ``quality``
-(a copy of one of them, the scalar MeshLab shows with "Colorize by vertex
-quality") and ``red green blue`` colours, which most viewers display as they are.
+One structured array per block of vertices: ``x y z`` (double, or float with
+``float32``), ``nx ny nz``, then whatever the mesh carries:
+
+- texture coordinates and colours (``convert --attributes``): ``s t`` (float)
+  and ``red green blue [alpha]`` (uchar); such a mesh keeps the layout c1surf
+  has always written for it: normals as float, no header comment;
+- named scalar properties (``convert --curvature``: ``kmax K H quality`` as
+  float, ``red green blue`` as uchar), in order; MeshLab shows ``quality`` with
+  "Colorize by vertex quality", most viewers show the colours as they are.
+
+Faces are ``property list uchar int vertex_indices``, binary little endian.
 """
 from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["write_ply"]
+__all__ = ["write_ply", "vertex_columns"]
+
+_BLOCK = 1 << 19  # rows per block: bounds the structured arrays to some MB
+_TYPE_NAMES = {"<f4": "float", "<f8": "double", "u1": "uchar"}
 
 
-def write_ply(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None,
-              properties: dict | None = None, colors: np.ndarray | None = None, comments=(), float32: bool = False) -> None:
-    """Write a binary little-endian PLY file.
+def vertex_columns(mesh, float32: bool = False) -> list:
+    """The vertex properties of ``mesh`` (an ``io.meshes.write.TriangleMesh``) as PLY columns.
+
+    Returns
+    -------
+    list of (name, dtype, (V,) values), in file order; dtype one of "<f8", "<f4", "u1"
+    """
+    real = "<f4" if float32 else "<f8"
+    columns = [(axis, real, mesh.points[:, k]) for k, axis in enumerate("xyz")]
+    if mesh.normals is not None:
+        normal = "<f4" if mesh.has_attributes else real
+        columns += [(axis, normal, mesh.normals[:, k]) for k, axis in enumerate(("nx", "ny", "nz"))]
+    if mesh.uv is not None:
+        columns += [("s", "<f4", mesh.uv[:, 0]), ("t", "<f4", mesh.uv[:, 1])]
+    for name, values in mesh.properties.items():
+        if not name.isidentifier():
+            raise ValueError(f"bad PLY property name {name!r}")
+        values = np.asarray(values)
+        columns.append((name, "u1" if values.dtype == np.uint8 else "<f4", values.reshape(-1)))
+    if mesh.colours is not None:
+        bytes_ = np.rint(np.asarray(mesh.colours) * 255).astype(np.uint8)
+        columns += [(name, "u1", bytes_[:, k]) for k, name in enumerate(mesh.colour_names)]
+    return columns
+
+
+def _header(columns, n_vertices: int, n_triangles: int, comments) -> bytes:
+    lines = ["ply", "format binary_little_endian 1.0"]
+    lines += [f"comment {c}" for c in comments]
+    lines.append(f"element vertex {n_vertices}")
+    lines += [f"property {_TYPE_NAMES[dtype]} {name}" for name, dtype, _ in columns]
+    lines += [f"element face {n_triangles}", "property list uchar int vertex_indices", "end_header"]
+    return ("\n".join(lines) + "\n").encode("ascii")
+
+
+def write_ply(path, mesh, float32: bool = False) -> None:
+    """Write ``mesh`` (an ``io.meshes.write.TriangleMesh``) as binary little-endian PLY.
 
     Parameters
     ----------
-    points : (V, 3) float; triangles : (T, 3) int; normals : (V, 3) float or None
-    properties : dict name -> (V,) float, written as float32 vertex properties, in order
-    colors : (V, 3) uint8 or None, written as ``red green blue``
-    comments : iterable of str, header comment lines
-    float32 : positions and normals as ``float`` (default ``double``, like the plain PLY writer)
+    path : str or os.PathLike
+    mesh : TriangleMesh, points (V, 3), triangles (T, 3) int, optional normals, uv, colours, properties
+    float32 : positions (and normals) as ``float`` instead of ``double``
     """
-    points = np.asarray(points)
-    triangles = np.asarray(triangles)
-    v = points.shape[0]
-    real = "<f4" if float32 else "<f8"
-    fields = [("x", real), ("y", real), ("z", real)]
-    if normals is not None:
-        fields += [("nx", real), ("ny", real), ("nz", real)]
-    properties = dict(properties or {})
-    for name in properties:
-        if not name.isidentifier():
-            raise ValueError(f"bad PLY property name {name!r}")
-        fields.append((name, "<f4"))
-    if colors is not None:
-        fields += [("red", "u1"), ("green", "u1"), ("blue", "u1")]
-    vertex = np.empty(v, dtype=fields)
-    for k, axis in enumerate("xyz"):
-        vertex[axis] = points[:, k]
-    if normals is not None:
-        for k, axis in enumerate(("nx", "ny", "nz")):
-            vertex[axis] = normals[:, k]
-    for name, values in properties.items():
-        vertex[name] = np.asarray(values).reshape(v)
-    if colors is not None:
-        for k, name in enumerate(("red", "green", "blue")):
-            vertex[name] = colors[:, k]
-    face = np.empty(triangles.shape[0], dtype=[("n", "u1"), ("i", "<i4", (3,))])
-    face["n"] = 3
-    face["i"] = triangles
-    type_names = {"<f4": "float", "<f8": "double", "u1": "uchar"}
-    header = ["ply", "format binary_little_endian 1.0"]
-    header += [f"comment {c}" for c in comments]
-    header.append(f"element vertex {v}")
-    header += [f"property {type_names[t]} {name}" for name, t in fields]
-    header += [f"element face {triangles.shape[0]}", "property list uchar int vertex_indices", "end_header"]
+    columns = vertex_columns(mesh, float32)
+    triangles = np.asarray(mesh.triangles)
+    n, t = mesh.points.shape[0], triangles.shape[0]
+    comments = () if mesh.has_attributes else ("c1surf",)
     with open(path, "wb") as f:
-        f.write(("\n".join(header) + "\n").encode("ascii"))
-        f.write(vertex.tobytes())
-        f.write(face.tobytes())
+        f.write(_header(columns, n, t, comments))
+        for a in range(0, n, _BLOCK):
+            vertex = np.empty(min(n, a + _BLOCK) - a, dtype=[(name, dtype) for name, dtype, _ in columns])
+            for name, _, values in columns:
+                vertex[name] = values[a : a + _BLOCK]
+            f.write(vertex.tobytes())
+        for a in range(0, t, _BLOCK):
+            face = np.empty(min(t, a + _BLOCK) - a, dtype=[("n", "u1"), ("i", "<i4", (3,))])
+            face["n"] = 3
+            face["i"] = triangles[a : a + _BLOCK]
+            f.write(face.tobytes())

@@ -1,4 +1,4 @@
-"""Read a polygon mesh file, choosing the reader from the suffix."""
+"""Read a polygon mesh file, choosing the reader from the suffix (``io.registry.MESH_READERS``)."""
 
 from __future__ import annotations
 
@@ -6,14 +6,10 @@ import os
 from pathlib import Path
 
 from ..errors import MeshInputError
+from ..registry import MESH_READERS, UnsupportedFormat, suffix_of
 from .mesh_file import MeshFile
-from .obj import read_obj
-from .ply import read_ply
 
-__all__ = ["read_mesh", "READERS", "SUPPORTED_SUFFIXES"]
-
-READERS = {".obj": read_obj, ".ply": read_ply}
-SUPPORTED_SUFFIXES = tuple(READERS)
+__all__ = ["read_mesh"]
 
 
 def read_mesh(path) -> MeshFile:
@@ -21,7 +17,7 @@ def read_mesh(path) -> MeshFile:
 
     Parameters
     ----------
-    path : str or os.PathLike
+    path : str or os.PathLike, a mesh file whose suffix names its format
 
     Returns
     -------
@@ -45,16 +41,12 @@ def read_mesh(path) -> MeshFile:
         raise MeshInputError(
             path_str, "is a directory, not a mesh file: give the path of "
             "an .obj or .ply file")
-    suffix = p.suffix.lower()
-    reader = READERS.get(suffix)
-    if reader is None:
-        shown = f"suffix {p.suffix!r}" if p.suffix else "no suffix"
-        raise MeshInputError(
-            path_str, f"unsupported mesh format ({shown}): c1surf reads "
-            f"{', '.join(SUPPORTED_SUFFIXES)} files; convert the mesh to one "
-            "of them")
+    try:
+        suffix = suffix_of(path_str, MESH_READERS)
+    except UnsupportedFormat as e:
+        raise MeshInputError(path_str, f"{e.message}; convert the mesh to one of them") from None
     if not os.access(path_str, os.R_OK):
         raise MeshInputError(
             path_str, "cannot read the file (permission denied): check its "
             "permissions")
-    return reader(path_str)
+    return MESH_READERS[suffix].function(path_str)

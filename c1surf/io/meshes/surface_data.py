@@ -158,62 +158,81 @@ def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = Non
     MeshInputError when requested data is missing or malformed.
     """
     data = SurfaceData(points=np.asarray(mesh.points, dtype=np.float64))
+    data.face_blend, data.vertex_blend = _blend_ratios(mesh, blend_file)
+    data.weights = _weights(mesh, use_weights)
+    if normals:
+        data.vertex_normals = _vertex_normals(mesh)
+    if attributes:
+        extra, data.attribute_names, data.colour_scale = _attribute_columns(mesh)
+        data.points = np.concatenate([data.points, extra], axis=1)
+    return data
+
+
+def _blend_ratios(mesh: MeshFile, blend_file):
+    """(face_blend (F,), vertex_blend (V,)): the PLY ``blend`` properties, overridden where the sidecar file sets a ratio."""
+    face_blend = vertex_blend = None
     if "blend" in mesh.face_attributes:
-        data.face_blend = _property_ratios(mesh, mesh.face_attributes["blend"], "face")
+        face_blend = _property_ratios(mesh, mesh.face_attributes["blend"], "face")
     if "blend" in mesh.vertex_attributes:
-        data.vertex_blend = _property_ratios(mesh, mesh.vertex_attributes["blend"], "vertex")
-    if blend_file is not None:
-        face_blend, vertex_blend = read_blend_file(blend_file, mesh)
-        if data.face_blend is not None:  # the sidecar file wins where it sets a ratio
-            face_blend = np.where(np.isnan(face_blend), data.face_blend, face_blend)
-        data.face_blend = face_blend
-        if vertex_blend is not None:
-            if data.vertex_blend is not None:
-                vertex_blend = np.where(np.isnan(vertex_blend), data.vertex_blend, vertex_blend)
-            data.vertex_blend = vertex_blend
+        vertex_blend = _property_ratios(mesh, mesh.vertex_attributes["blend"], "vertex")
+    if blend_file is None:
+        return face_blend, vertex_blend
+    file_faces, file_vertices = read_blend_file(blend_file, mesh)
+    if face_blend is not None:  # the sidecar file wins where it sets a ratio
+        file_faces = np.where(np.isnan(file_faces), face_blend, file_faces)
+    if file_vertices is not None and vertex_blend is not None:
+        file_vertices = np.where(np.isnan(file_vertices), vertex_blend, file_vertices)
+    return file_faces, vertex_blend if file_vertices is None else file_vertices
+
+
+def _weights(mesh: MeshFile, use_weights: bool | None):
+    """(V,) positive weights of the used vertices (1 elsewhere), or None when not asked for or all 1."""
     weights = mesh.vertex_weights
     if use_weights and weights is None:
         raise MeshInputError(mesh.path, "has no vertex weights (OBJ `v x y z w`, PLY property `weight`) for --weights")
-    if weights is not None and (use_weights or (use_weights is None and np.any(weights != 1.0))):
-        used = _used_vertices(mesh)
-        bad = np.flatnonzero(used & ~(weights > 0))
-        if bad.size:
-            raise MeshInputError(mesh.path, f"vertex {bad[0]} has weight {weights[bad[0]]!r}: rational weights must be positive")
-        data.weights = np.where(used, weights, 1.0)
-    used = None
-    if normals:
-        if mesh.vertex_normals is None:
-            raise MeshInputError(mesh.path, "has no vertex normals (OBJ `vn` with `f v//vn`, PLY `nx ny nz`) to interpolate")
-        used = _used_vertices(mesh)
-        n = np.asarray(mesh.vertex_normals, dtype=np.float64)
-        length = np.linalg.norm(n, axis=1)
-        missing = np.flatnonzero(used & ~(length > 0))
-        if missing.size:
-            raise MeshInputError(mesh.path, f"vertex {missing[0]} has no (or a zero) normal ({missing.size} such vertices)")
-        data.vertex_normals = np.where(used[:, None], n, np.nan)
-    if attributes:
-        columns, names = [], []
-        if mesh.vertex_uvs is not None:
-            columns.append(np.asarray(mesh.vertex_uvs, dtype=np.float64))
-            names += ["u", "v"]
-        colours = [c for c in COLOUR_NAMES if c in mesh.vertex_attributes]
-        if colours:
-            values = np.stack([np.asarray(mesh.vertex_attributes[c], dtype=np.float64) for c in colours], axis=1)
-            columns.append(values)
-            names += colours
-            data.colour_scale = 1.0 if np.nanmax(values, initial=0.0) <= 1.0 else 255.0
-        if not columns:
-            raise MeshInputError(mesh.path, "has no texture coordinates or vertex colours to carry (--attributes)")
-        extra = np.concatenate(columns, axis=1)
-        used = _used_vertices(mesh) if used is None else used
-        missing = np.flatnonzero(used & ~np.all(np.isfinite(extra), axis=1))
-        if missing.size:
-            raise MeshInputError(mesh.path, f"vertex {missing[0]} has no texture coordinate ({missing.size} such vertices): "
-                                 "--attributes needs one per vertex")
-        extra = np.where(used[:, None], extra, 0.0)
-        data.points = np.concatenate([data.points, extra], axis=1)
-        data.attribute_names = names
-    return data
+    if weights is None or not (use_weights or (use_weights is None and np.any(weights != 1.0))):
+        return None
+    used = _used_vertices(mesh)
+    bad = np.flatnonzero(used & ~(weights > 0))
+    if bad.size:
+        raise MeshInputError(mesh.path, f"vertex {bad[0]} has weight {weights[bad[0]]!r}: rational weights must be positive")
+    return np.where(used, weights, 1.0)
+
+
+def _vertex_normals(mesh: MeshFile) -> np.ndarray:
+    """(V, 3) normals of the used vertices (NaN elsewhere); every used vertex needs one."""
+    if mesh.vertex_normals is None:
+        raise MeshInputError(mesh.path, "has no vertex normals (OBJ `vn` with `f v//vn`, PLY `nx ny nz`) to interpolate")
+    used = _used_vertices(mesh)
+    n = np.asarray(mesh.vertex_normals, dtype=np.float64)
+    length = np.linalg.norm(n, axis=1)
+    missing = np.flatnonzero(used & ~(length > 0))
+    if missing.size:
+        raise MeshInputError(mesh.path, f"vertex {missing[0]} has no (or a zero) normal ({missing.size} such vertices)")
+    return np.where(used[:, None], n, np.nan)
+
+
+def _attribute_columns(mesh: MeshFile):
+    """(columns (V, k), names, colour scale): texture coordinates "u" "v", then the colours; 0 on unused vertices."""
+    columns, names, colour_scale = [], [], 1.0
+    if mesh.vertex_uvs is not None:
+        columns.append(np.asarray(mesh.vertex_uvs, dtype=np.float64))
+        names += ["u", "v"]
+    colours = [c for c in COLOUR_NAMES if c in mesh.vertex_attributes]
+    if colours:
+        values = np.stack([np.asarray(mesh.vertex_attributes[c], dtype=np.float64) for c in colours], axis=1)
+        columns.append(values)
+        names += colours
+        colour_scale = 1.0 if np.nanmax(values, initial=0.0) <= 1.0 else 255.0
+    if not columns:
+        raise MeshInputError(mesh.path, "has no texture coordinates or vertex colours to carry (--attributes)")
+    extra = np.concatenate(columns, axis=1)
+    used = _used_vertices(mesh)
+    missing = np.flatnonzero(used & ~np.all(np.isfinite(extra), axis=1))
+    if missing.size:
+        raise MeshInputError(mesh.path, f"vertex {missing[0]} has no texture coordinate ({missing.size} such vertices): "
+                             "--attributes needs one per vertex")
+    return np.where(used[:, None], extra, 0.0), names, colour_scale
 
 
 __all__ = ["SurfaceData", "surface_data", "read_blend_file", "COLOUR_NAMES"]

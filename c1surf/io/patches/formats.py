@@ -1,46 +1,48 @@
-"""Suffix -> writer / reader tables for patch files (``--patches``, ``tessellate``, ``check``)."""
+"""Patch files by suffix (``io.registry.PATCH_READERS`` / ``PATCH_WRITERS``): read any, write a PatchSet or a Surface."""
 from __future__ import annotations
 
-from pathlib import Path
+import dataclasses
+import functools
 
-from .json_patches import read_patch_set_json, read_patches_json, write_patches_json
-from .iges import read_patch_set_iges, write_patches_iges
-from .npz import read_patch_set_npz, write_patches_npz
-from .step import write_patches_step
+from ...evaluation.patch_set import PatchSet, surface_patch_set
+from .. import registry
 
-# Each writer: writer(path, surface, input_path=None, **options); options a writer
-# does not use are ignored: adjacency (a PatchAdjacency already computed),
-# file_name (the final name when ``path`` is a temporary file), units and group (IGES).
-# Each reader: reader(path) -> list of patch arrays (by degree).
-# Each loader: loader(path) -> PatchSet (file order, sources, adjacency, header).
-PATCH_WRITERS = {
-    ".json": write_patches_json,
-    ".npz": write_patches_npz,
-    ".igs": write_patches_iges,
-    ".iges": write_patches_iges,
-    ".step": write_patches_step,
-    ".stp": write_patches_step,
-}
-PATCH_LOADERS = {
-    ".json": read_patch_set_json,
-    ".npz": read_patch_set_npz,
-    ".igs": read_patch_set_iges,
-    ".iges": read_patch_set_iges,
-}
-PATCH_READERS = {".json": read_patches_json, **{k: (lambda path, load=v: load(path).by_degree()) for k, v in PATCH_LOADERS.items() if k != ".json"}}
+__all__ = ["load_patch_set", "write_patch_set", "write_surface_patches", "PATCH_LOADERS", "PATCH_READERS",
+           "PATCH_WRITERS"]
 
 
-def load_patch_set(path):
+def load_patch_set(path) -> PatchSet:
     """Read any patch file (the suffix picks the reader) as a PatchSet."""
-    suffix = Path(path).suffix.lower()
-    if suffix not in PATCH_LOADERS:
-        raise ValueError(f"unknown patch format {suffix!r}; use one of {', '.join(sorted(PATCH_LOADERS))}")
-    return PATCH_LOADERS[suffix](path)
+    return registry.PATCH_READERS[registry.suffix_of(path, registry.PATCH_READERS)].function(path)
 
 
-def patch_suffix(path) -> str:
-    """Lower-case suffix of ``path`` if it names a supported patch format, else ValueError."""
-    suffix = Path(path).suffix.lower()
-    if suffix not in PATCH_WRITERS:
-        raise ValueError(f"unknown patch format {suffix!r}; use one of {', '.join(sorted(PATCH_WRITERS))}")
-    return suffix
+def write_patch_set(path, patch_set: PatchSet, suffix: str | None = None, **options) -> None:
+    """Write ``patch_set`` in the format of ``suffix`` (default: the path's).
+
+    ``options``: file_name (the final name when ``path`` is a temporary file),
+    units and group (IGES); a format ignores the options it has no use for.
+    """
+    suffix = suffix or registry.suffix_of(path, registry.PATCH_WRITERS)
+    registry.PATCH_WRITERS[suffix].function(path, patch_set, **options)
+
+
+def write_surface_patches(path, surface, suffix: str | None = None, input_path: str | None = None, adjacency=None,
+                          merged=None, **options) -> None:
+    """Write the patches of a ``construction.surface.Surface`` (see ``write_patch_set``).
+
+    ``adjacency``: its PatchAdjacency when already computed; ``merged``: the
+    ``evaluation.merge.MergedPiece`` list of ``convert --merge``, or None.
+    """
+    patch_set = dataclasses.replace(surface_patch_set(surface, input_path, adjacency), merged=list(merged or []))
+    write_patch_set(path, patch_set, suffix, **options)
+
+
+def _by_degree(path) -> list:
+    return load_patch_set(path).by_degree()
+
+
+# The names of before io.registry (suffix -> function), for callers not moved to it yet
+# (cli/check.py, cli/render.py, bench/run.py): remove once they use io.registry.
+PATCH_LOADERS = dict.fromkeys(registry.PATCH_READERS, load_patch_set)
+PATCH_READERS = dict.fromkeys(registry.PATCH_READERS, _by_degree)
+PATCH_WRITERS = {suffix: functools.partial(write_surface_patches, suffix=suffix) for suffix in registry.PATCH_WRITERS}

@@ -1,16 +1,21 @@
-"""Patch files in IGES 5.3 (``.igs`` / ``.iges``): write a surface, read Bezier patches back.
+"""Patch files in IGES 5.3 (``.igs`` / ``.iges``): write a PatchSet, read Bezier patches and merged surfaces back.
 
-Writing goes through ``io.iges.write_iges``: one rational B-spline surface
+Writing goes through ``iges_writer.write_iges``: one rational B-spline surface
 entity (type 128, form 0) per patch, biquadratic first, then bicubic, clamped
-knots on [0, 1], unit weights (PROP3 = 1, polynomial), control points with the
-first (u) index fastest; by default one group entity (type 402 form 7)
-collects them so CAD systems show one object.
+knots on [0, 1], the patch weights (PROP3 = 1 where they are all equal:
+polynomial), control points with the first (u) index fastest; merged pieces
+(``convert --merge``) come first and replace the patches they stand for. By
+default one group entity (type 402 form 7) collects them so CAD systems show
+one object.
 
-Reading accepts exactly what ``c1surf tessellate`` can use: entities 128 that
-are single Bezier patches (no interior knots, equal weights), optionally
-collected by 402 groups. Anything else (trimmed surfaces, rational patches,
-transformation matrices, other geometry) is refused with one line saying so.
-IGES carries no adjacency: ``PatchSet.welding()`` finds it from the geometry.
+Reading accepts everything that writer writes: entities 128 that are single
+Bezier patches (polynomial or rational: unequal weights become
+``PatchSet.weights``) and c1surf's merged B-spline surfaces (degree (2, 2),
+knots 0 0 0 1 ... m m m: ``PatchSet.merged``, their patches cut out again
+into the patch list), optionally collected by 402 groups. Anything else
+(trimmed surfaces, other B-splines, transformation matrices, other geometry)
+is refused with one line saying so. IGES carries no adjacency:
+``PatchSet.welding()`` finds it from the geometry.
 """
 from __future__ import annotations
 
@@ -19,52 +24,46 @@ import os
 import numpy as np
 
 from ... import __version__
+from ...evaluation.merge import MergedPiece, piece_dicts
+from ...evaluation.patch_set import PatchSet, degree_runs
 from ..errors import MeshInputError
 from .iges_writer import UNITS, bezier_patches_to_surfaces, write_iges
-from ...evaluation.patch_set import PatchSet, degree_runs
+from .merged import is_piece_knots, piece_patches, uncovered_groups
 
 DEFAULT_UNITS = "mm"
 
 
-def write_patches_iges(path, surface, input_path: str | None = None, *, units: str = DEFAULT_UNITS, group: bool = True,
-                       file_name: str | None = None, merged=None, **_options) -> None:
-    """Write ``surface``'s patches as IGES 5.3.
+def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNITS, group: bool = True,
+                         file_name: str | None = None, **_options) -> None:
+    """Write ``patch_set`` as IGES 5.3: its merged pieces, then the patches they do not stand for.
 
     Parameters
     ----------
     path : the file to write (may be a temporary name)
-    surface : core.surface.Surface
-    input_path : str or None, recorded in the Start section
-    units : a key of ``io.iges.UNITS`` (coordinates are written unscaled; this labels them)
+    patch_set : evaluation.patch_set.PatchSet (weights and merged pieces are written)
+    units : a key of ``iges_writer.UNITS`` (coordinates are written unscaled; this labels them)
     group : collect the surfaces in one group entity (402 form 7)
     file_name : the name recorded in the Global section (default: basename of ``path``)
-    merged : ``core.merge.MergedPiece`` list (``convert --merge``): those B-spline surfaces
-        first, then the patches they do not cover
     """
-    surfaces = []
-    weights = getattr(surface, "patch_weights", None) or [None, None]  # rational surfaces (A2a): IGES weights
-    keep = np.ones(len(surface.biquadratic), dtype=bool)
-    if merged:
-        from ...evaluation.merge import piece_dicts
-
-        surfaces.extend(piece_dicts(merged))
-        for piece in merged:
-            keep[piece.patches.ravel()] = False
-    for g, w, mask in zip((surface.biquadratic, surface.bicubic), weights, (keep, None)):
-        if mask is not None:
-            g, w = g[mask], (None if w is None else w[mask])
-        if len(g):
-            surfaces.extend(bezier_patches_to_surfaces(np.ascontiguousarray(g[..., :3]), w))
-    o = surface.options
-    source = os.path.basename(str(input_path)) if input_path else "a mesh"
-    description = (
-        f"c1surf {__version__}: G1 surface of {source}, {len(surface.biquadratic)} biquadratic and "
-        f"{len(surface.bicubic)} bicubic Bezier patches as rational B-spline surfaces (type 128 form 0, "
-        f"{'rational' if getattr(surface, 'patch_weights', None) is not None else 'polynomial'}), biquadratic first; options blend={o.blend!r} alpha={o.alpha!r} beta={o.beta!r} "
-        f"tangent_rule={o.tangent_rule}."
-    )
+    surfaces = piece_dicts(patch_set.merged)
+    for points, weights in zip(*uncovered_groups(patch_set)):
+        surfaces.extend(bezier_patches_to_surfaces(points, weights))
     write_iges(path, surfaces, units=units, group=group, file_name=file_name or os.path.basename(os.fspath(path)),
-               description=description)
+               description=_description(patch_set))
+
+
+def _description(patch_set: PatchSet) -> str:
+    """The Start section's text: what was converted, the patch counts and the construction options."""
+    input_path = (patch_set.header.get("input") or {}).get("path")
+    source = os.path.basename(str(input_path)) if input_path else "a mesh"
+    counts = {n: sum(len(g) for g in patch_set.groups if g.shape[1:3] == (n, n)) for n in (3, 4)}
+    text = (f"c1surf {__version__}: G1 surface of {source}, {counts[3]} biquadratic and {counts[4]} bicubic Bezier "
+            "patches as rational B-spline surfaces (type 128 form 0, "
+            f"{'rational' if patch_set.weights is not None else 'polynomial'}), biquadratic first")
+    o = patch_set.header.get("options")
+    if not o:
+        return text + "."
+    return text + f"; options blend={o['blend']!r} alpha={o['alpha']!r} beta={o['beta']!r} tangent_rule={o['tangent_rule']}."
 
 
 # ----------------------------------------------------------------------------
@@ -124,53 +123,90 @@ def _real(token: str) -> float:
 
 
 def read_patch_set_iges(path) -> PatchSet:
-    """Read the Bezier patches (entities 128) of an IGES file, in Directory order.
+    """Read the Bezier patches and merged surfaces (entities 128) of an IGES file, in Directory order.
 
     Returns
     -------
-    PatchSet without adjacency or sources (IGES has neither)
+    PatchSet without adjacency or sources (IGES has neither); weights when
+    some patch or piece is rational; the patches of each merged piece follow
+    one another in the patch list, row by row, as ``merged.piece_patches`` cuts them
     """
     sections = _records(path)
+    patches, weights, pieces = [], [], []
+    n_biquadratic = 0  # biquadratic patches so far: a piece's patches are numbered among them
+    for line, (knots_u, knots_v, w, points) in _surfaces(path, sections):
+        if _single_span(knots_u, points.shape[0] - 1) and _single_span(knots_v, points.shape[1] - 1):
+            patches.append(points)
+            weights.append(w)
+            n_biquadratic += points.shape[:2] == (3, 3)
+            continue
+        if not (points.shape[0] >= 3 and is_piece_knots(knots_u) and is_piece_knots(knots_v)
+                and knots_u.size == points.shape[0] + 3 and knots_v.size == points.shape[1] + 3):
+            raise MeshInputError(str(path), "the B-spline surface (type 128) has interior knots and is not a merged "
+                                 "c1surf surface (degree (2, 2), knots 0 0 0 1 ... m m m): c1surf reads only such "
+                                 "surfaces and single Bezier patches", line)
+        m, n = points.shape[0] - 2, points.shape[1] - 2
+        piece = MergedPiece(points, w, knots_u, knots_v, n_biquadratic + np.arange(m * n).reshape(m, n),
+                            np.zeros((m, n), dtype=np.int64))
+        n_biquadratic += m * n
+        cut, cut_weights = piece_patches(piece)
+        pieces.append(piece)
+        patches.extend(cut)
+        weights.extend(cut_weights)
+    rational = any(not np.all(w == w.flat[0]) for w in weights)
+    if not rational:
+        pieces = [MergedPiece(p.points, None, p.knots_u, p.knots_v, p.patches, p.rotation) for p in pieces]
+    header = {"format": "iges", "input": {"path": str(path)}, "counts": {"patches": len(patches)}}
+    return PatchSet(degree_runs(patches), None, None, None, header, degree_runs(weights) if rational else None, pieces)
+
+
+def _single_span(knots: np.ndarray, degree: int) -> bool:
+    """Clamped knots of one Bezier span: degree + 1 equal values, then degree + 1 equal values."""
+    return knots.size == 2 * degree + 2 and np.all(knots[: degree + 1] == knots[0]) and np.all(knots[degree + 1 :] == knots[-1])
+
+
+def _surfaces(path, sections):
+    """(line, (knots_u, knots_v, weights (nu, nv), points (nu, nv, 3))) of each entity 128, in Directory order.
+
+    Groups (402), null entities and properties are passed over; any other
+    entity, and a surface with a transformation matrix, is refused.
+    """
     param, record = _delimiters(sections["G"])
     de, pd = sections["D"], sections["P"]
     if len(de) % 2:
         raise MeshInputError(str(path), "the Directory Entry section has an odd number of records", de[-1][0] if de else None)
-    patches = []
     for k in range(0, len(de), 2):
         line_number, d1 = de[k]
         d2 = de[k + 1][1]
         try:
-            etype, pointer, matrix, count, form = (_int(x) for x in (d1[0:8], d1[8:16], d1[48:56], d2[24:32], d2[32:40]))
+            etype, pointer, matrix, count = (_int(x) for x in (d1[0:8], d1[8:16], d1[48:56], d2[24:32]))
         except ValueError:
             raise MeshInputError(str(path), "malformed Directory Entry", line_number) from None
         if etype in (402, 0, 406):  # groups, null entities and properties: nothing to draw
             continue
         if etype != 128:
             raise MeshInputError(str(path), f"entity type {etype} is not supported: c1surf tessellate reads only "
-                                 "untrimmed Bezier patches (type 128)", line_number)
+                                 "untrimmed Bezier patches and B-spline surfaces (type 128)", line_number)
         if matrix != 0:
             raise MeshInputError(str(path), "entity 128 with a transformation matrix is not supported", line_number)
-        tokens = _parameters(path, pd, pointer, count, param, record)
-        try:
-            k1, k2, m1, m2 = (int(t) for t in tokens[1:5])
-            n1, n2, nc = k1 + m1 + 2, k2 + m2 + 2, (k1 + 1) * (k2 + 1)
-            values = np.array([_real(t) for t in tokens[10 : 10 + n1 + n2 + 4 * nc]])
-        except (ValueError, IndexError):
-            raise MeshInputError(str(path), "malformed rational B-spline surface (type 128)", line_number) from None
-        if values.size != n1 + n2 + 4 * nc or not np.all(np.isfinite(values)):
-            raise MeshInputError(str(path), "truncated rational B-spline surface (type 128)", line_number)
-        ku, kv = values[:n1], values[n1 : n1 + n2]
-        weights = values[n1 + n2 : n1 + n2 + nc]
-        if k1 != m1 or k2 != m2 or np.any(ku[: m1 + 1] != ku[0]) or np.any(ku[m1 + 1 :] != ku[-1]) \
-                or np.any(kv[: m2 + 1] != kv[0]) or np.any(kv[m2 + 1 :] != kv[-1]):
-            raise MeshInputError(str(path), f"the B-spline surface (type 128, form {form}) has interior knots: "
-                                 "c1surf tessellate reads only single Bezier patches", line_number)
-        if np.any(weights != weights[0]):
-            raise MeshInputError(str(path), "rational patch (unequal weights): c1surf tessellate reads only polynomial patches", line_number)
-        points = values[n1 + n2 + nc :].reshape(k2 + 1, k1 + 1, 3).transpose(1, 0, 2)  # u index fastest in the file
-        patches.append(np.ascontiguousarray(points))
-    header = {"format": "iges", "input": {"path": str(path)}, "counts": {"patches": len(patches)}}
-    return PatchSet(degree_runs(patches), None, None, None, header)
+        yield line_number, _surface_128(path, _parameters(path, pd, pointer, count, param, record), line_number)
 
 
-__all__ = ["write_patches_iges", "read_patch_set_iges", "UNITS", "DEFAULT_UNITS"]
+def _surface_128(path, tokens: list, line: int):
+    """Knots, weights and control points of a rational B-spline surface entity from its parameters."""
+    try:
+        k1, k2, m1, m2 = (int(t) for t in tokens[1:5])
+        n1, n2, nc = k1 + m1 + 2, k2 + m2 + 2, (k1 + 1) * (k2 + 1)
+        values = np.array([_real(t) for t in tokens[10 : 10 + n1 + n2 + 4 * nc]])
+    except (ValueError, IndexError):
+        raise MeshInputError(str(path), "malformed rational B-spline surface (type 128)", line) from None
+    if values.size != n1 + n2 + 4 * nc or not np.all(np.isfinite(values)):
+        raise MeshInputError(str(path), "truncated rational B-spline surface (type 128)", line)
+    weights = values[n1 + n2 : n1 + n2 + nc].reshape(k2 + 1, k1 + 1).T  # u index fastest in the file
+    if not np.all(weights > 0):
+        raise MeshInputError(str(path), "rational B-spline surface (type 128) with a weight <= 0", line)
+    points = values[n1 + n2 + nc :].reshape(k2 + 1, k1 + 1, 3).transpose(1, 0, 2)
+    return values[:n1], values[n1 : n1 + n2], np.ascontiguousarray(weights), np.ascontiguousarray(points)
+
+
+__all__ = ["write_patch_set_iges", "read_patch_set_iges", "UNITS", "DEFAULT_UNITS"]

@@ -9,7 +9,10 @@ Shape (see docs/patch-format.md)::
                   "weights": (du+1) x (dv+1) (rational patches only, A2a),
                   "source": {"face": f} | {"vertex": v} | {"edge": [a, b]},
                   "corners": [4 ids], "edges": [4 ids], "reversed": [4 bools],
-                  "neighbours": [[patch, side] x 4]}, ...]}
+                  "neighbours": [[patch, side] x 4]}, ...],
+     "merged": [{"kind": "bspline", "degree": [2, 2], "knots_u": [...], "knots_v": [...],
+                 "points": (m+2) x (n+2) x 3, "weights": (rational only),
+                 "patches": m x n, "rotation": m x n}, ...]}      (convert --merge only)
 
 Floats are written with ``repr`` precision, so reading gives the same bits.
 """
@@ -19,9 +22,11 @@ import json
 
 import numpy as np
 
-from ...evaluation.adjacency import PatchAdjacency
+from ...evaluation.patch_set import KIND_BY_DEGREE, PatchSet, degree_runs, surface_patch_set
 from ..errors import MeshInputError
-from ...evaluation.patch_set import FORMAT_NAME, FORMAT_VERSION, KIND_BY_DEGREE, PatchSet, degree_runs, surface_patch_set
+from .checks import check_header, checked_adjacency, checked_piece, checked_weights
+
+_PIECE_KEYS = ("points", "knots_u", "knots_v", "patches", "rotation")  # and "weights" when rational
 
 
 def surface_patch_document(surface, input_path: str | None = None, adjacency=None) -> dict:
@@ -50,27 +55,10 @@ def patch_set_document(patch_set: PatchSet) -> dict:
         for patch, c, e, r, n in zip(patches, adjacency.corners.tolist(), adjacency.edges.tolist(),
                                      adjacency.reversed.tolist(), neighbours):
             patch["corners"], patch["edges"], patch["reversed"], patch["neighbours"] = c, e, r, n
-    return {**patch_set.header, "patches": patches}
-
-
-def write_patches_json(path, surface, input_path: str | None = None, adjacency=None, merged=None, **_options) -> None:
-    """Write ``surface``'s patches to ``path`` as c1surf-patches JSON.
-
-    ``adjacency``: the surface's ``PatchAdjacency`` when already computed;
-    ``merged``: ``core.merge.MergedPiece`` list (``convert --merge``), written under
-    the key "merged" (every patch stays in "patches"); other keyword options
-    (IGES units, ...) do not apply to JSON.
-    """
-    patch_set = surface_patch_set(surface, input_path, adjacency)
-    if not merged:
-        write_patch_set_json(path, patch_set)
-        return
-    doc = patch_set_document(patch_set)
-    doc["merged"] = [merged_piece_document(piece) for piece in merged]
-    text = json.dumps(doc, separators=(",", ":"))
-    with open(path, "w", encoding="utf-8") as f:
-        f.write(text)
-        f.write("\n")
+    doc = {**patch_set.header, "patches": patches}
+    if patch_set.merged:  # convert --merge: B-spline pieces standing for rectangles of patches
+        doc["merged"] = [merged_piece_document(piece) for piece in patch_set.merged]
+    return doc
 
 
 def merged_piece_document(piece) -> dict:
@@ -86,8 +74,12 @@ def merged_piece_document(piece) -> dict:
     return out
 
 
-def write_patch_set_json(path, patch_set: PatchSet) -> None:
-    """Write a ``PatchSet`` as c1surf-patches JSON (compact, one line, ``repr`` floats)."""
+def write_patch_set_json(path, patch_set: PatchSet, **_options) -> None:
+    """Write a ``PatchSet`` as c1surf-patches JSON (compact, one line, ``repr`` floats).
+
+    Weights (rational patches) and merged pieces are kept; the options of other
+    formats (IGES units, ...) do not apply.
+    """
     text = json.dumps(patch_set_document(patch_set), separators=(",", ":"))  # dumps: the C encoder, unlike dump
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
@@ -95,61 +87,64 @@ def write_patch_set_json(path, patch_set: PatchSet) -> None:
 
 
 def read_patch_set_json(path) -> PatchSet:
-    """Read a c1surf-patches JSON file: patches in file order, sources, adjacency, header.
+    """Read a c1surf-patches JSON file: patches in file order, weights, sources, adjacency, merged pieces, header.
 
     Adjacency is returned only when every patch has "corners", "edges" and
     "reversed" ("neighbours" is derived from them and not read).
     """
     doc = _load_document(path)
-    patches, kinds, sources, corners, edges, flags, weights = [], [], [], [], [], [], []
-    has_source, has_adjacency = True, True
-    for k, patch in enumerate(doc.get("patches", [])):
-        points = _patch_points(path, k, patch)
-        patches.append(points)
-        if isinstance(patch, dict) and "weights" in patch:
-            weights.append(_patch_weights(path, k, patch, points.shape[:2]))
-        source = patch.get("source") if isinstance(patch, dict) else None
-        if isinstance(source, dict) and len(source) == 1:
-            (kind, value), = source.items()
-            try:
-                pair = [int(value[0]), int(value[1])] if kind == "edge" else [int(value), -1]
-            except (TypeError, ValueError, IndexError):
-                raise MeshInputError(str(path), f"patch {k}: malformed source {source!r}") from None
-            kinds.append(kind)
-            sources.append(pair)
-        else:
-            has_source = False
-        if all(key in patch for key in ("corners", "edges", "reversed")):
-            corners.append(patch["corners"])
-            edges.append(patch["edges"])
-            flags.append(patch["reversed"])
-        else:
-            has_adjacency = False
-    n = len(patches)
+    entries = doc.get("patches", [])
+    patches = [_patch_points(path, k, patch) for k, patch in enumerate(entries)]
+    source_kind, source = _sources(path, entries)
     adjacency = None
-    if has_adjacency and n:
+    if entries and all(all(key in patch for key in ("corners", "edges", "reversed")) for patch in entries):
+        adjacency = checked_adjacency(path, *([patch[key] for patch in entries] for key in ("corners", "edges", "reversed")),
+                                      len(entries))
+    header = {key: value for key, value in doc.items() if key not in ("patches", "merged")}
+    return PatchSet(degree_runs(patches), adjacency, source_kind, source, header, _weights(path, entries, patches),
+                    _merged(path, doc.get("merged", []), patches))
+
+
+def _weights(path, entries, patches) -> list | None:
+    """Runs of the patches' "weights" (all or none), parallel to ``degree_runs(patches)``."""
+    weights = [checked_weights(path, f"patch {k}", patch["weights"], points.shape[:2])
+               for k, (patch, points) in enumerate(zip(entries, patches)) if "weights" in patch]
+    if weights and len(weights) != len(patches):
+        raise MeshInputError(str(path), f'only {len(weights)} of {len(patches)} patches have "weights": give all or none')
+    return degree_runs(weights) if weights else None
+
+
+def _sources(path, entries):
+    """(source_kind (P,) str, source (P, 2) int64) of the patches, or (None, None) unless every patch has one."""
+    kinds, sources = [], []
+    for k, patch in enumerate(entries):
+        source = patch.get("source")
+        if not (isinstance(source, dict) and len(source) == 1):
+            return None, None
+        (kind, value), = source.items()
         try:
-            adjacency = PatchAdjacency(np.asarray(corners, dtype=np.int64), np.asarray(edges, dtype=np.int64),
-                                       np.asarray(flags, dtype=bool))
-            adjacency.validate(n)
-        except (TypeError, ValueError) as e:
-            raise MeshInputError(str(path), f"malformed patch adjacency ({e})") from None
-    header = {key: value for key, value in doc.items() if key != "patches"}
-    source_kind = np.array(kinds) if has_source and n else None
-    source = np.asarray(sources, dtype=np.int64).reshape(-1, 2) if has_source and n else None
-    if weights and len(weights) != n:
-        raise MeshInputError(str(path), f'only {len(weights)} of {n} patches have "weights": give all or none')
-    return PatchSet(degree_runs(patches), adjacency, source_kind, source, header, degree_runs(weights) if weights else None)
+            sources.append([int(value[0]), int(value[1])] if kind == "edge" else [int(value), -1])
+        except (TypeError, ValueError, IndexError):
+            raise MeshInputError(str(path), f"patch {k}: malformed source {source!r}") from None
+        kinds.append(kind)
+    if not entries:
+        return None, None
+    return np.array(kinds), np.asarray(sources, dtype=np.int64).reshape(-1, 2)
 
 
-def _patch_weights(path, k: int, patch, shape) -> np.ndarray:
-    try:
-        w = np.asarray(patch["weights"], dtype=np.float64)
-    except (TypeError, ValueError) as e:
-        raise MeshInputError(str(path), f"patch {k}: malformed weights ({e})") from None
-    if w.shape != tuple(shape) or not np.all(np.isfinite(w) & (w > 0)):
-        raise MeshInputError(str(path), f"patch {k}: weights must be positive with shape {tuple(shape)}, got {w.shape}")
-    return w
+def _merged(path, documents, patches) -> list:
+    """The MergedPiece of every "merged" entry (``merged_piece_document``)."""
+    if not isinstance(documents, list):
+        raise MeshInputError(str(path), '"merged" must be a list')
+    n_biquadratic = sum(points.shape[:2] == (3, 3) for points in patches)
+    pieces = []
+    for k, piece in enumerate(documents):
+        if not isinstance(piece, dict) or any(key not in piece for key in _PIECE_KEYS):
+            raise MeshInputError(str(path), f"merged piece {k}: needs {', '.join(_PIECE_KEYS)}")
+        points, knots_u, knots_v, patches_, rotation = (piece[key] for key in _PIECE_KEYS)
+        pieces.append(checked_piece(path, k, points, piece.get("weights"), knots_u, knots_v, patches_, rotation,
+                                    n_biquadratic))
+    return pieces
 
 
 def _load_document(path) -> dict:
@@ -162,10 +157,7 @@ def _load_document(path) -> dict:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise MeshInputError(str(path), f"not a JSON patch file ({e})", getattr(e, "lineno", None)) from None
-    if not isinstance(doc, dict) or doc.get("format") != FORMAT_NAME:
-        raise MeshInputError(str(path), f'not a c1surf patch file (missing "format": "{FORMAT_NAME}")')
-    if doc.get("version") != FORMAT_VERSION:
-        raise MeshInputError(str(path), f"patch file version {doc.get('version')} is not supported (this c1surf reads version {FORMAT_VERSION})")
+    check_header(path, doc)
     if not isinstance(doc.get("patches", []), list):
         raise MeshInputError(str(path), '"patches" must be a list')
     return doc

@@ -12,6 +12,10 @@ Members (see docs/patch-format.md; P patches, biquadratic first, then bicubic)::
     edges        (P,4)       int64  side edge ids
     reversed     (P,4)       bool
     neighbours   (P,4,2)     int64  (patch, side) across each side, (-1, -1) on a boundary
+    biquadratic_weights (Nq,3,3), bicubic_weights (Nc,4,4)  float64   rational patches only (A2a)
+    merged_spans (K,2)       int64  (m, n) spans of each merged piece (convert --merge only), then
+    merged_points, merged_weights, merged_knots_u, merged_knots_v, merged_patches, merged_rotation:
+                                    the pieces' arrays flattened and concatenated (docs/patch-format.md)
 
 Uncompressed and without pickles: ``numpy.load(path)`` reads it (lazily,
 member by member), and the zip entries carry a fixed date, so the same
@@ -28,18 +32,18 @@ import zipfile
 
 import numpy as np
 
-from ...evaluation.adjacency import PatchAdjacency
+from ...evaluation.patch_set import FORMAT_NAME, PatchSet
 from ..errors import MeshInputError
-from ...evaluation.patch_set import FORMAT_NAME, FORMAT_VERSION, PatchSet, surface_patch_set
+from .checks import check_header, checked_adjacency, checked_piece, checked_weights
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
 
 
-def _patch_groups(patch_set: PatchSet):
-    """(biquadratic groups, bicubic groups) of a PatchSet; refuses other degrees or orders."""
+def _patch_groups(groups: list):
+    """(biquadratic groups, bicubic groups) of a PatchSet's groups (or weights); refuses other degrees or orders."""
     quad, cubic = [], []
     seen_cubic = False
-    for g in patch_set.groups:
+    for g in groups:
         shape = g.shape[1:3]
         if shape == (3, 3) and not seen_cubic:
             quad.append(g)
@@ -63,7 +67,7 @@ def _members(patch_set: PatchSet):
 
     One member at a time: a large surface never holds all of them as copies at once.
     """
-    quad, cubic = _patch_groups(patch_set)
+    quad, cubic = _patch_groups(patch_set.groups)
     yield "header", np.array(json.dumps(patch_set.header, separators=(",", ":")))
     yield "biquadratic", _joined(quad, (0, 3, 3, 3))
     yield "bicubic", _joined(cubic, (0, 4, 4, 3))
@@ -76,15 +80,29 @@ def _members(patch_set: PatchSet):
         yield "edges", a.edges.astype(np.int64, copy=False)
         yield "reversed", a.reversed.astype(bool, copy=False)
         yield "neighbours", a.neighbours()
+    if patch_set.weights is not None:
+        quad_w, cubic_w = _patch_groups(patch_set.weights)
+        yield "biquadratic_weights", _joined(quad_w, (0, 3, 3))
+        yield "bicubic_weights", _joined(cubic_w, (0, 4, 4))
+    if patch_set.merged:
+        yield from _merged_members(patch_set.merged)
 
 
-def patch_set_arrays(patch_set: PatchSet) -> dict:
-    """The NPZ members of a PatchSet (c1surf surfaces: degrees (2, 2) and (3, 3) only)."""
-    return dict(_members(patch_set))
+def _merged_members(pieces):
+    """(name, array) of the merged pieces: their (m, n) spans, then each array of all pieces flattened in turn."""
+    yield "merged_spans", np.array([piece.patches.shape for piece in pieces], dtype=np.int64).reshape(-1, 2)
+    yield "merged_points", np.concatenate([piece.points[..., :3].reshape(-1, 3) for piece in pieces])
+    if pieces[0].weights is not None:
+        yield "merged_weights", np.concatenate([piece.weights.ravel() for piece in pieces])
+    for name in ("knots_u", "knots_v", "patches", "rotation"):
+        yield f"merged_{name}", np.concatenate([np.ravel(getattr(piece, name)) for piece in pieces])
 
 
-def write_patch_set_npz(path, patch_set: PatchSet) -> None:
-    """Write a PatchSet as an uncompressed, byte-reproducible ``.npz``."""
+def write_patch_set_npz(path, patch_set: PatchSet, **_options) -> None:
+    """Write a PatchSet as an uncompressed, byte-reproducible ``.npz`` (weights and merged pieces included).
+
+    The options of other formats (IGES units, ...) do not apply.
+    """
     with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
         for name, array in _members(patch_set):
             info = zipfile.ZipInfo(name + ".npy", date_time=_DATE)
@@ -93,11 +111,6 @@ def write_patch_set_npz(path, patch_set: PatchSet) -> None:
             with zf.open(info, "w", force_zip64=True) as f:
                 np.lib.format.write_array(f, np.ascontiguousarray(array), allow_pickle=False)
             del array
-
-
-def write_patches_npz(path, surface, input_path: str | None = None, adjacency=None, **_options) -> None:
-    """Write ``surface``'s patches to ``path`` as c1surf-patches NPZ (same content as the JSON)."""
-    write_patch_set_npz(path, surface_patch_set(surface, input_path, adjacency))
 
 
 def _mapped_members(path) -> dict:
@@ -142,52 +155,94 @@ def _mapped_members(path) -> dict:
 
 
 def read_patch_set_npz(path) -> PatchSet:
-    """Read a c1surf-patches ``.npz``: patches in file order, sources, adjacency, header.
+    """Read a c1surf-patches ``.npz``: patches in file order, weights, sources, adjacency, merged pieces, header.
 
     The arrays are memory-mapped read-only views of the file (uncompressed
     members), so opening even a large surface takes milliseconds.
     """
+    data = _open(path)
+    header = _header(path, data)
+    quad, cubic = _patches(path, data, "biquadratic", 3), _patches(path, data, "bicubic", 4)
+    p = len(quad) + len(cubic)
+    source_kind = source = adjacency = None
+    if {"source_kind", "source"} <= set(data):
+        source_kind, source = data["source_kind"], data["source"]
+        if source_kind.shape != (p,) or source.shape != (p, 2) or source.dtype.kind != "i":
+            raise MeshInputError(str(path), f"source_kind / source must have shapes ({p},) / ({p}, 2)")
+    if {"corners", "edges", "reversed"} <= set(data):
+        adjacency = checked_adjacency(path, data["corners"], data["edges"], data["reversed"], p)
+    weights = None
+    if "biquadratic_weights" in data or "bicubic_weights" in data:
+        weights = [checked_weights(path, f"{name}_weights", data.get(f"{name}_weights"), g.shape[:3])
+                   for name, g in (("biquadratic", quad), ("bicubic", cubic)) if len(g)]
+    groups = [g for g in (quad, cubic) if len(g)]
+    return PatchSet(groups, adjacency, source_kind, source, header, weights, _merged(path, data, len(quad)))
+
+
+def _open(path) -> dict:
+    """The members of the NPZ file ``path`` (see ``_mapped_members``), or a one-line refusal."""
     try:
-        data = _mapped_members(path)
+        return _mapped_members(path)
     except FileNotFoundError:
         raise MeshInputError(str(path), "no such file") from None
     except IsADirectoryError:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
     except (OSError, ValueError, EOFError, struct.error, zipfile.BadZipFile) as e:
         raise MeshInputError(str(path), f"not an NPZ patch file ({e})") from None
-    names = set(data)
-    if "header" not in names:
+
+
+def _header(path, data: dict) -> dict:
+    """The "header" member, checked to be a c1surf patch file of a version this c1surf reads."""
+    if "header" not in data:
         raise MeshInputError(str(path), f'not a c1surf patch file (no "header" member with "format": "{FORMAT_NAME}")')
     try:
         header = json.loads(str(data["header"].item()))
     except (ValueError, TypeError) as e:
         raise MeshInputError(str(path), f"damaged header ({e})") from None
-    if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
-        raise MeshInputError(str(path), f'not a c1surf patch file (missing "format": "{FORMAT_NAME}")')
-    if header.get("version") != FORMAT_VERSION:
-        raise MeshInputError(str(path), f"patch file version {header.get('version')} is not supported (this c1surf reads version {FORMAT_VERSION})")
-    quad = data.get("biquadratic", np.zeros((0, 3, 3, 3)))
-    cubic = data.get("bicubic", np.zeros((0, 4, 4, 3)))
-    for name, g, n in (("biquadratic", quad, 3), ("bicubic", cubic, 4)):
-        if g.dtype != np.float64 or g.ndim != 4 or g.shape[1:] != (n, n, 3):
-            raise MeshInputError(str(path), f"{name} must be float64 of shape (N, {n}, {n}, 3), got {g.dtype} {g.shape}")
-        if not np.isfinite(g).all():
-            raise MeshInputError(str(path), f"{name} holds NaN or infinite coordinates")
-    p = len(quad) + len(cubic)
-    source_kind = source = adjacency = None
-    if {"source_kind", "source"} <= names:
-        source_kind, source = data["source_kind"], data["source"]
-        if source_kind.shape != (p,) or source.shape != (p, 2) or source.dtype.kind != "i":
-            raise MeshInputError(str(path), f"source_kind / source must have shapes ({p},) / ({p}, 2)")
-    if {"corners", "edges", "reversed"} <= names:
-        try:
-            adjacency = PatchAdjacency(np.asarray(data["corners"], dtype=np.int64), np.asarray(data["edges"], dtype=np.int64),
-                                       np.asarray(data["reversed"], dtype=bool))
-            adjacency.validate(p)
-        except (TypeError, ValueError) as e:
-            raise MeshInputError(str(path), f"malformed patch adjacency ({e})") from None
-    groups = [g for g in (quad, cubic) if len(g)]
-    return PatchSet(groups, adjacency, source_kind, source, header)
+    check_header(path, header)
+    return header
 
 
-__all__ = ["write_patches_npz", "write_patch_set_npz", "read_patch_set_npz", "patch_set_arrays"]
+def _patches(path, data: dict, name: str, n: int) -> np.ndarray:
+    """Member ``name``: (N, n, n, 3) float64 finite control points (empty when absent)."""
+    g = data.get(name, np.zeros((0, n, n, 3)))
+    if g.dtype != np.float64 or g.ndim != 4 or g.shape[1:] != (n, n, 3):
+        raise MeshInputError(str(path), f"{name} must be float64 of shape (N, {n}, {n}, 3), got {g.dtype} {g.shape}")
+    if not np.isfinite(g).all():
+        raise MeshInputError(str(path), f"{name} holds NaN or infinite coordinates")
+    return g
+
+
+_PIECE_MEMBERS = ("merged_points", "merged_knots_u", "merged_knots_v", "merged_patches", "merged_rotation")
+
+
+def _merged(path, data: dict, n_biquadratic: int) -> list:
+    """The merged pieces of the "merged_*" members (``_merged_members``), each checked."""
+    if "merged_spans" not in data:
+        return []
+    missing = [name for name in _PIECE_MEMBERS if name not in data]
+    spans = np.asarray(data["merged_spans"], dtype=np.int64)
+    if missing or spans.ndim != 2 or spans.shape[1] != 2 or np.any(spans < 1):
+        raise MeshInputError(str(path), f"merged pieces need merged_spans (K, 2) of spans >= 1 and {', '.join(_PIECE_MEMBERS)}")
+    m, n = spans[:, 0], spans[:, 1]
+    sizes = {"merged_points": (m + 2) * (n + 2), "merged_weights": (m + 2) * (n + 2), "merged_knots_u": m + 5,
+             "merged_knots_v": n + 5, "merged_patches": m * n, "merged_rotation": m * n}
+    parts = {}
+    for name, size in sizes.items():
+        if name in data:
+            ends = np.cumsum(size)
+            if len(data[name]) != (ends[-1] if ends.size else 0):
+                raise MeshInputError(str(path), f"{name} holds {len(data[name])} rows, the spans need {ends[-1]}")
+            parts[name] = np.split(data[name], ends[:-1])
+    try:
+        return [checked_piece(path, k, parts["merged_points"][k].reshape(mk + 2, nk + 2, 3),
+                              parts["merged_weights"][k].reshape(mk + 2, nk + 2) if "merged_weights" in parts else None,
+                              parts["merged_knots_u"][k], parts["merged_knots_v"][k],
+                              parts["merged_patches"][k].reshape(mk, nk), parts["merged_rotation"][k].reshape(mk, nk),
+                              n_biquadratic)
+                for k, (mk, nk) in enumerate(spans.tolist())]
+    except ValueError as e:  # members of the wrong shape
+        raise MeshInputError(str(path), f"malformed merged pieces ({e})") from None
+
+
+__all__ = ["write_patch_set_npz", "read_patch_set_npz"]

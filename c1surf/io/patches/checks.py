@@ -1,0 +1,81 @@
+"""What the c1surf patch file readers (JSON, NPZ) check, each refusal one line naming the file.
+
+The arrays a file gives for the header, the adjacency, the weights and the
+merged pieces become the parts of a ``PatchSet`` here, or a ``MeshInputError``
+saying what is wrong.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...evaluation.adjacency import PatchAdjacency
+from ...evaluation.merge import MergedPiece
+from ...evaluation.patch_set import FORMAT_NAME, FORMAT_VERSION
+from ..errors import MeshInputError
+from .merged import clamped_knots
+
+__all__ = ["check_header", "checked_adjacency", "checked_weights", "checked_piece"]
+
+
+def check_header(path, header) -> None:
+    """Refuse a header (dict) that is not of a c1surf patch file of the version this c1surf reads."""
+    if not isinstance(header, dict) or header.get("format") != FORMAT_NAME:
+        raise MeshInputError(str(path), f'not a c1surf patch file (missing "format": "{FORMAT_NAME}")')
+    if header.get("version") != FORMAT_VERSION:
+        raise MeshInputError(str(path), f"patch file version {header.get('version')} is not supported "
+                             f"(this c1surf reads version {FORMAT_VERSION})")
+
+
+def checked_adjacency(path, corners, edges, reversed_, n_patches: int) -> PatchAdjacency:
+    """The PatchAdjacency of (P, 4) corner ids, edge ids and reversed flags, validated for ``n_patches``."""
+    try:
+        adjacency = PatchAdjacency(np.asarray(corners, dtype=np.int64), np.asarray(edges, dtype=np.int64),
+                                   np.asarray(reversed_, dtype=bool))
+        adjacency.validate(n_patches)
+    except (TypeError, ValueError) as e:
+        raise MeshInputError(str(path), f"malformed patch adjacency ({e})") from None
+    return adjacency
+
+
+def checked_weights(path, what: str, weights, shape: tuple) -> np.ndarray:
+    """``weights`` as float64 of ``shape``, all positive and finite; ``what`` names them in the refusal."""
+    try:
+        w = np.asarray(weights, dtype=np.float64)
+    except (TypeError, ValueError) as e:
+        raise MeshInputError(str(path), f"{what}: malformed weights ({e})") from None
+    if w.shape != tuple(shape) or not np.all(np.isfinite(w) & (w > 0)):
+        raise MeshInputError(str(path), f"{what}: weights must be positive with shape {tuple(shape)}, got {w.shape}")
+    return w
+
+
+def checked_piece(path, k: int, points, weights, knots_u, knots_v, patches, rotation, n_biquadratic: int) -> MergedPiece:
+    """A MergedPiece from the arrays a patch file gives for merged piece ``k``.
+
+    Parameters
+    ----------
+    points : (m + 2, n + 2, 3) float; weights : (m + 2, n + 2) float or None
+    knots_u : (m + 5,) float; knots_v : (n + 5,) float, those of ``merged.clamped_knots``
+    patches, rotation : (m, n) int, biquadratic patch numbers (< ``n_biquadratic``) and quarter turns 0..3
+    """
+    what = f"merged piece {k}"
+    try:
+        points = np.asarray(points, dtype=np.float64)
+        knots_u, knots_v = (np.asarray(x, dtype=np.float64).ravel() for x in (knots_u, knots_v))
+        patches, rotation = (np.asarray(x, dtype=np.int64) for x in (patches, rotation))
+    except (TypeError, ValueError) as e:
+        raise MeshInputError(str(path), f"{what}: malformed ({e})") from None
+    if points.ndim != 3 or points.shape[2] != 3 or min(points.shape[:2]) < 3 or not np.isfinite(points).all():
+        raise MeshInputError(str(path), f"{what}: points must be finite with shape (m + 2, n + 2, 3), m, n >= 1, "
+                             f"got {points.shape}")
+    m, n = points.shape[0] - 2, points.shape[1] - 2
+    if not (np.array_equal(knots_u, clamped_knots(m)) and np.array_equal(knots_v, clamped_knots(n))):
+        raise MeshInputError(str(path), f"{what}: knots must be 0 0 0 1 ... m m m for its {m} x {n} spans")
+    if weights is not None:
+        weights = checked_weights(path, what, weights, (m + 2, n + 2))
+    if patches.shape != (m, n) or rotation.shape != (m, n):
+        raise MeshInputError(str(path), f"{what}: patches and rotation must have shape {(m, n)}, "
+                             f"got {patches.shape} and {rotation.shape}")
+    if np.any((patches < 0) | (patches >= n_biquadratic)) or np.any((rotation < 0) | (rotation > 3)):
+        raise MeshInputError(str(path), f"{what}: patches must number biquadratic patches (0 .. {n_biquadratic - 1}) "
+                             "and rotation count quarter turns (0 .. 3)")
+    return MergedPiece(points, weights, knots_u, knots_v, patches, rotation)

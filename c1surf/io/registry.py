@@ -1,0 +1,154 @@
+"""Which file formats c1surf reads and writes: one suffix table per kind of file.
+
+Each table maps a lower-case suffix to a :class:`Format`: the function that
+reads or writes it and one line saying what the file holds. The command line
+takes its suffix checks (:func:`suffix_of`) and its help texts
+(:func:`suffix_list`) from here, and the dispatching readers and writers
+(``io.meshes.read.read_mesh``, ``io.meshes.write.write_mesh``,
+``io.patches.formats``) their functions. To add a format, write its reader or
+writer in ``io/meshes``, ``io/patches`` or ``io/images`` and add one line here.
+
+Functions are named as ``"module:function"`` and imported on first use, so that
+checking a suffix (or ``c1surf --help``) loads none of the format libraries
+(trimesh, plyfile, Open CASCADE), and so that the format modules, which use
+this registry to dispatch, are not imported by it in turn.
+
+Signatures, by table:
+
+- ``MESH_READERS``: ``read(path) -> io.meshes.mesh_file.MeshFile``
+- ``MESH_WRITERS``: ``write(path, mesh: io.meshes.write.TriangleMesh, float32=False)``
+- ``PATCH_READERS``: ``read(path) -> evaluation.patch_set.PatchSet``
+- ``PATCH_WRITERS``: ``write(path, patch_set, *, file_name=None, units="mm", group=True)``
+  (options a format has no use for are ignored)
+- ``IMAGE_WRITERS``: the image files of ``c1surf render`` (each writer takes its own picture type)
+"""
+from __future__ import annotations
+
+import importlib
+import os
+from collections.abc import Mapping
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .errors import C1SurfFileError
+
+__all__ = ["Format", "FormatTable", "UnsupportedFormat", "suffix_of", "suffix_list", "MESH_READERS", "MESH_WRITERS",
+           "PATCH_READERS", "PATCH_WRITERS", "IMAGE_WRITERS"]
+
+
+@dataclass(frozen=True)
+class Format:
+    """One file format of a table.
+
+    suffixes : tuple of str, lower case with the dot (".igs", ".iges"): the first is the usual one
+    target : str, "module:function" of the reader or writer
+    description : str, what the file holds, in a few words
+    holds : frozenset of str, optional per-vertex data the format keeps (mesh writers):
+        "attributes" (texture coordinates and colours), "properties" (named scalars, e.g. curvature)
+    """
+
+    suffixes: tuple
+    target: str
+    description: str
+    holds: frozenset = field(default_factory=frozenset)
+
+    @property
+    def function(self):
+        """The reader or writer (its module is imported on first use)."""
+        module, name = self.target.split(":")
+        return getattr(importlib.import_module(module), name)
+
+
+class FormatTable(Mapping):
+    """Suffix -> Format of one kind of file, in the order the formats were listed.
+
+    noun : str, what a file of this kind is ("mesh format"), for messages
+    verb : str, what c1surf does with it ("reads", "writes")
+    """
+
+    def __init__(self, noun: str, verb: str, formats: list[Format]):
+        self.noun, self.verb = noun, verb
+        self._formats = {suffix: f for f in formats for suffix in f.suffixes}
+
+    def __getitem__(self, suffix: str) -> Format:
+        return self._formats[suffix]
+
+    def __iter__(self):
+        return iter(self._formats)
+
+    def __len__(self) -> int:
+        return len(self._formats)
+
+    def holding(self, data: str) -> tuple:
+        """Suffixes of the formats that keep ``data`` ("attributes", "properties")."""
+        return tuple(s for s, f in self._formats.items() if data in f.holds)
+
+
+class UnsupportedFormat(C1SurfFileError, ValueError):
+    """A path whose suffix names no format of the table it was checked against."""
+
+
+def suffix_list(table: Mapping) -> str:
+    """The suffixes of a table, sorted, for messages and help texts: ".glb, .obj, .off"."""
+    return ", ".join(sorted(table))
+
+
+def suffix_of(path, table: Mapping) -> str:
+    """Lower-case suffix of ``path`` if ``table`` has a format for it.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    table : FormatTable (or any mapping keyed by suffix)
+
+    Returns
+    -------
+    str, e.g. ".ply" (also for "MESH.PLY")
+
+    Raises
+    ------
+    UnsupportedFormat
+        ``PATH: unsupported mesh format (suffix '.stl'): c1surf reads .obj, .ply files``
+    """
+    path = os.fspath(path)
+    suffix = Path(path).suffix
+    if suffix.lower() in table:
+        return suffix.lower()
+    shown = f"suffix {suffix!r}" if suffix else "no suffix"
+    noun, verb = getattr(table, "noun", "file format"), getattr(table, "verb", "handles")
+    raise UnsupportedFormat(path, f"unsupported {noun} ({shown}): c1surf {verb} {suffix_list(table)} files")
+
+
+_MESHES, _PATCHES, _IMAGES = "c1surf.io.meshes.", "c1surf.io.patches.", "c1surf.io.images."
+_BOTH = frozenset({"attributes", "properties"})
+
+MESH_READERS = FormatTable("mesh format", "reads", [
+    Format((".obj",), _MESHES + "obj:read_obj", "Wavefront OBJ: polygons of any size, vt/vn, v x y z w weights, groups"),
+    Format((".ply",), _MESHES + "ply:read_ply", "PLY (ASCII or binary): polygons, normals, uv, weight, blend, colours"),
+])
+
+MESH_WRITERS = FormatTable("mesh format", "writes", [
+    Format((".obj",), _MESHES + "obj_out:write_obj", "Wavefront OBJ text: v, vt, vn, f", frozenset({"attributes"})),
+    Format((".ply",), _MESHES + "ply_out:write_ply", "binary PLY: positions, normals, any per-vertex properties", _BOTH),
+    Format((".stl",), _MESHES + "write:write_stl", "binary STL (float32, through trimesh)"),
+    Format((".glb",), _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)"),
+    Format((".off",), _MESHES + "write:write_off", "OFF text (through trimesh)"),
+])
+
+PATCH_READERS = FormatTable("patch format", "reads", [
+    Format((".json",), _PATCHES + "json_patches:read_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
+    Format((".npz",), _PATCHES + "npz:read_patch_set_npz", "c1surf patch file as NumPy arrays"),
+    Format((".igs", ".iges"), _PATCHES + "iges:read_patch_set_iges", "IGES 5.3 Bezier patches and merged B-splines"),
+])
+
+PATCH_WRITERS = FormatTable("patch format", "writes", [
+    Format((".json",), _PATCHES + "json_patches:write_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
+    Format((".npz",), _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays"),
+    Format((".igs", ".iges"), _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)"),
+    Format((".step", ".stp"), _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)"),
+])
+
+IMAGE_WRITERS = FormatTable("image format", "writes", [
+    Format((".exr",), _IMAGES + "exr:write_exr", "OpenEXR: float32 channels (colour, depth, normals, curvature)"),
+    Format((".png",), _IMAGES + "png:write_png", "PNG preview (8-bit sRGB)"),
+])
