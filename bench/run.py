@@ -186,7 +186,7 @@ def work_c1surf(job):
     from c1surf.evaluation.adjacency import patch_adjacency
     from c1surf.evaluation.tessellate import tessellate_patches
     from c1surf.io.meshes.write import write_triangle_mesh
-    from c1surf.io.patches.formats import PATCH_WRITERS
+    from c1surf.io.patches.formats import write_surface_patches
 
     seconds, peak = {}, {}
     start = time.perf_counter()
@@ -218,7 +218,7 @@ def work_c1surf(job):
         del tess
         target = Path(scratch) / "patches.npz"
         start = time.perf_counter()
-        PATCH_WRITERS[".npz"](str(target), surface, input_path=job["path"], adjacency=adjacency)
+        write_surface_patches(str(target), surface, ".npz", input_path=job["path"], adjacency=adjacency)
         seconds["write_patches"] = time.perf_counter() - start
         output["npz_bytes"] = target.stat().st_size
         peak["write_patches"] = _maxrss_mb()

@@ -6,7 +6,8 @@ from pathlib import Path
 import click
 
 from ..evaluation.smoothness import measure_smoothness
-from ..io.patches.formats import PATCH_LOADERS
+from ..io.patches.formats import load_patch_set
+from ..io.registry import PATCH_READERS
 from ..io.meshes.read import read_mesh
 from .common import friendly_errors
 from .convert import build_or_fail, extension_setup
@@ -35,8 +36,8 @@ def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule
     jump and exits 1 when the surface is not G1 to within --tolerance.
     """
     suffix = Path(path).suffix.lower()
-    if suffix in PATCH_LOADERS:
-        patch_set = PATCH_LOADERS[suffix](path)
+    if suffix in PATCH_READERS:
+        patch_set = load_patch_set(path)
         groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     else:
         mesh = read_mesh(path)

@@ -16,7 +16,8 @@ from ..io.atomic import atomic_output
 from ..io.images.exr import write_exr
 from ..io.images.png import write_png
 from ..io.meshes.read import read_mesh
-from ..io.patches.formats import PATCH_LOADERS
+from ..io.patches.formats import load_patch_set
+from ..io.registry import PATCH_READERS
 from ..render.camera import PROJECTIONS, VIEWS, frame_camera
 from ..render.image import GEOMETRY_NAMES, atlas_layout, default_tile, render, render_atlas
 from ..render.pictures import COLORMAPS, curvature_picture, srgb_to_linear, zebra_picture
@@ -54,9 +55,9 @@ def parse_size(text: str) -> tuple[int, int]:
 def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Progress) -> PatchSet:
     """The patches (with their weights and adjacency) of a mesh or patch file."""
     suffix = Path(input_path).suffix.lower()
-    if suffix in PATCH_LOADERS:
+    if suffix in PATCH_READERS:
         progress.phase(f"reading the patches of {input_path}")
-        patches = PATCH_LOADERS[suffix](input_path)
+        patches = load_patch_set(input_path)
     else:
         progress.phase(f"reading {input_path}")
         mesh = read_mesh(input_path)

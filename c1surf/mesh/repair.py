@@ -115,7 +115,6 @@ def orientation_double_cover(mesh: HalfEdgeMesh):
     face_vertices : (2H,) int, cover vertex of each corner
     vertex_source : (V',) int, input vertex of each cover vertex
     """
-    h = np.arange(mesh.n_halfedges)
     n_half = mesh.n_halfedges
     # corner node (sheet s, half-edge h) = s * H + h, the corner at origin[h] of face copy s
     edges, edge_of, counts = undirected_edges(mesh)

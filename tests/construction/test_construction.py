@@ -20,7 +20,7 @@ from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.tessellate import tessellate
 from c1surf.io.meshes.obj import read_obj
 
-from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, misprinted_bicubic, polygon_mesh, shared_mesh, slab_with_polygons, surface_of
+from conftest import CLOSED_SAMPLES, CLOSED_SHARED, SAMPLES, misprinted_bicubic, shared_mesh, slab_with_polygons, surface_of
 from reference import bicubic_stencil, biquadratic_stencil
 
 MAX_JUMP = 1e-10  # radians

@@ -9,7 +9,7 @@ import pytest
 from c1surf.evaluation.bezier import bernstein_basis, bernstein_columns, evaluate_patches_at, raise_degree
 from c1surf.evaluation.curvature import patch_curvature, surface_curvature, tessellation_curvature
 from c1surf.evaluation.rational import dehomogenize
-from c1surf.io.patches.formats import PATCH_LOADERS
+from c1surf.io.patches.formats import load_patch_set
 from conftest import rational_sphere_patch
 
 GOLDEN = Path(__file__).resolve().parents[1] / "golden"
@@ -122,7 +122,7 @@ def test_rational_cylinder_patch():
 
 
 def golden_groups(name="twisted.json"):
-    return PATCH_LOADERS[".json"](GOLDEN / name).groups
+    return load_patch_set(GOLDEN / name).groups
 
 
 def finite_difference_curvature(points, u, v, h):

@@ -30,7 +30,7 @@ from c1surf.construction.surface import SurfaceOptions
 from c1surf.evaluation.tessellate import tessellate, tessellate_patches
 from c1surf.io.patches.iges_writer import write_iges
 from c1surf.io.patches.json_patches import read_patch_set_json
-from c1surf.io.patches.formats import PATCH_LOADERS, PATCH_READERS, load_patch_set
+from c1surf.io.patches.formats import load_patch_set
 from c1surf.io.patches.npz import read_patch_set_npz, write_patch_set_npz
 from c1surf.evaluation.patch_set import PatchSet
 
@@ -247,7 +247,7 @@ def test_round_trip_evaluation_is_bit_exact(tmp_path, suffix):
     for direct, read in zip([surface.biquadratic, surface.bicubic], loaded.groups):
         for du, dv in ((0, 0), (1, 0), (0, 1)):
             assert np.array_equal(evaluate_patches(read, t, t, du, dv), evaluate_patches(direct, t, t, du, dv))
-    assert [len(g) for g in PATCH_READERS[suffix](patches)] == [len(surface.biquadratic), len(surface.bicubic)]
+    assert [len(g) for g in load_patch_set(patches).by_degree()] == [len(surface.biquadratic), len(surface.bicubic)]
 
 
 def test_npz_opens_in_milliseconds(tmp_path):
@@ -287,7 +287,7 @@ def test_iges_patch_file_reads_back_exactly(tmp_path):
     surface = surface_of(SAMPLES / "twisted.obj")
     path = tmp_path / "s.igs"
     assert run("convert", SAMPLES / "twisted.obj", "-o", tmp_path / "s.obj", "--patches", path, "--units", "in").exit_code == 0
-    loaded = PATCH_LOADERS[".igs"](path)
+    loaded = load_patch_set(path)
     assert loaded.adjacency is None and loaded.source is None
     assert np.array_equal(loaded.groups[0], surface.biquadratic) and np.array_equal(loaded.groups[1], surface.bicubic)
     lines = path.read_text().splitlines()

@@ -1,20 +1,15 @@
 """io.registry: one suffix table per kind of file, the one suffix check and its message, used by the commands."""
 from __future__ import annotations
 
-import importlib.util
-
 import pytest
 from click.testing import CliRunner
 
 from c1surf.cli.main import main
-from c1surf.io import registry
 from c1surf.io.errors import C1SurfFileError
 from c1surf.io.registry import (IMAGE_WRITERS, MESH_READERS, MESH_WRITERS, PATCH_READERS, PATCH_WRITERS,
                                 UnsupportedFormat, suffix_list, suffix_of)
 
 TABLES = [MESH_READERS, MESH_WRITERS, PATCH_READERS, PATCH_WRITERS, IMAGE_WRITERS]
-# modules a table names that another branch of the layout work adds (io/images/png.py comes with the render split)
-PENDING = {"c1surf.io.images.png"}
 
 
 @pytest.mark.parametrize("table", TABLES, ids=lambda t: f"{t.noun} {t.verb}")
@@ -23,8 +18,6 @@ def test_every_format_names_a_function_of_io(table):
         assert suffix == suffix.lower() and suffix.startswith(".") and suffix in fmt.suffixes
         module, name = fmt.target.split(":")
         assert module.startswith("c1surf.io.") and fmt.description
-        if module in PENDING and importlib.util.find_spec(module) is None:
-            continue
         assert callable(fmt.function) and fmt.function.__name__ == name
 
 
@@ -55,11 +48,3 @@ def test_commands_take_suffixes_and_help_from_the_registry(tmp_path):
                  ["tessellate", str(tmp_path / "p.txt"), "-o", str(tmp_path / "m.ply")]):
         result = runner.invoke(main, args)
         assert result.exit_code == 2 and "unsupported" in result.output and "c1surf " in result.output, result.output
-
-
-def test_older_names_are_views_of_the_registry():
-    from c1surf.io.patches import formats
-
-    assert set(formats.PATCH_LOADERS) == set(formats.PATCH_READERS) == set(PATCH_READERS)
-    assert set(formats.PATCH_WRITERS) == set(PATCH_WRITERS)
-    assert registry.PATCH_READERS is PATCH_READERS

@@ -2,13 +2,11 @@
 from __future__ import annotations
 
 import dataclasses
-import functools
 
 from ...evaluation.patch_set import PatchSet, surface_patch_set
 from .. import registry
 
-__all__ = ["load_patch_set", "write_patch_set", "write_surface_patches", "PATCH_LOADERS", "PATCH_READERS",
-           "PATCH_WRITERS"]
+__all__ = ["load_patch_set", "write_patch_set", "write_surface_patches"]
 
 
 def load_patch_set(path) -> PatchSet:
@@ -35,14 +33,3 @@ def write_surface_patches(path, surface, suffix: str | None = None, input_path: 
     """
     patch_set = dataclasses.replace(surface_patch_set(surface, input_path, adjacency), merged=list(merged or []))
     write_patch_set(path, patch_set, suffix, **options)
-
-
-def _by_degree(path) -> list:
-    return load_patch_set(path).by_degree()
-
-
-# The names of before io.registry (suffix -> function), for callers not moved to it yet
-# (cli/check.py, cli/render.py, bench/run.py): remove once they use io.registry.
-PATCH_LOADERS = dict.fromkeys(registry.PATCH_READERS, load_patch_set)
-PATCH_READERS = dict.fromkeys(registry.PATCH_READERS, _by_degree)
-PATCH_WRITERS = {suffix: functools.partial(write_surface_patches, suffix=suffix) for suffix in registry.PATCH_WRITERS}
