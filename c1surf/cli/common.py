@@ -40,10 +40,18 @@ def topology_failure(error: TopologyError, mesh_file) -> Failure:
     return Failure(f"{where}: {message}")
 
 
+def tag_note(mesh_file) -> str | None:
+    """The note naming the sharp-feature tags of ``mesh_file`` that the construction ignores, or None."""
+    tags = getattr(mesh_file, "tags", None)
+    if tags is None or tags.is_empty():
+        return None
+    return f"{mesh_file.path}: sharp-feature tags are not honoured yet and were ignored: {tags.summary()}"
+
+
 def repair_notes(surface, mesh_file) -> list[str]:
-    """One-line notes on what c1surf changed or ignored to make the input usable."""
+    """One-line notes on what c1surf changed or ignored to make the input usable (the ignored tags first)."""
     r = getattr(surface, "repairs", {}) or {}
-    notes = []
+    notes = [note] if (note := tag_note(mesh_file)) else []
     if getattr(mesh_file, "collapsed_corners", 0):
         notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
     if r.get("flipped_faces"):

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..errors import MeshInputError
+from .tags.record import SharpTags
 
 __all__ = ["MeshFile"]
 
@@ -52,6 +53,10 @@ class MeshFile:
         when the file names no groups.
     group_names : list of str
         Group names in order of first use by a face.
+    tags : SharpTags
+        Sharp-feature tags (OBJ ``t`` lines, PLY ``edge`` creases and vertex
+        ``corner``/``sharpness``), read and checked but not honoured yet;
+        empty when the file has none.
     """
 
     path: str
@@ -67,6 +72,7 @@ class MeshFile:
     face_groups: np.ndarray | None = None
     collapsed_corners: int = 0
     group_names: list[str] = field(default_factory=list)
+    tags: SharpTags = field(default_factory=SharpTags)
 
     @property
     def n_vertices(self) -> int:

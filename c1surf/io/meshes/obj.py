@@ -8,8 +8,9 @@ coordinates and normals from the face corners, and groups.
 
 Records used: ``v`` (x y z [w], or x y z r g b), ``vt``, ``vn``, ``f``
 (``v``, ``v/vt``, ``v//vn``, ``v/vt/vn``, negative = relative), ``g`` and
-``o`` (face groups).  Everything else (``s``, ``usemtl``, ``mtllib``,
-``l``, ``p``, OpenSubdiv ``t`` tags, ...) and ``#`` comments are ignored.
+``o`` (face groups), and OpenSubdiv ``t`` tags (``tags.obj_tags``: creases,
+corners, holes, ... into ``MeshFile.tags``).  Everything else (``s``,
+``usemtl``, ``mtllib``, ``l``, ``p``, ...) and ``#`` comments are ignored.
 """
 
 from __future__ import annotations
@@ -20,7 +21,9 @@ import numpy as np
 
 from ..errors import MeshInputError
 from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, refuse_repeated_vertex
-from .obj_text import ABSENT, F, V, VN, VT, WHITESPACE, ObjText
+from .obj_text import ABSENT, F, OTHER, V, VN, VT, WHITESPACE, ObjText
+from .tags.obj_tags import parse_tag_lines
+from .tags.record import check_tags
 
 __all__ = ["read_obj", "parse_obj"]
 
@@ -92,10 +95,24 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
         normals = _per_vertex(face_vertices, _resolve(raw_vn, np.count_nonzero(text.kind == VN), corners, VN, "normal",
                                                       path), _normal_table(text), v_lines.size)
     face_groups, group_names = text.groups(f_lines)
+    tags = parse_tag_lines(_tag_lines(text), path)
+    check_tags(tags, sizes, face_vertices, v_lines.size, path)
     return MeshFile(path=path, points=points, face_sizes=sizes.astype(np.int64, copy=False),
                     face_vertices=face_vertices, face_lines=(f_lines + 1).astype(np.int64), vertex_weights=weights,
                     vertex_normals=normals, vertex_uvs=uvs, vertex_attributes=vertex_attributes,
-                    face_groups=face_groups, group_names=group_names, collapsed_corners=collapsed)
+                    face_groups=face_groups, group_names=group_names, collapsed_corners=collapsed, tags=tags)
+
+
+def _tag_lines(text: ObjText):
+    """(1-based line, bytes) of every ``t`` record, keyword included, comments blanked."""
+    kw = text.kw_pos
+    candidates = np.flatnonzero((kw >= 0) & (text.kind == OTHER))
+    if candidates.size == 0:
+        return []
+    after = np.minimum(kw[candidates] + 1, text.buf.size - 1)
+    is_t = (text.buf[kw[candidates]] == ord("t")) & ((kw[candidates] + 1 == text.ends[candidates])
+                                                      | WHITESPACE[text.buf[after]])
+    return [(int(li) + 1, text.buf[text.starts[li]:text.ends[li]].tobytes()) for li in candidates[is_t]]
 
 
 # ----------------------------------------------------------------------

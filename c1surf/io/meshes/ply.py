@@ -18,6 +18,8 @@ from plyfile import (PlyData, PlyElementParseError, PlyHeaderParseError,
 
 from ..errors import MeshInputError
 from .mesh_file import MeshFile, collapse_repeated_corners_or_refuse, refuse_repeated_vertex
+from .tags.ply_tags import ply_tags
+from .tags.record import check_tags
 
 __all__ = ["read_ply"]
 
@@ -41,7 +43,8 @@ def read_ply(path) -> MeshFile:
         ``points`` (V, 3), ``face_sizes`` (F,), ``face_vertices``
         (sum(face_sizes),); ``face_lines`` (F,) for ASCII files, None for
         binary ones; optional normals, uvs, ``weight`` and any other
-        scalar vertex / face properties.
+        scalar vertex / face properties; ``tags`` from an ``edge`` element
+        (``vertex1 vertex2 crease``) and vertex ``corner``/``sharpness``.
 
     Raises
     ------
@@ -51,7 +54,11 @@ def read_ply(path) -> MeshFile:
     path = os.fspath(path)
     ply, rows = _open(path)
     vertex = _vertex_data(path, ply["vertex"], rows)
-    return MeshFile(path=path, **vertex, **_face_data(path, ply["face"], vertex["points"].shape[0], rows))
+    faces = _face_data(path, ply["face"], vertex["points"].shape[0], rows)
+    edges = ply["edge"].data if "edge" in ply else None
+    tags = ply_tags(path, ply["vertex"].data, edges, rows.line)
+    check_tags(tags, faces["face_sizes"], faces["face_vertices"], vertex["points"].shape[0], path)
+    return MeshFile(path=path, **vertex, **faces, tags=tags)
 
 
 class _Rows:

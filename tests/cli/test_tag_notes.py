@@ -1,0 +1,79 @@
+"""Sharp-feature tags are read but not honoured yet: every command that builds a surface says so, once."""
+from __future__ import annotations
+
+import pytest
+from click.testing import CliRunner
+
+from c1surf.cli.main import main
+
+CUBE = "".join(f"v {x} {y} {z}\n" for x, y, z in [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0),
+                                                  (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]) + """f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 2 3 7 6
+f 3 4 8 7
+f 4 1 5 8
+"""
+TAGS = "t crease 5/1/0 0 1 2 3 0 10\nt corner 1/1/0 6 2\nt hole 1/0/0 1\nt interpolateboundary 1/0/0 1\n" \
+       "t creasemethod 0/0/1 chaikin\n"
+NOTE = ("sharp-feature tags are not honoured yet and were ignored: crease (4 edges), corner (1 vertex), hole (1 face), "
+        "interpolateboundary 1, creasemethod (1 tag)")
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+@pytest.fixture
+def tagged(tmp_path):
+    path = tmp_path / "tagged.obj"
+    path.write_text(CUBE + TAGS)
+    return path
+
+
+def notes(result) -> list[str]:
+    return [line for line in result.stderr.splitlines() if "sharp-feature" in line]
+
+
+def test_convert_notes_the_ignored_tags_once(tmp_path, tagged):
+    result = run("convert", tagged, "-o", tmp_path / "out.obj", "-r", 2)
+    assert result.exit_code == 0, result.output
+    assert notes(result) == [f"c1surf: note: {tagged}: {NOTE}"]
+    assert "sharp-feature" not in result.stdout
+
+
+def test_convert_is_silent_with_quiet_and_the_surface_is_unchanged(tmp_path, tagged):
+    plain = tmp_path / "plain.obj"
+    plain.write_text(CUBE)
+    result = run("convert", tagged, "-o", tmp_path / "tagged_out.obj", "-r", 2, "-q")
+    assert result.exit_code == 0 and result.stderr == ""
+    assert run("convert", plain, "-o", tmp_path / "plain_out.obj", "-r", 2, "-q").stderr == ""
+    assert (tmp_path / "tagged_out.obj").read_bytes() == (tmp_path / "plain_out.obj").read_bytes()
+
+
+def test_an_untagged_mesh_gets_no_note(tmp_path):
+    plain = tmp_path / "plain.obj"
+    plain.write_text(CUBE)
+    assert notes(run("convert", plain, "-o", tmp_path / "out.obj", "-r", 2)) == []
+
+
+def test_check_notes_the_ignored_tags_on_stderr(tagged):
+    result = run("check", tagged)
+    assert result.exit_code == 0 and "G1: yes" in result.stdout
+    assert notes(result) == [f"c1surf: note: {tagged}: {NOTE}"]
+
+
+def test_a_bad_tag_is_a_one_line_error(tmp_path):
+    path = tmp_path / "bad.obj"
+    path.write_text(CUBE + "t crease 2/1/0 0 6 1.0\n")
+    result = run("convert", path, "-o", tmp_path / "out.obj")
+    assert result.exit_code == 1
+    assert result.stderr.strip() == (f"c1surf: error: {path}:15: crease pair 0 6 is not an edge of the mesh (no face "
+                                     "has these two vertices next to each other; tags count vertices from 0): fix the tag")
+
+
+def test_render_notes_the_ignored_tags_unless_quiet(tmp_path, tagged):
+    result = run("render", tagged, "-o", tmp_path / "a.exr", "--size", 16)
+    assert result.exit_code == 0, result.output
+    assert notes(result) == [f"c1surf: note: {tagged}: {NOTE}"]
+    assert notes(run("render", tagged, "-o", tmp_path / "b.exr", "--size", 16, "-q")) == []
