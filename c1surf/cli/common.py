@@ -68,6 +68,13 @@ def repair_notes(surface, mesh_file) -> list[str]:
     return notes
 
 
+def echo_repair_notes(surface, mesh_file, quiet: bool) -> None:
+    """Print ``repair_notes`` as ``c1surf: note:`` lines on stderr, unless ``quiet``."""
+    if not quiet:
+        for note in repair_notes(surface, mesh_file):
+            click.echo(f"c1surf: note: {note}", err=True)
+
+
 def friendly_errors(command):
     """Decorator: known failures become one line and exit 1; --debug shows the traceback."""
 

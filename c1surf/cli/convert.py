@@ -18,7 +18,7 @@ from ..io.patches.iges import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import surface_data
 from .curvature_ply import curvature_properties
-from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes, topology_failure
+from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes, topology_failure
 from .options import extension_options, surface_options
 
 # Peak memory of a tessellation, traced with tracemalloc on spot_quadrangulated (46,848 patches):
@@ -156,9 +156,7 @@ def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: P
     options, data = extension_setup(mesh, mesh_suffix, **shape)
     progress.phase(f"building the surface of {mesh.n_faces} faces")
     surface = build_or_fail(mesh, options, data)
-    if not quiet:
-        for note in repair_notes(surface, mesh):
-            click.echo(f"c1surf: note: {note}", err=True)
+    echo_repair_notes(surface, mesh, quiet)
     return surface, data
 
 

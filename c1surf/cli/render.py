@@ -22,7 +22,7 @@ from ..render.camera import PROJECTIONS, VIEWS, frame_camera
 from ..render.image import GEOMETRY_NAMES, atlas_layout, default_tile, render, render_atlas
 from ..render.pictures import COLORMAPS, curvature_picture, srgb_to_linear, zebra_picture
 from ..render.raycast import default_resolution, patch_grid_mesh
-from .common import Failure, Progress, friendly_errors, output_suffix, repair_notes
+from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes
 from .convert import available_memory, build_or_fail
 from .options import surface_options
 
@@ -63,9 +63,7 @@ def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Pro
         mesh = read_mesh(input_path)
         progress.phase(f"building the surface of {mesh.n_faces} faces")
         surface = build_or_fail(mesh, options)
-        if not quiet:
-            for note in repair_notes(surface, mesh):
-                click.echo(f"c1surf: note: {note}", err=True)
+        echo_repair_notes(surface, mesh, quiet)
         patches = surface_patch_set(surface, str(input_path))
     if patches.n_patches == 0:
         raise Failure(f"{input_path}: there are no patches to render")
