@@ -15,7 +15,8 @@ from .io.meshes.read import read_mesh
 from .io.meshes.surface_data import surface_data
 
 
-def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False, **options):
+def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False,
+                      creases_file=None, crease_angle=None, ignore_tags: bool = False, **options):
     """Read ``path`` (OBJ or PLY) and build its surface.
 
     Parameters
@@ -25,6 +26,9 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
     weights : None (use the file's vertex weights if some differ from 1), True or False: rational patches (A2a)
     normals : interpolate the file's vertex normals (A1a; sets interpolate_vertices)
     attributes : carry texture coordinates and colours as extra point columns
+    creases_file : sidecar JSON of creases, corners and holes (the file's own tags are always used)
+    crease_angle : degrees: edges with a larger dihedral angle become infinitely sharp creases
+    ignore_tags : build the smooth surface, without the file's sharp-feature tags
     **options : SurfaceOptions fields (blend, alpha, beta, tangent_rule, interpolate_vertices, triangles)
 
     Returns
@@ -34,7 +38,8 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
     mesh = read_mesh(path)
     if normals:
         options["interpolate_vertices"] = True
-    data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes)
+    data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes,
+                        creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags)
     surface = Surface(mesh.face_sizes, mesh.face_vertices, data.points, SurfaceOptions(**options), **data.surface_kwargs())
     return surface, mesh
 

@@ -40,18 +40,14 @@ def topology_failure(error: TopologyError, mesh_file) -> Failure:
     return Failure(f"{where}: {message}")
 
 
-def tag_note(mesh_file) -> str | None:
-    """The note naming the sharp-feature tags of ``mesh_file`` that the construction ignores, or None."""
-    tags = getattr(mesh_file, "tags", None)
-    if tags is None or tags.is_empty():
-        return None
-    return f"{mesh_file.path}: sharp-feature tags are not honoured yet and were ignored: {tags.summary()}"
+def repair_notes(surface, mesh_file, data=None) -> list[str]:
+    """One-line notes on what c1surf changed or ignored to make the input usable (the sharp features first).
 
-
-def repair_notes(surface, mesh_file) -> list[str]:
-    """One-line notes on what c1surf changed or ignored to make the input usable (the ignored tags first)."""
+    ``data``: the ``io.meshes.surface_data.SurfaceData`` the surface was built from (its
+    ``feature_notes`` say which tags were honoured and which not), or None.
+    """
     r = getattr(surface, "repairs", {}) or {}
-    notes = [note] if (note := tag_note(mesh_file)) else []
+    notes = list(getattr(data, "feature_notes", []))
     if getattr(mesh_file, "collapsed_corners", 0):
         notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
     if r.get("flipped_faces"):
@@ -68,10 +64,10 @@ def repair_notes(surface, mesh_file) -> list[str]:
     return notes
 
 
-def echo_repair_notes(surface, mesh_file, quiet: bool) -> None:
+def echo_repair_notes(surface, mesh_file, quiet: bool, data=None) -> None:
     """Print ``repair_notes`` as ``c1surf: note:`` lines on stderr, unless ``quiet``."""
     if not quiet:
-        for note in repair_notes(surface, mesh_file):
+        for note in repair_notes(surface, mesh_file, data):
             click.echo(f"c1surf: note: {note}", err=True)
 
 

@@ -58,7 +58,8 @@ def build_or_fail(mesh, options: SurfaceOptions, data=None) -> Surface:
 
 
 def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
-                    interpolate_normals, weights, triangles, attributes, refinements="2"):
+                    interpolate_normals, weights, triangles, attributes, refinements="2", creases_file=None,
+                    crease_angle=None, ignore_tags=False):
     """SurfaceOptions and SurfaceData for the surface options and the extension options of a command.
 
     ``mesh_suffix``: of the tessellated output (``--attributes`` needs one that
@@ -76,7 +77,8 @@ def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_r
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
                              interpolate_vertices=interpolate, triangles=triangles,
                              refinements=refinements if refinements == "auto" else int(refinements))
-    data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=interpolate_normals, attributes=attributes)
+    data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=interpolate_normals, attributes=attributes,
+                        creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags)
     return options, data
 
 
@@ -156,7 +158,7 @@ def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: P
     options, data = extension_setup(mesh, mesh_suffix, **shape)
     progress.phase(f"building the surface of {mesh.n_faces} faces")
     surface = build_or_fail(mesh, options, data)
-    echo_repair_notes(surface, mesh, quiet)
+    echo_repair_notes(surface, mesh, quiet, data)
     return surface, data
 
 

@@ -45,6 +45,21 @@ def extension_options(command):
                      help="Doo-Sabin steps before A2/A3: 2 as in the paper; 0 or 1 when a closed input already "
                           "satisfies R1-R3 after that many (Prop. 1.3.1); auto: the fewest that work."),
     ]
+    return with_options(feature_options(command), options)
+
+
+def feature_options(command):
+    """Add the sharp-feature options (README, "Sharp features")."""
+    options = [
+        click.option("--creases", "creases_file", type=click.Path(dir_okay=False), default=None,
+                     help='JSON of creases, corners and holes besides the file\'s tags: {"creases": [[v0, v1, ..., '
+                          'sharpness]], "corners": [[v, sharpness]], "holes": [face, ...]} (indices from 0).'),
+        click.option("--crease-angle", type=click.FloatRange(0.0, 180.0, max_open=True), default=None, metavar="DEG",
+                     help="Make every edge whose two faces meet at a dihedral angle above DEG degrees an infinitely "
+                          "sharp crease (for meshes without tags)."),
+        click.option("--ignore-tags", is_flag=True,
+                     help="Build the smooth surface: the file's crease, corner and hole tags are read but not used."),
+    ]
     return with_options(command, options)
 
 

@@ -22,6 +22,8 @@ from ..render.camera import PROJECTIONS, VIEWS, frame_camera
 from ..render.image import GEOMETRY_NAMES, atlas_layout, default_tile, render, render_atlas
 from ..render.pictures import COLORMAPS, curvature_picture, srgb_to_linear, zebra_picture
 from ..render.raycast import default_resolution, patch_grid_mesh
+from ..io.meshes.surface_data import SurfaceData
+from ..io.meshes.tags.features import sharp_features
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes
 from .convert import available_memory, build_or_fail
 from .options import surface_options
@@ -62,8 +64,10 @@ def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Pro
         progress.phase(f"reading {input_path}")
         mesh = read_mesh(input_path)
         progress.phase(f"building the surface of {mesh.n_faces} faces")
-        surface = build_or_fail(mesh, options)
-        echo_repair_notes(surface, mesh, quiet)
+        features, notes = sharp_features(mesh)  # the file's own creases, corners and holes
+        data = SurfaceData(points=mesh.points, features=features, feature_notes=notes)
+        surface = build_or_fail(mesh, options, data)
+        echo_repair_notes(surface, mesh, quiet, data)
         patches = surface_patch_set(surface, str(input_path))
     if patches.n_patches == 0:
         raise Failure(f"{input_path}: there are no patches to render")

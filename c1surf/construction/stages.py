@@ -11,6 +11,7 @@ In order (``STAGE_BUILDERS``; a builder returns None where its step does not app
 - ``place``: input points to the coarse mesh (vertex copies of the repairs, ghost points);
 - ``doo_sabin_1``: the first Doo-Sabin step, with A1a's vertex interpolation folded in;
 - ``doo_sabin_2``: the second step, kept factored (``stencils.doo_sabin.DooSabinStep``);
+  both steps pull points towards creases and corners (``stencils.creases``);
 - ``perturbation``: A1's perturbation of the B points of even holes;
 - ``vertex_normals``: A1a's normal constraint; it mixes the coordinates, so its
   matrix acts on flattened points (``mixes_coordinates``);
@@ -31,6 +32,7 @@ from .refine.doo_sabin import FACE_FROM_VERTEX
 from .stencils.bicubic import bicubic_layout
 from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_corner_ratios
+from .stencils.creases import crease_correction, refined_sharpness
 from .stencils.doo_sabin import DooSabinStep, doo_sabin_matrix
 from .stencils.hole_rules import HoleRules
 from .stencils.perturbation import perturbation_matrix
@@ -173,6 +175,11 @@ def first_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixSt
     if topology.refinements == 0:
         return None
     step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
+    sharp = topology.sharpness
+    if sharp is not None:  # creases and corners pull their points towards the crease polygon (stencils.creases)
+        correction = crease_correction(topology.input, inputs.corner_ratio, inputs.corner_ratio, sharp.halfedge,
+                                       sharp.vertex, step=1)
+        step = step if correction is None else (step + correction).tocsr()
     if inputs.interpolate_vertices:
         step = vertex_interpolation_step(step, topology.input, topology.faces1)
     return MatrixStage("doo_sabin_1", step)
@@ -183,7 +190,13 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
     if topology.refinements < 2:
         return None
     is_vertex_cell = topology.faces1.kind == FACE_FROM_VERTEX
-    return DooSabinStep(topology.level1, second_step_corner_ratios(topology.level1, is_vertex_cell, inputs.corner_ratio))
+    ratio = second_step_corner_ratios(topology.level1, is_vertex_cell, inputs.corner_ratio)
+    correction, sharp = None, topology.sharpness
+    if sharp is not None:  # the creases of the first step, one step weaker (stencils.creases)
+        halfedge, vertex = refined_sharpness(topology.input, topology.level1, sharp.halfedge, sharp.vertex)
+        correction = crease_correction(topology.level1, ratio, inputs.corner_ratio[topology.level1.origin], halfedge,
+                                       vertex, step=2)
+    return DooSabinStep(topology.level1, ratio, correction=correction)
 
 
 def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:

@@ -87,6 +87,8 @@ class Surface:
         the patches become rational, with weights
     vertex_normals : (V, 3) float or None, NaN rows where unset: with
         ``options.interpolate_vertices`` the surface normal at each such vertex is this one
+    features : SharpFeatures or None, creases, corners and holes (``construction.features``):
+        topology, fixed for the surface's life like the connectivity
 
     Attributes (after construction)
     -------------------------------
@@ -101,7 +103,7 @@ class Surface:
     """
 
     def __init__(self, face_sizes, face_vertices, points, options: SurfaceOptions | None = None, face_blend=None,
-                 vertex_blend=None, weights=None, vertex_normals=None):
+                 vertex_blend=None, weights=None, vertex_normals=None, features=None):
         self.options = o = (options or SurfaceOptions()).check(vertex_normals)
         points = np.asarray(points, dtype=np.float64)
         n_vertices, n_faces = points.shape[0], np.size(face_sizes)
@@ -116,7 +118,11 @@ class Surface:
         self.weights = None if weights is None else _checked_weights(weights, n_vertices)
         self.timings = {}
         start = time.perf_counter()
-        self.topology = t = build_topology(face_sizes, face_vertices, n_vertices, o.refinements, o.interpolate_vertices)
+        if features is not None:
+            features = features.check(n_vertices, n_faces)
+        self.features = features
+        self.topology = t = build_topology(face_sizes, face_vertices, n_vertices, o.refinements, o.interpolate_vertices,
+                                           features)
         self.timings["topology"] = time.perf_counter() - start
         # First step: a corner takes its vertex's ratio where one is given, else its cell's (stencils.blend).
         corner = corner_ratios(t.input, t.per_coarse_face(blend, float(o.blend)), t.per_coarse_vertex(vertex_blend))
@@ -215,25 +221,33 @@ class Surface:
 
     def _apply(self, points: np.ndarray) -> "Surface":
         """Run the stages on ``points``: refined points, then the patches."""
-        x = points
+        # Every stage is affine (its rows sum to 1) and commutes with translations, so
+        # the stages run on points centred on their bounding box and the centre is added
+        # back: round-off then scales with the model's size, not its distance from the origin.
+        origin = (points.min(axis=0) + points.max(axis=0)) / 2 if points.size else np.zeros(points.shape[1])
+        x = points - origin
         if self.weights is not None:
-            x = np.concatenate([points * self.weights[:, None], self.weights[:, None]], axis=1)
+            x = np.concatenate([x * self.weights[:, None], self.weights[:, None]], axis=1)
         for stage in self.stages:
             start = time.perf_counter()
             refined, x = x, stage.apply(x)  # the last stage (the patches) reads the refined points
             self.timings[f"apply {stage.name}"] = time.perf_counter() - start
+        if self.weights is None:
+            refined += origin
+        else:
+            refined[:, :-1] += origin * refined[:, -1:]
         self.points, self.refined_points = points, refined
         n_quad, d = self.quad_frames.shape[0], x.shape[1]
         biquadratic, bicubic = x[: 9 * n_quad].reshape(n_quad, 3, 3, d), x[9 * n_quad :].reshape(-1, 4, 4, d)
         if self.weights is None:
-            self.biquadratic, self.bicubic = biquadratic, bicubic
+            self.biquadratic, self.bicubic = biquadratic + origin, bicubic + origin
             self.biquadratic_weights = self.bicubic_weights = None
             return self
         self.biquadratic_weights, self.bicubic_weights = biquadratic[..., -1], bicubic[..., -1]
         if not (np.all(self.biquadratic_weights > 0) and np.all(self.bicubic_weights > 0)):
             raise ValueError("the vertex weights vary too much: some patch weight is not positive")
-        self.biquadratic = biquadratic[..., :-1] / biquadratic[..., -1:]
-        self.bicubic = bicubic[..., :-1] / bicubic[..., -1:]
+        self.biquadratic = biquadratic[..., :-1] / biquadratic[..., -1:] + origin
+        self.bicubic = bicubic[..., :-1] / bicubic[..., -1:] + origin
         return self
 
     def stencil(self, flat: bool = False):
@@ -278,9 +292,9 @@ def _checked_weights(weights, n_vertices: int) -> np.ndarray:
 def build_surface(points, face_sizes, face_vertices, **options) -> Surface:
     """Convenience: ``Surface(face_sizes, face_vertices, points, SurfaceOptions(**options))``.
 
-    ``face_blend``, ``vertex_blend``, ``weights`` and ``vertex_normals`` go to ``Surface``.
+    ``face_blend``, ``vertex_blend``, ``weights``, ``vertex_normals`` and ``features`` go to ``Surface``.
     """
-    data = {key: options.pop(key, None) for key in ("face_blend", "vertex_blend", "weights", "vertex_normals")}
+    data = {key: options.pop(key, None) for key in ("face_blend", "vertex_blend", "weights", "vertex_normals", "features")}
     return Surface(face_sizes, face_vertices, points, SurfaceOptions(**options), **data)
 
 

@@ -9,7 +9,7 @@ that reads points (convex or reflex ghost corners) is a stage
 """
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.sparse import csr_matrix
@@ -18,6 +18,7 @@ from ..mesh.errors import TopologyError
 from ..mesh.ghost_layer import GhostLayer, add_ghost_layer
 from ..mesh.halfedges import HalfEdgeMesh
 from ..mesh.repair import check_valence, prepare_topology
+from .features import CoarseSharpness, SharpFeatures, coarse_sharpness
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_VERTEX, RefinedFaces, refine_doo_sabin, refined_halfedges
 from .refine.fewer_steps import check_refinements, fewer_refinement_sources, refinements_needed
 from .refine.holes import HoleGroup, hole_neighbourhoods, patch_frames
@@ -46,6 +47,8 @@ class SurfaceTopology:
     cubic_frames : (Nc, 4) int, frames of the kept bicubic patches
     cubic_keep : (sum over holes of n,) bool or None, which bicubic patches are kept (None: all)
     cubic_hole : (Nc,) int, hole (in ``holes`` order) of every kept bicubic patch
+    sharpness : CoarseSharpness or None, creases and corners on ``input`` (``features``)
+    hole_faces : (k,) int, input faces tagged as holes (no patches)
     """
 
     n_input_vertices: int
@@ -66,6 +69,8 @@ class SurfaceTopology:
     cubic_frames: np.ndarray
     cubic_keep: np.ndarray | None
     cubic_hole: np.ndarray
+    sharpness: CoarseSharpness | None = None
+    hole_faces: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
 
     @property
     def frames(self) -> np.ndarray:
@@ -114,7 +119,8 @@ class SurfaceTopology:
         return kind, index, edge
 
 
-def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto", interpolate_vertices: bool = False) -> SurfaceTopology:
+def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto", interpolate_vertices: bool = False,
+                   features: SharpFeatures | None = None) -> SurfaceTopology:
     """Repair, close, refine and lay out the patches of a polygon mesh.
 
     Parameters
@@ -124,6 +130,8 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     n_vertices : int, input vertices
     refinements : 0, 1, 2 or "auto" (``SurfaceOptions.refinements``)
     interpolate_vertices : bool, A1a (needs at least one refinement)
+    features : SharpFeatures or None: hole faces lose their patches; creases and corners
+        are mapped onto the coarse mesh for the refinement stages
     """
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     prepared, vertex_source, repairs = prepare_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), n_vertices)
@@ -135,6 +143,10 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     coarse = prepared if ghost is None else ghost.mesh
     real_face = np.ones(coarse.n_faces, bool) if ghost is None else ghost.real_face.copy()
     real_face[: second_sheet.size] &= ~second_sheet
+    hole_faces = np.zeros(0, dtype=np.int64) if features is None else np.unique(features.hole_faces)
+    real_face[hole_faces] = False  # a hole keeps its corners in the refinement, but no patches
+    if not real_face.any():
+        raise TopologyError("every face is tagged as a hole: there is no surface to build", hole_faces[:8])
     closed = real_face.all() and not repairs["boundary_edges"]
     levels = refinement_count(coarse, refinements, closed, interpolate_vertices)
     faces1, level1, refined = refine(coarse, levels)
@@ -149,6 +161,7 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
         refinements=levels, faces1=faces1, level1=level1, refined=refined, real_vertex=real_vertex, holes=holes,
         quad_frames=quad_frames, cubic_frames=cubic_frames[real_cubic], cubic_keep=None if real_cubic.all() else real_cubic,
         cubic_hole=np.repeat(np.arange(sizes.size), sizes)[real_cubic],
+        sharpness=None if features is None else coarse_sharpness(coarse, vertex_source, features), hole_faces=hole_faces,
     )
 
 

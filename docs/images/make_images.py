@@ -35,6 +35,30 @@ def main():
         c1surf("render", spot, "--png", HERE / "spot_kmax.png", "--size", "360x300", "--eye", "2.4", "1.0", "-2.4",
                "--range", "0", "10")
     broken_pair(HERE / "misprint_zebra.png")
+    crease_strip(HERE / "crease_sharpness.png")
+
+
+def crease_strip(path):
+    """The sample cube with its 12 edges tagged as creases of sharpness 0, 0.5, 1, 2 and 10, side by side."""
+    import tempfile
+
+    cube = (ROOT / "sample_meshes" / "cube.obj").read_text()
+    faces = [[int(v) - 1 for v in line.split()[1:]] for line in cube.splitlines() if line.startswith("f ")]
+    edges = sorted({tuple(sorted((f[i], f[(i + 1) % 4]))) for f in faces for i in range(4)})
+    tiles = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for s in (0, 0.5, 1, 2, 10):
+            mesh = Path(tmp) / f"cube_{s}.obj"
+            mesh.write_text(cube + "".join(f"t crease 2/1/0 {a} {b} {s}\n" for a, b in edges))
+            png = Path(tmp) / f"cube_{s}.png"
+            c1surf("render", mesh, "--png", png, "--size", "220x200", "--range", "0", "8")
+            tiles.append((Image.open(png).convert("RGB"), f"sharpness {s:g}"))
+    out = Image.new("RGB", (5 * 220, 220), (255, 255, 255))
+    draw = ImageDraw.Draw(out)
+    for k, (tile, label) in enumerate(tiles):
+        out.paste(tile, (k * 220, 20))
+        draw.text((k * 220 + 6, 4), label, fill=(0, 0, 0))
+    out.save(path, optimize=True)
 
 
 def broken_pair(path):

@@ -1,4 +1,4 @@
-"""Sharp-feature tags are read but not honoured yet: every command that builds a surface says so, once."""
+"""Sharp-feature tags: every command that builds a surface says once what it honours and what it does not."""
 from __future__ import annotations
 
 import pytest
@@ -16,8 +16,13 @@ f 4 1 5 8
 """
 TAGS = "t crease 5/1/0 0 1 2 3 0 10\nt corner 1/1/0 6 2\nt hole 1/0/0 1\nt interpolateboundary 1/0/0 1\n" \
        "t creasemethod 0/0/1 chaikin\n"
-NOTE = ("sharp-feature tags are not honoured yet and were ignored: crease (4 edges), corner (1 vertex), hole (1 face), "
-        "interpolateboundary 1, creasemethod (1 tag)")
+NOTE = ("sharp-feature tags honoured: crease (4 edges), corner (1 vertex), hole (1 face); not honoured: "
+        "interpolateboundary 1 (c1surf's boundary rule, a ghost layer, always ends the surface on a curve along the "
+        "boundary polygon); creasemethod (1 tag: c1surf's own crease rule is used (stencils.creases))")
+SHARP = ("infinitely sharp creases and corners (sharpness >= 10) are built as the sharpest G1 crease (sharpness 10: a "
+         "narrow G1 fillet), not as a C0 edge")
+IGNORED = ("sharp-feature tags ignored (--ignore-tags), the surface is smooth: crease (4 edges), corner (1 vertex), "
+           "hole (1 face), interpolateboundary 1, creasemethod (1 tag)")
 
 
 def run(*args):
@@ -32,23 +37,37 @@ def tagged(tmp_path):
 
 
 def notes(result) -> list[str]:
-    return [line for line in result.stderr.splitlines() if "sharp-feature" in line]
+    return [line for line in result.stderr.splitlines() if "sharp" in line]
 
 
-def test_convert_notes_the_ignored_tags_once(tmp_path, tagged):
+def expected(path) -> list[str]:
+    return [f"c1surf: note: {path}: {NOTE}", f"c1surf: note: {SHARP}"]
+
+
+def test_convert_notes_the_tags_once(tmp_path, tagged):
     result = run("convert", tagged, "-o", tmp_path / "out.obj", "-r", 2)
     assert result.exit_code == 0, result.output
-    assert notes(result) == [f"c1surf: note: {tagged}: {NOTE}"]
+    assert notes(result) == expected(tagged)
     assert "sharp-feature" not in result.stdout
 
 
-def test_convert_is_silent_with_quiet_and_the_surface_is_unchanged(tmp_path, tagged):
+def test_convert_is_silent_with_quiet_and_honours_the_tags(tmp_path, tagged):
     plain = tmp_path / "plain.obj"
     plain.write_text(CUBE)
     result = run("convert", tagged, "-o", tmp_path / "tagged_out.obj", "-r", 2, "-q")
     assert result.exit_code == 0 and result.stderr == ""
     assert run("convert", plain, "-o", tmp_path / "plain_out.obj", "-r", 2, "-q").stderr == ""
-    assert (tmp_path / "tagged_out.obj").read_bytes() == (tmp_path / "plain_out.obj").read_bytes()
+    assert (tmp_path / "tagged_out.obj").read_bytes() != (tmp_path / "plain_out.obj").read_bytes()
+
+
+def test_ignore_tags_builds_the_smooth_surface_and_says_so(tmp_path, tagged):
+    plain = tmp_path / "plain.obj"
+    plain.write_text(CUBE)
+    result = run("convert", tagged, "-o", tmp_path / "ignored.obj", "-r", 2, "--ignore-tags")
+    assert result.exit_code == 0, result.output
+    assert notes(result) == [f"c1surf: note: {tagged}: {IGNORED}"]
+    run("convert", plain, "-o", tmp_path / "plain_out.obj", "-r", 2, "-q")
+    assert (tmp_path / "ignored.obj").read_bytes() == (tmp_path / "plain_out.obj").read_bytes()
 
 
 def test_an_untagged_mesh_gets_no_note(tmp_path):
@@ -57,10 +76,10 @@ def test_an_untagged_mesh_gets_no_note(tmp_path):
     assert notes(run("convert", plain, "-o", tmp_path / "out.obj", "-r", 2)) == []
 
 
-def test_check_notes_the_ignored_tags_on_stderr(tagged):
+def test_check_notes_the_tags_on_stderr(tagged):
     result = run("check", tagged)
     assert result.exit_code == 0 and "G1: yes" in result.stdout
-    assert notes(result) == [f"c1surf: note: {tagged}: {NOTE}"]
+    assert notes(result) == expected(tagged)
 
 
 def test_a_bad_tag_is_a_one_line_error(tmp_path):
@@ -72,8 +91,8 @@ def test_a_bad_tag_is_a_one_line_error(tmp_path):
                                      "has these two vertices next to each other; tags count vertices from 0): fix the tag")
 
 
-def test_render_notes_the_ignored_tags_unless_quiet(tmp_path, tagged):
+def test_render_notes_the_tags_unless_quiet(tmp_path, tagged):
     result = run("render", tagged, "-o", tmp_path / "a.exr", "--size", 16)
     assert result.exit_code == 0, result.output
-    assert notes(result) == [f"c1surf: note: {tagged}: {NOTE}"]
+    assert notes(result) == expected(tagged)
     assert notes(run("render", tagged, "-o", tmp_path / "b.exr", "--size", 16, "-q")) == []

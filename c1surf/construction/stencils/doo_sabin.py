@@ -118,14 +118,17 @@ class DooSabinStep:
     mesh : HalfEdgeMesh with V vertices and H half-edges
     ratio : (H,) float, the ratio of every corner
     name : str, the stage's name
+    correction : (H, V) csr_matrix or None, added to the smooth step (creases and
+        corners, ``stencils.creases.crease_correction``)
     """
 
     mixes_coordinates = False
 
-    def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_2"):
+    def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_2", correction=None):
         self.name = name
         self.mesh = mesh
         self.ratio = np.asarray(ratio, dtype=np.float64)
+        self.correction = correction
         self.shape = (mesh.n_halfedges, mesh.n_vertices)
         self._matrix = None
 
@@ -133,10 +136,15 @@ class DooSabinStep:
         """(H, d) fine points from (V, d) coarse ``points``."""
         if self._matrix is not None:
             return self._matrix @ points
-        return doo_sabin_factored(self.mesh, self.ratio, points)
+        out = doo_sabin_factored(self.mesh, self.ratio, points)
+        if self.correction is not None:
+            out += self.correction @ points
+        return out
 
     def matrix(self) -> csr_matrix:
         """(H, V) csr_matrix, built on the first call and kept (``apply`` uses it from then on)."""
         if self._matrix is None:
             self._matrix = doo_sabin_matrix(self.mesh, self.ratio, per_corner=True)
+            if self.correction is not None:
+                self._matrix = (self._matrix + self.correction).tocsr()
         return self._matrix

@@ -16,7 +16,9 @@ extensions of the paper use (``core.surface.Surface`` arguments):
 - vertex normals (A1a): OBJ ``vn`` (through ``f v//vn``), PLY ``nx ny nz``;
 - attributes carried through the construction as extra columns: texture
   coordinates (OBJ ``vt``, PLY ``u v`` / ``s t``) and colours (``red green
-  blue`` [``alpha``]).
+  blue`` [``alpha``]);
+- sharp features: the file's crease, corner and hole tags, a ``--creases``
+  sidecar and ``--crease-angle`` (``tags.features``).
 """
 from __future__ import annotations
 
@@ -27,6 +29,7 @@ import numpy as np
 
 from ..errors import MeshInputError
 from .mesh_file import MeshFile
+from .tags.features import sharp_features
 
 COLOUR_NAMES = ("red", "green", "blue", "alpha")
 
@@ -41,6 +44,8 @@ class SurfaceData:
     face_blend, vertex_blend : (F,) / (V,) float with NaN where unset, or None
     weights : (V,) float or None
     vertex_normals : (V, 3) float (NaN rows where unset) or None
+    features : construction.features.SharpFeatures or None
+    feature_notes : list of str, what was honoured or ignored of the sharp features (``tags.features``)
     """
 
     points: np.ndarray
@@ -50,11 +55,13 @@ class SurfaceData:
     vertex_blend: np.ndarray | None = None
     weights: np.ndarray | None = None
     vertex_normals: np.ndarray | None = None
+    features: object = None
+    feature_notes: list = field(default_factory=list)
 
     def surface_kwargs(self) -> dict:
         """Keyword arguments of ``Surface`` (besides points and options)."""
         return {"face_blend": self.face_blend, "vertex_blend": self.vertex_blend, "weights": self.weights,
-                "vertex_normals": self.vertex_normals}
+                "vertex_normals": self.vertex_normals, "features": self.features}
 
 
 def _ratio(path, where: str, value) -> float:
@@ -143,7 +150,8 @@ def _used_vertices(mesh: MeshFile) -> np.ndarray:
 
 
 def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = None, normals: bool = False,
-                 attributes: bool = False) -> SurfaceData:
+                 attributes: bool = False, creases_file=None, crease_angle: float | None = None,
+                 ignore_tags: bool = False) -> SurfaceData:
     """Collect the extension data of ``mesh`` (see the module docstring).
 
     Parameters
@@ -152,6 +160,8 @@ def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = Non
     use_weights : True / False, or None: use the file's weights when some differ from 1
     normals : use the file's vertex normals (every used vertex needs one)
     attributes : carry texture coordinates and colours as extra columns
+    creases_file, crease_angle, ignore_tags : sharp features besides (or instead of) the
+        file's tags (``tags.features.sharp_features``)
 
     Raises
     ------
@@ -160,6 +170,7 @@ def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = Non
     data = SurfaceData(points=np.asarray(mesh.points, dtype=np.float64))
     data.face_blend, data.vertex_blend = _blend_ratios(mesh, blend_file)
     data.weights = _weights(mesh, use_weights)
+    data.features, data.feature_notes = sharp_features(mesh, creases_file, crease_angle, ignore_tags)
     if normals:
         data.vertex_normals = _vertex_normals(mesh)
     if attributes:

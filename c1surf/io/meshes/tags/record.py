@@ -1,7 +1,7 @@
 """The sharp-feature tags read from a mesh file, and their checks against the mesh.
 
-c1surf reads and reports these tags but does not honour them yet (the
-sharp-features issue): the CLI prints one note naming every kind read.
+``tags.features`` turns them into the construction's ``SharpFeatures`` (creases,
+corners, holes) and names in a note every tag that is not honoured.
 """
 
 from __future__ import annotations

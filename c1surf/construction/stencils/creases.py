@@ -1,0 +1,123 @@
+"""Creases and corners in the two Doo-Sabin steps of A1 (``construction.features``).
+
+A Doo-Sabin point of corner h (vertex v of face f) is ``(1 - a) v + a S_f``.
+Where f has a sharp edge at v, or v is a corner, the point is pulled towards a
+*target* on the crease polygon or the corner:
+
+- v a corner: the target is v;
+- f's edge (v, w) sharp: ``(1 - b) v + b w``, the point Chaikin's rule puts on
+  the crease polygon (b = a / 2, which is 1/4 at the default blend; the smooth
+  point of a parallelogram face is this target plus the same step along the
+  other edge, so sharpening removes the component across the crease);
+- both of f's edges at v sharp (f alone on its side of the crease):
+  ``(1 - b) v + b/2 (w + u)``, between the two Chaikin points;
+
+by the weight ``w(s) = 1 - 2^(-s/2)`` with s the sharpness (of the edge, the
+mean of both edges, or the corner's) less the steps already taken: 0 for
+s <= 0, 0.29 at s = 1, 0.97 at the cap s = 10. (A steeper law, 1 - 2^-s, makes
+cells so thin at s >= 6 that storing their coefficients in float64 far from the
+origin alone breaks G1 by 3e-10 rad, measured on OpenSubdiv's bishop and rook;
+with the half exponent they stay below 5e-11.) So a crease of sharpness s is sharp
+"during the first steps of refinement and smooth after" as in OpenSubdiv: the
+first step uses s, the second s - 1, and A2/A3 build smooth patches on the
+result. Since w < 1 no cell collapses, every patch keeps a tangent plane, and
+the surface is G1 for every sharpness (Theorem 1.3.3 holds for any points).
+
+The second step sees the creases of the first on the once-refined mesh: the
+edges of the F-cells along a sharp input edge (one per side of it, the long
+sides of the thin E-cell between them) keep its sharpness, and every corner of
+a corner vertex's V-cell is a corner.
+"""
+from __future__ import annotations
+
+import numpy as np
+from scipy.sparse import csr_matrix
+
+from ...mesh.halfedges import HalfEdgeMesh
+
+
+def crease_weight(sharpness: np.ndarray, step: int) -> np.ndarray:
+    """(k,) float in [0, 1): how far step ``step`` (1 or 2) pulls a point of this sharpness to its target."""
+    s = np.asarray(sharpness, dtype=np.float64) - (step - 1)
+    return np.where(s > 0, 1.0 - np.exp2(-np.maximum(s, 0.0) / 2), 0.0)
+
+
+def crease_correction(mesh: HalfEdgeMesh, ratio: np.ndarray, chaikin_ratio: np.ndarray, halfedge_sharpness: np.ndarray,
+                      vertex_sharpness: np.ndarray, step: int) -> csr_matrix | None:
+    """The change creases and corners make to one Doo-Sabin step, as a sparse matrix.
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh with V vertices and H half-edges, the mesh the step refines
+    ratio : (H,) float, the step's ratio a of every corner (``stencils.blend``)
+    chaikin_ratio : (H,) float, the first-step ratio of every corner's vertex (b = ratio / 2 along creases)
+    halfedge_sharpness : (H,) float, sharpness of every half-edge's edge
+    vertex_sharpness : (V,) float, corner sharpness of every vertex
+    step : 1 or 2
+
+    Returns
+    -------
+    (H, V) csr_matrix C, or None when no point moves: the sharp step is ``M + C``
+    with M the smooth step (``doo_sabin_matrix``); row h is ``w (target - smooth point)``.
+    """
+    h = np.arange(mesh.n_halfedges)
+    prev = mesh.prev
+    s_next, s_prev, s_corner = halfedge_sharpness, halfedge_sharpness[prev], vertex_sharpness[mesh.origin]
+    corner = s_corner > 0
+    both = ~corner & (s_next > 0) & (s_prev > 0)
+    along_next = ~corner & ~both & (s_next > 0)
+    along_prev = ~corner & ~both & (s_prev > 0)
+    sharpness = np.select([corner, both, along_next, along_prev], [s_corner, (s_next + s_prev) / 2, s_next, s_prev], 0.0)
+    weight = crease_weight(sharpness, step)
+    moved = np.flatnonzero(weight > 0)
+    if moved.size == 0:
+        return None
+    h, weight, b = moved, weight[moved], np.minimum(chaikin_ratio[moved], 1.0) / 2
+    corner, both, along_next, along_prev = corner[h], both[h], along_next[h], along_prev[h]
+    # target: t_v v + t_w w + t_u u, with w = dest[h], u = origin[prev[h]]
+    t_v = np.where(corner, 1.0, 1.0 - b)
+    t_w = np.where(along_next, b, np.where(both, b / 2, 0.0))
+    t_u = np.where(along_prev, b, np.where(both, b / 2, 0.0))
+    rows = [h, h, h]
+    cols = [mesh.origin[h], mesh.dest[h], mesh.origin[prev[h]]]
+    vals = [weight * t_v, weight * t_w, weight * t_u]
+    # minus w times the smooth point (1 - a) v + a/n (sum of the face's vertices)
+    a, face = ratio[h], mesh.face[h]
+    size = mesh.face_sizes[face]
+    members = np.repeat(mesh.face_offsets[face], size) + (np.arange(size.sum()) - np.repeat(np.cumsum(size) - size, size))
+    rows += [h, np.repeat(h, size)]
+    cols += [mesh.origin[h], mesh.origin[members]]
+    vals += [-weight * (1.0 - a), np.repeat(-weight * a / size, size)]
+    correction = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                            shape=(mesh.n_halfedges, mesh.n_vertices))
+    correction.sum_duplicates()
+    return correction
+
+
+def refined_sharpness(coarse: HalfEdgeMesh, level1: HalfEdgeMesh, halfedge_sharpness: np.ndarray,
+                      vertex_sharpness: np.ndarray):
+    """Sharpness on the once-refined mesh, for the second step.
+
+    Parameters
+    ----------
+    coarse : HalfEdgeMesh with H half-edges (level-1 vertex h is coarse corner h)
+    level1 : HalfEdgeMesh, ``refine.doo_sabin.refined_halfedges(coarse, ...)``
+    halfedge_sharpness : (H,) float, coarse
+    vertex_sharpness : (V,) float, coarse
+
+    Returns
+    -------
+    halfedge : (H1,) float: the F-cell edge h -> next[h] (level-1 half-edge h) and its twin,
+        a long side of the E-cell of coarse edge h, keep the coarse edge's sharpness
+    vertex : (H,) float: every level-1 vertex keeps the corner sharpness of its coarse vertex
+    """
+    n = coarse.n_halfedges
+    halfedge = np.zeros(level1.n_halfedges)
+    halfedge[:n] = halfedge_sharpness
+    twin = level1.twin[:n]
+    inner = twin >= 0
+    halfedge[twin[inner]] = np.maximum(halfedge[twin[inner]], halfedge_sharpness[inner])
+    return halfedge, vertex_sharpness[coarse.origin]
+
+
+__all__ = ["crease_weight", "crease_correction", "refined_sharpness"]
