@@ -11,6 +11,7 @@ from .batch import batch
 from .check import check
 from .convert import convert
 from .render import render_command
+from .reports.diff import diff
 from .reports.measure import measure
 from .tessellate import tessellate
 
@@ -45,6 +46,7 @@ main.add_command(check)
 main.add_command(tessellate)
 main.add_command(render_command)
 main.add_command(measure)
+main.add_command(diff)
 
 if __name__ == "__main__":  # pragma: no cover
     main()
