@@ -185,3 +185,29 @@ def rational_sphere_patch(radius, centre):
             x = radius * np.array([meridian[i, 0] * sweep[j, 0], meridian[i, 0] * sweep[j, 1], meridian[i, 1]]) + centre
             Q[i, j] = np.append(x * w, w)
     return Q
+
+
+# -- Open CASCADE (cadquery-ocp, test extra) ----------------------------------------------
+
+
+def ocp_shapes(shape, kind) -> list:
+    """The sub-shapes of ``shape`` of the TopAbs kind ``kind``, in explorer order."""
+    from OCP.TopExp import TopExp_Explorer
+
+    found = []
+    explorer = TopExp_Explorer(shape, kind)
+    while explorer.More():
+        found.append(explorer.Current())
+        explorer.Next()
+    return found
+
+
+def read_step(path):
+    """The one shape of a STEP file, read by Open CASCADE's STEPControl_Reader."""
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.STEPControl import STEPControl_Reader
+
+    reader = STEPControl_Reader()
+    assert reader.ReadFile(str(path)) == IFSelect_RetDone
+    assert reader.TransferRoots() >= 1
+    return reader.OneShape()

@@ -5,6 +5,7 @@ from pathlib import Path
 
 import click
 
+from ..evaluation.patch_set import PatchSet, surface_patch_set
 from ..evaluation.smoothness import measure_smoothness
 from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
@@ -12,6 +13,23 @@ from ..io.meshes.read import read_mesh
 from .common import friendly_errors
 from .convert import build_or_fail, extension_setup
 from .options import extension_options, surface_options
+
+
+def read_or_build(path, shape: dict) -> PatchSet:
+    """The patches of a patch file, or of the surface of a mesh file built with the options ``shape``.
+
+    ``shape``: the values of the surface and extension options (``options.py``),
+    keyed by ``convert.extension_setup``'s parameter names. The notes on the
+    sharp-feature tags go to stderr (the commands using this print a report on stdout).
+    """
+    if Path(path).suffix.lower() in PATCH_READERS:
+        return load_patch_set(path)
+    mesh = read_mesh(path)
+    options, data = extension_setup(mesh, None, **shape)
+    for note in data.feature_notes:
+        click.echo(f"c1surf: note: {note}", err=True)
+    surface = build_or_fail(mesh, options, data)
+    return surface_patch_set(surface, str(path))
 
 
 @click.command()
@@ -25,8 +43,7 @@ from .options import extension_options, surface_options
 @surface_options
 @extension_options
 @friendly_errors
-def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices, interpolate_normals,
-          weights, triangles, attributes, refinements, creases_file, crease_angle, ignore_tags):
+def check(path, tolerance, samples, unoriented, **shape):
     """Check that a surface is G1 (tangent-plane continuous).
 
     PATCHES is a patch file written by `convert --patches`; an OBJ/PLY INPUT is
@@ -35,19 +52,8 @@ def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule
     construction's bookkeeping. Prints the largest position gap and normal
     jump and exits 1 when the surface is not G1 to within --tolerance.
     """
-    suffix = Path(path).suffix.lower()
-    if suffix in PATCH_READERS:
-        patch_set = load_patch_set(path)
-        groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
-    else:
-        mesh = read_mesh(path)
-        options, data = extension_setup(mesh, None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
-                                        interpolate_normals, weights, triangles, attributes, refinements, creases_file,
-                                        crease_angle, ignore_tags)
-        for note in data.feature_notes:  # check has no --quiet: the notes go to stderr, the report to stdout
-            click.echo(f"c1surf: note: {note}", err=True)
-        surface = build_or_fail(mesh, options, data)
-        groups, patch_weights = [surface.biquadratic, surface.bicubic], surface.patch_weights
+    patch_set = read_or_build(path, shape)
+    groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,
                                 unoriented=unoriented)
     n_patches = sum(len(g) for g in groups)

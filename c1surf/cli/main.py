@@ -11,6 +11,8 @@ from .batch import batch
 from .check import check
 from .convert import convert
 from .render import render_command
+from .reports.diff import diff
+from .reports.measure import measure
 from .tessellate import tessellate
 
 
@@ -43,6 +45,8 @@ main.add_command(batch)
 main.add_command(check)
 main.add_command(tessellate)
 main.add_command(render_command)
+main.add_command(measure)
+main.add_command(diff)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -21,7 +21,8 @@ from c1surf.api import surface_from_file
 from c1surf.cli.main import main
 from c1surf.evaluation.bezier import evaluate_patches
 
-from conftest import CLOSED_SAMPLES, SAMPLES, shared_mesh, surface_of
+from conftest import ocp_shapes as shapes
+from conftest import CLOSED_SAMPLES, SAMPLES, read_step, shared_mesh, surface_of
 
 try:
     from OCP.BRep import BRep_Tool
@@ -32,9 +33,7 @@ try:
     from OCP.GProp import GProp_GProps
     from OCP.IFSelect import IFSelect_RetDone
     from OCP.IGESControl import IGESControl_Reader
-    from OCP.STEPControl import STEPControl_Reader
     from OCP.TopAbs import TopAbs_FACE, TopAbs_SHELL, TopAbs_SOLID
-    from OCP.TopExp import TopExp_Explorer
     from OCP.TopoDS import TopoDS
 
     OCP_ERROR = None
@@ -72,15 +71,6 @@ def read_iges(path):
     roots = reader.NbRootsForTransfer()
     assert reader.TransferRoots()
     return reader, reader.OneShape(), roots
-
-
-def shapes(shape, kind) -> list:
-    found = []
-    explorer = TopExp_Explorer(shape, kind)
-    while explorer.More():
-        found.append(explorer.Current())
-        explorer.Next()
-    return found
 
 
 def faces(shape) -> list:
@@ -180,10 +170,7 @@ def test_iges_faces_of_a_closed_mesh_sew_into_one_closed_shell(tmp_path, name):
 def test_step_is_one_closed_solid_that_agrees(tmp_path, name):
     surface = surface_of(SAMPLES / name)
     path = convert(tmp_path, SAMPLES / name, ".step")
-    reader = STEPControl_Reader()
-    assert reader.ReadFile(str(path)) == IFSelect_RetDone
-    assert reader.TransferRoots() >= 1
-    shape = reader.OneShape()
+    shape = read_step(path)
     assert len(shapes(shape, TopAbs_SOLID)) == 1
     shells = shapes(shape, TopAbs_SHELL)
     assert len(shells) == 1 and BRep_Tool.IsClosed_s(TopoDS.Shell(shells[0]))

@@ -1,0 +1,53 @@
+"""``c1surf diff``: two patch files, or two meshes, compared structurally and coefficient by coefficient."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+from ...evaluation.compare import compare_meshes, compare_patch_sets
+from ...io.meshes.read import read_mesh
+from ...io.patches.formats import load_patch_set
+from ...io.registry import MESH_READERS, PATCH_READERS, suffix_list
+from ..common import Failure, friendly_errors
+
+
+@click.command()
+@click.argument("first", metavar="A", type=click.Path(dir_okay=False))
+@click.argument("second", metavar="B", type=click.Path(dir_okay=False))
+@click.option("--tolerance", type=click.FloatRange(0.0, None), default=1e-12, show_default=True,
+              help="Largest coefficient (or vertex) move accepted as equal, relative to the bounding-box diagonal of A.")
+@friendly_errors
+def diff(first, second, tolerance):
+    """Compare two patch files (any format c1surf reads) or two meshes (OBJ, PLY).
+
+    Structure first: patch counts and degrees, weights, merged pieces (meshes:
+    vertex and face counts, face sizes and vertices); then every control point
+    of B against A's. Prints the first differences (patch, source, coefficient,
+    how far it moved) and exits 0 when A and B are equal within --tolerance,
+    1 when they differ.
+    """
+    kinds = [input_kind(path) for path in (first, second)]
+    if kinds[0] != kinds[1]:
+        raise Failure(f"{first} is a {kinds[0]} file and {second} a {kinds[1]} file: give two of one kind")
+    if kinds[0] == "patch":
+        comparison = compare_patch_sets(load_patch_set(first), load_patch_set(second), tolerance)
+    else:
+        a, b = read_mesh(first), read_mesh(second)
+        comparison = compare_meshes(a.points, a.face_sizes, a.face_vertices, b.points, b.face_sizes, b.face_vertices,
+                                    tolerance)
+    for line in comparison.lines():
+        click.echo(line)
+    if not comparison.equal:
+        raise click.exceptions.Exit(1)
+
+
+def input_kind(path) -> str:
+    """"patch" or "mesh" by the suffix of ``path``; a one-line failure for any other."""
+    suffix = Path(path).suffix.lower()
+    if suffix in PATCH_READERS:
+        return "patch"
+    if suffix in MESH_READERS:
+        return "mesh"
+    raise Failure(f"{path}: unsupported input (suffix {suffix!r}): c1surf diff compares patch files "
+                  f"({suffix_list(PATCH_READERS)}) or meshes ({suffix_list(MESH_READERS)})")

@@ -1,0 +1,298 @@
+"""Area, volume, centroid and inertia tensor of a patch surface, by Gauss-Legendre quadrature.
+
+Everything is an integral over the patches' parameter squares of a function of
+``x``, ``x_u`` and ``x_v``; ``N = x_u x x_v`` is the (unnormalized) outward normal:
+
+- area: ``|N|``, not a polynomial (a square root). Integrated with ``k x k``
+  Gauss points per patch on ``s x s`` sub-squares, ``s`` doubled patch by patch
+  until two levels agree to ``AREA_RTOL`` (adaptive; the integrand is analytic
+  where the patch is regular, so the rule converges exponentially and the
+  difference of two levels bounds the error of the finer one by far).
+- volume, first and second moments, by the divergence theorem on the solid
+  bounded by a closed surface, with ``y = x - origin``:
+  ``V = 1/3 int y.N``, ``int_V y_i = 1/4 int y_i (y.N)``,
+  ``int_V y_i y_j = 1/5 int y_i y_j (y.N)`` (div(y_i y_j y) = 5 y_i y_j).
+  For a polynomial patch of degree ``d`` in u, ``y.N`` has degree ``3d - 1`` in u
+  and ``y_i y_j (y.N)`` degree ``5d - 1``: ``ceil(5d / 2)`` Gauss points (exact to
+  degree ``2k - 1``) integrate all three exactly, up to rounding. Rational patches
+  (``x = H / w``) give rational integrands (``y.N = det(H, H_u, H_v) / w^3`` for
+  the origin at 0): they take the adaptive path of the area, to ``MOMENT_RTOL``.
+
+The origin of ``y`` is the centre of the control points' bounding box, so that
+the centroid and the central second moments lose no digits to a far-away
+solid. The inertia tensor is that of the solid of unit density about its
+centroid, ``I = int_V (|r|^2 Id - r r^T)`` with ``r = x - centroid``.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .bezier import bernstein_basis, evaluate_grid
+from .rational import euclidean_derivatives, homogeneous
+
+AREA_RTOL = 1e-13  # two levels of the area quadrature agree to this, relative, patch by patch
+MOMENT_RTOL = 1e-13  # the same for the moments of rational patches
+MAX_SUBDIVISIONS = 64  # sub-squares per side at most (a singular patch stops there)
+CHUNK_SAMPLES = 1 << 19  # samples evaluated at once (bounds the memory, not a per-patch loop)
+
+
+@dataclass(frozen=True)
+class MassProperties:
+    """Result of ``mass_properties``.
+
+    area : float
+    area_error : float, estimated absolute error of ``area`` (sum over patches of the
+        difference of the last two quadrature levels)
+    closed : bool, every patch side shared by two consistently oriented patches
+    reason : str or None, why volume, centroid and inertia are None (open surface)
+    volume : float or None
+    centroid : (3,) float or None
+    inertia : (3, 3) float or None, about the centroid, unit density
+    note : str or None, e.g. the orientation was inwards and was turned
+    """
+
+    area: float
+    area_error: float
+    closed: bool
+    reason: str | None = None
+    volume: float | None = None
+    centroid: np.ndarray | None = None
+    inertia: np.ndarray | None = None
+    note: str | None = None
+
+
+def gauss_rule(points: int, subdivisions: int = 1):
+    """Composite Gauss-Legendre rule on [0, 1].
+
+    Parameters
+    ----------
+    points : int, Gauss points per sub-interval (exact for polynomials of degree 2 points - 1)
+    subdivisions : int, equal sub-intervals
+
+    Returns
+    -------
+    nodes, weights : (points * subdivisions,) float, the weights summing to 1
+    """
+    x, w = np.polynomial.legendre.leggauss(points)
+    left = np.arange(subdivisions, dtype=np.float64)[:, None]
+    nodes = (left + 0.5 * (x[None, :] + 1.0)) / subdivisions
+    return nodes.ravel(), np.tile(0.5 * w / subdivisions, subdivisions)
+
+
+def moment_points(degree: int) -> int:
+    """Gauss points integrating ``y_i y_j (y . x_u x x_v)`` exactly in a variable of degree ``degree``."""
+    return max(1, (5 * degree + 1) // 2)
+
+
+def patch_frames(points: np.ndarray, weights, u: np.ndarray, v: np.ndarray):
+    """Points and first derivatives of patches of one degree on a tensor grid.
+
+    Parameters
+    ----------
+    points : (p, du+1, dv+1, 3) float
+    weights : None or (p, du+1, dv+1) float (rational patches)
+    u, v : (mu,), (mv,) float
+
+    Returns
+    -------
+    x, x_u, x_v : (p, mu, mv, 3) float
+    """
+    coefficients = points if weights is None else homogeneous(points, weights)
+    du, dv = coefficients.shape[1] - 1, coefficients.shape[2] - 1
+    bu, bv = bernstein_basis(du, u), bernstein_basis(dv, v)
+    h = {(0, 0): evaluate_grid(coefficients, bu, bv),
+         (1, 0): evaluate_grid(coefficients, bernstein_basis(du, u, 1), bv),
+         (0, 1): evaluate_grid(coefficients, bu, bernstein_basis(dv, v, 1))}
+    if weights is not None:
+        h = euclidean_derivatives(h)
+    return h[(0, 0)], h[(1, 0)], h[(0, 1)]
+
+
+def area_integrand(x: np.ndarray, xu: np.ndarray, xv: np.ndarray, origin=None) -> np.ndarray:
+    """``|x_u x x_v|`` as one column: (..., 3) float arrays -> (..., 1) float."""
+    n = np.cross(xu, xv)
+    return np.sqrt(np.einsum("...i,...i->...", n, n))[..., None]
+
+
+def moment_integrand(x: np.ndarray, xu: np.ndarray, xv: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """Volume, first and second moment densities of the divergence theorem.
+
+    Parameters
+    ----------
+    x, xu, xv : (..., 3) float
+    origin : (3,) float
+
+    Returns
+    -------
+    (..., 13) float: ``y.N / 3``, ``y_i (y.N) / 4`` (3), ``y_i y_j (y.N) / 5`` (9, row-major)
+    """
+    y = x - origin
+    flux = np.einsum("...i,...i->...", y, np.cross(xu, xv))[..., None]
+    second = (y[..., :, None] * y[..., None, :]).reshape(y.shape[:-1] + (9,))
+    return np.concatenate([flux / 3.0, y * flux / 4.0, second * flux / 5.0], axis=-1)
+
+
+def _integrate_fixed(points, weights, integrand, origin, rule_u, rule_v) -> np.ndarray:
+    """Integrals of ``integrand`` over every patch with one tensor rule: (p, c), in chunks of patches."""
+    (u, wu), (v, wv) = rule_u, rule_v
+    w = wu[:, None] * wv[None, :]
+    chunk = max(1, CHUNK_SAMPLES // w.size)
+    out = []
+    for start in range(0, len(points), chunk):
+        part = slice(start, start + chunk)
+        frames = patch_frames(points[part], None if weights is None else weights[part], u, v)
+        out.append(np.einsum("pabc,ab->pc", integrand(*frames, origin), w))
+    return np.concatenate(out) if out else np.zeros((0, 1))
+
+
+def integrate_patches(points, weights, integrand, origin, rtol: float | None = None):
+    """Integrals of ``integrand(x, x_u, x_v, origin)`` over every patch of one degree.
+
+    With ``rtol`` None: one rule of ``moment_points`` Gauss points per direction
+    (exact for the polynomial moments). Otherwise adaptive: the sub-squares per
+    side double on the patches whose last two levels differ by more than
+    ``rtol`` (relative to the patch's value, or to the mean over the patches where
+    that is smaller), up to ``MAX_SUBDIVISIONS``.
+
+    Parameters
+    ----------
+    points : (p, du+1, dv+1, 3) float
+    weights : None or (p, du+1, dv+1) float
+    integrand : callable (..., 3) x 3, (3,) -> (..., c)
+    origin : (3,) float
+    rtol : float or None
+
+    Returns
+    -------
+    values : (p, c) float; error : (p,) float, the last difference of two levels (0 without rtol)
+    """
+    ku, kv = moment_points(points.shape[1] - 1), moment_points(points.shape[2] - 1)
+    values = _integrate_fixed(points, weights, integrand, origin, gauss_rule(ku), gauss_rule(kv))
+    error = np.zeros(len(points))
+    if rtol is None or not len(points):
+        return values, error
+    scale = np.maximum(np.abs(values), np.abs(values).mean(axis=0))
+    active, s = np.arange(len(points)), 1
+    while active.size and s < MAX_SUBDIVISIONS:
+        s *= 2
+        finer = _integrate_fixed(points[active], None if weights is None else weights[active], integrand, origin,
+                                 gauss_rule(ku, s), gauss_rule(kv, s))
+        change = np.abs(finer - values[active])
+        values[active], error[active] = finer, change.max(axis=1)
+        active = active[np.any(change > rtol * scale[active], axis=1)]
+    return values, error
+
+
+def closed_surface(edges: np.ndarray, reversed_: np.ndarray):
+    """Whether patch sides close up into a consistently oriented surface.
+
+    Parameters
+    ----------
+    edges : (P, 4) int, edge id of every side (``adjacency.PatchAdjacency.edges``)
+    reversed_ : (P, 4) bool, side runs against its edge
+
+    Returns
+    -------
+    closed : bool; reason : str or None, why not
+    """
+    if edges.size == 0:
+        return False, "there are no patches"
+    flat = edges.ravel()
+    count = np.bincount(flat)
+    if np.any(count == 1):
+        return False, f"the surface is open: {int(np.sum(count == 1))} patch sides lie on its boundary"
+    if np.any(count > 2):
+        return False, f"{int(np.sum(count > 2))} patch edges are shared by more than two patches"
+    # Run counter-clockwise around a patch, sides 2 and 3 go against increasing parameter.
+    ccw = (reversed_ ^ (np.arange(4) >= 2)[None, :]).ravel()
+    order = np.argsort(flat, kind="stable")
+    if np.any(ccw[order[0::2]] == ccw[order[1::2]]):
+        return False, "the patches are not consistently oriented (a non-orientable surface bounds no solid)"
+    return True, None
+
+
+def _bbox_centre(groups) -> np.ndarray:
+    flat = np.concatenate([g.reshape(-1, 3) for g in groups])
+    return 0.5 * (flat.min(axis=0) + flat.max(axis=0))
+
+
+def surface_area(groups, weights=None, rtol: float = AREA_RTOL):
+    """Area of the patches and its estimated absolute error.
+
+    Parameters
+    ----------
+    groups : list of (p_k, du+1, dv+1, 3) float
+    weights : None or a list parallel to ``groups`` of (p_k, du+1, dv+1) float
+
+    Returns
+    -------
+    area, error : float
+    """
+    area = error = 0.0
+    for k, g in enumerate(groups):
+        values, err = integrate_patches(np.asarray(g, np.float64)[..., :3], None if weights is None else weights[k],
+                                        area_integrand, np.zeros(3), rtol)
+        area, error = area + float(values.sum()), error + float(err.sum())
+    return area, error
+
+
+def solid_moments(groups, weights=None, rtol: float = MOMENT_RTOL):
+    """Volume, centroid and central inertia tensor of the solid the closed patches bound.
+
+    Parameters
+    ----------
+    groups : list of (p_k, du+1, dv+1, 3) float, a closed, consistently oriented surface
+    weights : None or a list parallel to ``groups`` of (p_k, du+1, dv+1) float (rational
+        patches: adaptive quadrature to ``rtol``; polynomial ones are exact)
+
+    Returns
+    -------
+    volume : float (negative when the normals point inwards); centroid : (3,) float;
+    inertia : (3, 3) float, about the centroid, of the density sign(volume)
+    """
+    groups = [np.asarray(g, np.float64)[..., :3] for g in groups]
+    origin = _bbox_centre(groups)
+    total = np.zeros(13)
+    for k, g in enumerate(groups):
+        values, _ = integrate_patches(g, None if weights is None else weights[k], moment_integrand, origin,
+                                      None if weights is None else rtol)
+        total += values.sum(axis=0)
+    volume, first, second = total[0], total[1:4], total[4:].reshape(3, 3)
+    shift = first / volume
+    central = second - volume * np.outer(shift, shift)
+    inertia = np.trace(central) * np.eye(3) - central
+    return float(volume), origin + shift, 0.5 * (inertia + inertia.T)
+
+
+def mass_properties(groups, edges: np.ndarray, reversed_: np.ndarray, weights=None) -> MassProperties:
+    """Area; for a closed surface also volume, centroid and inertia tensor (about the centroid).
+
+    Parameters
+    ----------
+    groups : list of (p_k, du+1, dv+1, 3) float, patches in file order
+    edges, reversed_ : (P, 4) int, (P, 4) bool, the patch adjacency (decides closedness)
+    weights : None or a list parallel to ``groups`` of (p_k, du+1, dv+1) float
+
+    Returns
+    -------
+    MassProperties; a solid whose normals point inwards is measured turned outwards (with a note)
+    """
+    groups = [g for g in groups if len(g)]
+    if weights is not None:
+        weights = [np.asarray(w, np.float64) for w in weights if len(w)]
+    area, area_error = surface_area(groups, weights)
+    closed, reason = closed_surface(np.asarray(edges), np.asarray(reversed_, dtype=bool))
+    if not closed:
+        return MassProperties(area, area_error, False, reason)
+    volume, centroid, inertia = solid_moments(groups, weights)
+    note = None
+    if volume < 0:
+        volume, inertia = -volume, -inertia
+        note = "the patch normals point into the solid; measured as if they pointed out"
+    return MassProperties(area, area_error, True, None, volume, centroid, inertia, note)
+
+
+__all__ = ["MassProperties", "mass_properties", "surface_area", "solid_moments", "closed_surface", "gauss_rule",
+           "integrate_patches", "patch_frames", "AREA_RTOL", "MOMENT_RTOL"]
