@@ -11,6 +11,7 @@ from .batch import batch
 from .check import check
 from .convert import convert
 from .render import render_command
+from .reports.inspect import inspect
 from .tessellate import tessellate
 
 
@@ -43,6 +44,7 @@ main.add_command(batch)
 main.add_command(check)
 main.add_command(tessellate)
 main.add_command(render_command)
+main.add_command(inspect)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

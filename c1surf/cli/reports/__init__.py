@@ -1,0 +1,1 @@
+"""Commands that report on an input without converting it (``c1surf inspect``)."""
