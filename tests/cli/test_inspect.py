@@ -234,8 +234,8 @@ def test_tags_are_counted_by_kind(tmp_path):
 # -- refusals and errors ----------------------------------------------------------------------------
 
 
-def convert_error(path, tmp_path) -> str:
-    result = run("convert", path, "-o", tmp_path / "out.ply", "-q")
+def convert_error(path, tmp_path, *options) -> str:
+    result = run("convert", path, "-o", tmp_path / "out.ply", "-q", *options)
     assert result.exit_code == 1
     [line] = result.stderr.strip().splitlines()
     return line.removeprefix("c1surf: error: ")
@@ -328,3 +328,38 @@ def test_readme_documents_every_json_key():
     section = section[:re.search(r"\n#+ ", section[4:]).start() + 4]
     for key in KEYS | COMPONENT_KEYS:
         assert f"`{key}`" in section, key
+
+
+def test_a_ply_face_the_reader_refuses_is_reported_as_convert_refuses_it(tmp_path):
+    faces = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7], [0, 4, 1, 4]]
+    header = ["ply", "format ascii 1.0", "element vertex 8", "property float x", "property float y", "property float z",
+              f"element face {len(faces)}", "property list uchar int vertex_indices", "end_header"]
+    rows = [" ".join(map(str, p)) for p in CUBE_POINTS] + [f"{len(f)} " + " ".join(map(str, f)) for f in faces]
+    path = tmp_path / "repeat.ply"
+    path.write_text("\n".join(header + rows) + "\n")
+    report = inspect_json(path)
+    assert report["degenerate_faces"] == 1 and report["faces"] == 7
+    assert report["refused"] == convert_error(path, tmp_path) and "visits vertex 4 twice" in report["refused"]
+
+
+def test_refinements_option_gives_the_patches_of_that_conversion():
+    path = SAMPLES / "cube.obj"
+    patches = inspect_json(path, "--refinements", "auto")["patches"]
+    surface, _ = surface_from_file(path, refinements="auto")
+    assert patches["total"] == surface.n_patches and patches["refinements"] == surface.topology.refinements
+
+
+def test_too_few_refinements_are_refused_as_convert_refuses_them(tmp_path):
+    path = SAMPLES / "cube.obj"
+    report = inspect_json(path, "--refinements", "1")
+    assert report["refused"] == convert_error(path, tmp_path, "--refinements", "1") and "R2" in report["refused"]
+    assert report["repairs"] == inspect_json(path)["repairs"]  # the repairs ran before the refusal
+
+
+def test_an_output_too_big_for_memory_is_refused_as_convert_refuses_it(tmp_path):
+    path = SAMPLES / "cube.obj"
+    report = inspect_json(path, "-r", 100000)
+    available = lambda line: re.sub(r"about [\d.]+ GiB is available", "about ... GiB is available", line)  # noqa: E731
+    assert available(report["refused"]) == available(convert_error(path, tmp_path, "-r", "100000"))
+    assert "--force" in report["refused"]
+    assert report["output"]["triangles"] == 2 * 96 * 99999 ** 2 and report["patches"]["total"] == 96
