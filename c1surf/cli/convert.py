@@ -82,9 +82,14 @@ def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_r
     return options, data
 
 
+def tessellation_bytes(n_patches: int, resolution: int) -> float:
+    """Estimated peak memory (bytes) of tessellating and writing ``n_patches`` at ``resolution`` (see the constants)."""
+    return n_patches * (BYTES_PER_PATCH + BYTES_PER_SAMPLE * resolution * resolution) * WRITER_HEADROOM
+
+
 def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> None:
     """Refuse a tessellation of ``n_patches`` that would not fit in memory, with the estimate."""
-    needed = n_patches * (BYTES_PER_PATCH + BYTES_PER_SAMPLE * resolution * resolution) * WRITER_HEADROOM
+    needed = tessellation_bytes(n_patches, resolution)
     available = available_memory()
     if needed > 0.8 * available and not force:
         raise Failure(

@@ -13,6 +13,7 @@ from .convert import convert
 from .render import render_command
 from .reports.diff import diff
 from .reports.measure import measure
+from .reports.inspect import inspect
 from .tessellate import tessellate
 
 
@@ -47,6 +48,7 @@ main.add_command(tessellate)
 main.add_command(render_command)
 main.add_command(measure)
 main.add_command(diff)
+main.add_command(inspect)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -30,12 +30,14 @@ __all__ = ["read_obj", "parse_obj"]
 _KEYWORD = {V: "v", VT: "vt", VN: "vn"}
 
 
-def read_obj(path) -> MeshFile:
+def read_obj(path, keep_degenerate: bool = False) -> MeshFile:
     """Read a Wavefront OBJ polygon mesh without triangulating it.
 
     Parameters
     ----------
     path : str or os.PathLike, an OBJ text file
+    keep_degenerate : keep faces that repeat a vertex as written (no collapse, no refusal;
+        ``c1surf inspect`` reports them)
 
     Returns
     -------
@@ -59,10 +61,10 @@ def read_obj(path) -> MeshFile:
             path_str,
             f"cannot read the file ({exc.strerror or exc}): check the path "
             "and its permissions") from None
-    return parse_obj(data, path_str)
+    return parse_obj(data, path_str, keep_degenerate)
 
 
-def parse_obj(data: bytes, path="<memory>") -> MeshFile:
+def parse_obj(data: bytes, path="<memory>", keep_degenerate: bool = False) -> MeshFile:
     """Parse OBJ text given as bytes; see :func:`read_obj`.
 
     Parameters
@@ -71,6 +73,8 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
         The complete file contents.
     path : str
         Name used in error messages and stored in the result.
+    keep_degenerate : bool
+        As in :func:`read_obj`.
     """
     path = os.fspath(path)
     _check_text(data, path)
@@ -80,9 +84,12 @@ def parse_obj(data: bytes, path="<memory>") -> MeshFile:
     corners = _FaceCorners(text, f_lines, _face_sizes(text, f_lines, path))
     raw_v, raw_vt, raw_vn = text.face_corners(f_lines, corners.sizes)
     face_vertices = _resolve(raw_v, v_lines.size, corners, V, "vertex", path)
-    sizes, face_vertices, kept, collapsed = collapse_repeated_corners_or_refuse(
-        corners.sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1)
-    refuse_repeated_vertex(sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1, lambda f: "face", vertex_base=1)
+    if keep_degenerate:
+        sizes, collapsed = corners.sizes, 0
+    else:
+        sizes, face_vertices, kept, collapsed = collapse_repeated_corners_or_refuse(
+            corners.sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1)
+        refuse_repeated_vertex(sizes, face_vertices, path, lambda f: int(f_lines[f]) + 1, lambda f: "face", vertex_base=1)
     if collapsed:  # the texture and normal indices of the corners that remain
         raw_vt = None if raw_vt is None else raw_vt[kept]
         raw_vn = None if raw_vn is None else raw_vn[kept]

@@ -30,12 +30,14 @@ _RESERVED_VERTEX = {"x", "y", "z", "nx", "ny", "nz", "weight"}
 _HEAD_BYTES = 1 << 16
 
 
-def read_ply(path) -> MeshFile:
+def read_ply(path, keep_degenerate: bool = False) -> MeshFile:
     """Read a PLY polygon mesh (ASCII or binary) without triangulating it.
 
     Parameters
     ----------
     path : str or os.PathLike, an ASCII or binary PLY file
+    keep_degenerate : keep faces that repeat a vertex as written (no collapse, no refusal;
+        ``c1surf inspect`` reports them)
 
     Returns
     -------
@@ -54,7 +56,7 @@ def read_ply(path) -> MeshFile:
     path = os.fspath(path)
     ply, rows = _open(path)
     vertex = _vertex_data(path, ply["vertex"], rows)
-    faces = _face_data(path, ply["face"], vertex["points"].shape[0], rows)
+    faces = _face_data(path, ply["face"], vertex["points"].shape[0], rows, keep_degenerate)
     edges = ply["edge"].data if "edge" in ply else None
     tags = ply_tags(path, ply["vertex"].data, edges, rows.line)
     check_tags(tags, faces["face_sizes"], faces["face_vertices"], vertex["points"].shape[0], path)
@@ -138,7 +140,7 @@ def _vertex_data(path: str, vert, rows: _Rows) -> dict:
             "vertex_attributes": attributes}
 
 
-def _face_data(path: str, face, n_vert: int, rows: _Rows) -> dict:
+def _face_data(path: str, face, n_vert: int, rows: _Rows, keep_degenerate: bool = False) -> dict:
     """The MeshFile fields of the face element: sizes (F,), vertices (sum(sizes),), lines, other properties."""
     fdata = face.data
     index_name = next((n for n in _INDEX_NAMES
@@ -161,9 +163,11 @@ def _face_data(path: str, face, n_vert: int, rows: _Rows) -> dict:
             path, f"face {f} has {k} {'vertex' if k == 1 else 'vertices'}: "
             "a polygon needs at least 3; remove it", rows.line("face", f))
     _check_indices(path, sizes, face_vertices, n_vert, rows)
-    sizes, face_vertices, _, collapsed = collapse_repeated_corners_or_refuse(
-        sizes, face_vertices, path, lambda f: rows.line("face", f))
-    refuse_repeated_vertex(sizes, face_vertices, path, lambda f: rows.line("face", f), lambda f: f"face {f}")
+    collapsed = 0
+    if not keep_degenerate:
+        sizes, face_vertices, _, collapsed = collapse_repeated_corners_or_refuse(
+            sizes, face_vertices, path, lambda f: rows.line("face", f))
+        refuse_repeated_vertex(sizes, face_vertices, path, lambda f: rows.line("face", f), lambda f: f"face {f}")
     face_lines = rows.first["face"] + np.arange(sizes.size, dtype=np.int64) if rows.text else None
     return {"face_sizes": sizes, "face_vertices": face_vertices, "face_lines": face_lines,
             "face_attributes": _extras(face, fdata, {index_name}), "collapsed_corners": collapsed}

@@ -12,12 +12,14 @@ from .mesh_file import MeshFile
 __all__ = ["read_mesh"]
 
 
-def read_mesh(path) -> MeshFile:
+def read_mesh(path, keep_degenerate: bool = False) -> MeshFile:
     """Read an OBJ or PLY polygon mesh (suffix decides, any letter case).
 
     Parameters
     ----------
     path : str or os.PathLike, a mesh file whose suffix names its format
+    keep_degenerate : keep faces that repeat a vertex as written: no collapse of repeated
+        corners and no refusal (``c1surf inspect`` counts them; every other caller refuses)
 
     Returns
     -------
@@ -49,4 +51,5 @@ def read_mesh(path) -> MeshFile:
         raise MeshInputError(
             path_str, "cannot read the file (permission denied): check its "
             "permissions")
-    return MESH_READERS[suffix].function(path_str)
+    reader = MESH_READERS[suffix].function
+    return reader(path_str, keep_degenerate=True) if keep_degenerate else reader(path_str)
