@@ -12,11 +12,12 @@ from .evaluation.smoothness import measure_smoothness
 from .construction.surface import Surface, SurfaceOptions, build_surface
 from .evaluation.tessellate import tessellate
 from .io.meshes.read import read_mesh
-from .io.meshes.surface_data import surface_data
+from .io.meshes.surface_data import surface_data, weld_surface_input
 
 
-def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False, **options):
-    """Read ``path`` (OBJ or PLY) and build its surface.
+def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False,
+                      weld: float | None = 0.0, **options):
+    """Read ``path`` (OBJ, PLY, OFF, STL), weld it and build its surface.
 
     Parameters
     ----------
@@ -25,16 +26,18 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
     weights : None (use the file's vertex weights if some differ from 1), True or False: rational patches (A2a)
     normals : interpolate the file's vertex normals (A1a; sets interpolate_vertices)
     attributes : carry texture coordinates and colours as extra point columns
+    weld : welding tolerance relative to the bounding-box diagonal (0: equal positions), or None: the file's vertices
     **options : SurfaceOptions fields (blend, alpha, beta, tangent_rule, interpolate_vertices, triangles)
 
     Returns
     -------
-    (Surface, MeshFile)
+    (Surface, MeshFile): the MeshFile as welded (``MeshFile.weld`` says what changed)
     """
     mesh = read_mesh(path)
     if normals:
         options["interpolate_vertices"] = True
     data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes)
+    mesh, data = weld_surface_input(mesh, data, weld)
     surface = Surface(mesh.face_sizes, mesh.face_vertices, data.points, SurfaceOptions(**options), **data.surface_kwargs())
     return surface, mesh
 

@@ -9,9 +9,10 @@ from ..evaluation.smoothness import measure_smoothness
 from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
 from ..io.meshes.read import read_mesh
+from ..io.meshes.surface_data import weld_surface_input
 from .common import friendly_errors, tag_note
 from .convert import build_or_fail, extension_setup
-from .options import extension_options, surface_options
+from .options import extension_options, surface_options, weld_options, weld_tolerance
 
 
 @click.command()
@@ -24,13 +25,14 @@ from .options import extension_options, surface_options
               help="Compare normals up to sign (tangent-plane continuity of non-orientable surfaces such as a Moebius strip).")
 @surface_options
 @extension_options
+@weld_options
 @friendly_errors
 def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices, interpolate_normals,
-          weights, triangles, attributes, refinements):
+          weights, triangles, attributes, refinements, weld, no_weld):
     """Check that a surface is G1 (tangent-plane continuous).
 
-    PATCHES is a patch file written by `convert --patches`; an OBJ/PLY INPUT is
-    converted first (with the surface options below). Shared edges are found
+    PATCHES is a patch file written by `convert --patches`; a mesh INPUT is
+    converted first (with the surface and weld options below). Shared edges are found
     from the patch geometry alone (matching end and mid points), not from the
     construction's bookkeeping. Prints the largest position gap and normal
     jump and exits 1 when the surface is not G1 to within --tolerance.
@@ -45,6 +47,7 @@ def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule
             click.echo(f"c1surf: note: {note}", err=True)
         options, data = extension_setup(mesh, None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
                                         interpolate_normals, weights, triangles, attributes, refinements)
+        mesh, data = weld_surface_input(mesh, data, weld_tolerance(weld, no_weld))
         surface = build_or_fail(mesh, options, data)
         groups, patch_weights = [surface.biquadratic, surface.bicubic], surface.patch_weights
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,

@@ -21,12 +21,12 @@ extensions of the paper use (``core.surface.Surface`` arguments):
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import MeshInputError
-from .mesh_file import MeshFile
+from .mesh_file import MeshFile, weld_mesh_file
 
 COLOUR_NAMES = ("red", "green", "blue", "alpha")
 
@@ -55,6 +55,14 @@ class SurfaceData:
         """Keyword arguments of ``Surface`` (besides points and options)."""
         return {"face_blend": self.face_blend, "vertex_blend": self.vertex_blend, "weights": self.weights,
                 "vertex_normals": self.vertex_normals}
+
+    def vertex_keys(self) -> np.ndarray:
+        """(V, k) per-vertex inputs of the construction besides the position (attribute columns,
+        weights, normals, blend ratios): vertices whose keys differ are not welded."""
+        columns = [self.points[:, 3:]]
+        columns += [np.reshape(c, (len(self.points), -1)) for c in (self.weights, self.vertex_normals, self.vertex_blend)
+                    if c is not None]
+        return np.concatenate(columns, axis=1)
 
 
 def _ratio(path, where: str, value) -> float:
@@ -168,6 +176,28 @@ def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = Non
     return data
 
 
+def weld_surface_input(mesh: MeshFile, data: SurfaceData | None, tolerance: float | None):
+    """Weld ``mesh`` (``mesh_file.weld_mesh_file``) without merging vertices whose construction data differ.
+
+    Parameters
+    ----------
+    mesh : MeshFile
+    data : SurfaceData of ``mesh`` or None; its vertex keys keep apart vertices with different
+        texture coordinates or colours (``--attributes``), weights, normals or blend ratios
+    tolerance : float, relative to the bounding-box diagonal (0: equal positions), or None: no welding
+
+    Returns
+    -------
+    (MeshFile, SurfaceData or None): per-face data follows the faces welding keeps
+    """
+    if tolerance is None:
+        return mesh, data
+    welded, kept = weld_mesh_file(mesh, tolerance, None if data is None else data.vertex_keys())
+    if data is not None and data.face_blend is not None:
+        data = replace(data, face_blend=data.face_blend[kept])
+    return welded, data
+
+
 def _blend_ratios(mesh: MeshFile, blend_file):
     """(face_blend (F,), vertex_blend (V,)): the PLY ``blend`` properties, overridden where the sidecar file sets a ratio."""
     face_blend = vertex_blend = None
@@ -235,4 +265,4 @@ def _attribute_columns(mesh: MeshFile):
     return np.where(used[:, None], extra, 0.0), names, colour_scale
 
 
-__all__ = ["SurfaceData", "surface_data", "read_blend_file", "COLOUR_NAMES"]
+__all__ = ["SurfaceData", "surface_data", "weld_surface_input", "read_blend_file", "COLOUR_NAMES"]
