@@ -97,12 +97,26 @@ def coincident_representatives(points: np.ndarray, face_vertices: np.ndarray, to
     if tolerance > 0:
         label = _near_labels(points[used], key_columns, tolerance)
     else:
-        rows = np.concatenate([np.asarray(points, float)[used] + 0.0, key_columns], axis=1)  # + 0.0: -0.0 is 0.0
-        label = np.unique(rows, axis=0, return_inverse=True)[1].ravel()
+        label = _row_labels(np.concatenate([np.asarray(points, float)[used], key_columns], axis=1))
     lowest = np.full(label.max() + 1, n, dtype=np.int64)
     np.minimum.at(lowest, label, used)
     representative[used] = lowest[label]
     return representative
+
+
+def _row_labels(rows: np.ndarray) -> np.ndarray:
+    """(m,) int: the same label for equal rows of (m, k) ``rows`` (a lexicographic sort, -0.0 equal to 0.0)."""
+    order = np.lexsort(rows.T[::-1])
+    ordered = rows[order]
+    starts = np.r_[True, np.any(ordered[1:] != ordered[:-1], axis=1)]
+    label = np.empty(rows.shape[0], dtype=np.int64)
+    label[order] = np.cumsum(starts) - 1
+    return label
+
+
+def _edge_keys(a: np.ndarray, b: np.ndarray, n_vertices: int) -> np.ndarray:
+    """(H,) int64: one number per undirected edge between vertices ``a`` and ``b`` (each (H,) int)."""
+    return np.minimum(a, b) * n_vertices + np.maximum(a, b)
 
 
 def _comparable(keys: np.ndarray) -> np.ndarray:
@@ -180,13 +194,15 @@ def overshared_vertices(face_sizes: np.ndarray, face_vertices: np.ndarray, n_ver
     bad = np.zeros(n_vertices, dtype=bool)
     if face_vertices.size == 0:
         return bad
-    ends = np.stack([face_vertices, face_vertices[_next_corner(face_sizes)]], axis=1)
-    ends.sort(axis=1)
-    edges, counts = np.unique(ends, axis=0, return_counts=True)
-    bad[edges[counts > 2].ravel()] = True
-    face = np.repeat(np.arange(face_sizes.size), face_sizes)
-    visits, visit_counts = np.unique(np.stack([face, face_vertices], axis=1), axis=0, return_counts=True)
-    bad[visits[visit_counts > 1, 1]] = True
+    following = face_vertices[_next_corner(face_sizes)]
+    _, first, counts = np.unique(_edge_keys(face_vertices, following, n_vertices), return_index=True,
+                                     return_counts=True)
+    crowded = first[counts > 2]
+    bad[face_vertices[crowded]] = True
+    bad[following[crowded]] = True
+    face = np.repeat(np.arange(face_sizes.size, dtype=np.int64), face_sizes)
+    visits, visit_counts = np.unique(face * n_vertices + face_vertices, return_counts=True)
+    bad[visits[visit_counts > 1] % n_vertices] = True
     return bad
 
 
@@ -211,8 +227,8 @@ def regroup_by_fans(face_sizes: np.ndarray, welded: np.ndarray, original: np.nda
     """
     h = welded.size
     following = _next_corner(face_sizes)
-    ends = np.sort(np.stack([welded, welded[following]], axis=1), axis=1)
-    _, edge, counts = np.unique(ends, axis=0, return_inverse=True, return_counts=True)
+    n = int(max(welded.max(), original.max())) + 1
+    _, edge, counts = np.unique(_edge_keys(welded, welded[following], n), return_inverse=True, return_counts=True)
     edge = edge.ravel()
     order = np.argsort(edge, kind="stable")
     starts = np.concatenate([[0], np.cumsum(counts)[:-1]])
