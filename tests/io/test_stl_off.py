@@ -7,6 +7,8 @@ import numpy as np
 import pytest
 import trimesh
 from click.testing import CliRunner
+from hypothesis import HealthCheck, given, settings
+from hypothesis import strategies as st
 
 from c1surf.api import check_surface, surface_from_file
 from c1surf.cli.main import main
@@ -16,6 +18,7 @@ from c1surf.io.meshes.read import read_mesh
 from c1surf.io.registry import MESH_READERS
 
 MAX_JUMP = 1e-10  # radians, as in tests/construction
+FUZZ = settings(max_examples=40, deadline=None, suppress_health_check=[HealthCheck.too_slow, HealthCheck.function_scoped_fixture])
 
 
 def run(*args):
@@ -295,3 +298,53 @@ def test_texture_seams_weld_unless_the_uvs_are_carried(tmp_path):
     carried, mesh = surface_from_file(split, attributes=True)
     assert mesh.weld.welded_vertices == 0
     assert carried.repairs["boundary_edges"] == 8 and carried.repairs["components"] == 2
+
+
+# -- never a crash -----------------------------------------------------------------------
+
+OFF_LINES = st.one_of(
+    st.sampled_from(["OFF", "COFF", "NOFF", "OFF 4 2 0", "4 2 0", "3 1", "# c", "", "OFF x"]),
+    st.builds(lambda *c: " ".join(c), *[st.sampled_from(["0", "1", "-2.5", "1e3", "nan", "x", ""])] * 4),
+    st.builds(lambda *i: " ".join(i), *[st.sampled_from(["3", "4", "0", "1", "2", "3", "9", "-1", "a", ""])] * 5),
+)
+
+
+def convert_never_crashes(tmp_path, data: bytes, suffix: str):
+    path, out = tmp_path / f"in{suffix}", tmp_path / "out.ply"
+    path.write_bytes(data)
+    out.unlink(missing_ok=True)
+    result = CliRunner().invoke(main, ["convert", str(path), "-o", str(out), "-r", "2", "-q"])
+    assert result.exit_code in (0, 1), result.output
+    if result.exit_code == 1:
+        lines = result.stderr.strip().splitlines()
+        assert len(lines) == 1 and lines[0].startswith("c1surf: error: ")
+    assert out.exists() == (result.exit_code == 0)
+
+
+@FUZZ
+@given(st.lists(OFF_LINES, max_size=20))
+def test_random_off_text_never_crashes(tmp_path, lines):
+    convert_never_crashes(tmp_path, "\n".join(lines).encode(), ".off")
+
+
+@FUZZ
+@given(st.binary(max_size=300), st.sampled_from([".off", ".stl"]))
+def test_arbitrary_bytes_never_crash(tmp_path, data, suffix):
+    convert_never_crashes(tmp_path, data, suffix)
+
+
+@FUZZ
+@given(st.lists(st.sampled_from([0.0, 1.0, 1.0 + 1e-12, -1.0]), min_size=9, max_size=9), st.integers(1, 12))
+def test_random_binary_stl_soups_never_crash(tmp_path, corners, copies):
+    triangles = np.resize(np.asarray(corners), (copies, 3, 3)) + np.arange(copies)[:, None, None] % 2
+    convert_never_crashes(tmp_path, binary_stl(tmp_path / "soup.bin", triangles).read_bytes(), ".stl")
+
+
+def test_batch_finds_stl_and_off_inputs_and_passes_the_weld_options_on(tmp_path):
+    from c1surf.cli.batch import expand_inputs, weld_arguments
+
+    for name in ("a.stl", "b.OFF", "c.obj", "d.glb"):
+        (tmp_path / name).write_text("x")
+    assert [p.name for p in expand_inputs([str(tmp_path / "*")])] == ["a.stl", "b.OFF", "c.obj"]
+    assert weld_arguments(None) == ["--no-weld"] and weld_arguments(0.0) == []
+    assert weld_arguments(1e-6) == ["--weld", "1e-06"]

@@ -123,7 +123,8 @@ def weld_mesh_file(mesh: MeshFile, tolerance: float = 0.0, keys: np.ndarray | No
     """The mesh with its coincident vertices welded (``mesh.weld.weld_vertices``).
 
     Points and per-vertex data are kept as read: faces refer to the lowest-numbered
-    vertex of each welded position, so vertex numbers stay the file's. Texture
+    vertex of each welded position, so vertex numbers stay the file's (and so do the
+    vertex numbers of ``tags``; their face numbers do not follow dropped faces). Texture
     coordinates, normals and colours are per vertex in a MeshFile: a welded
     vertex has those of its representative, unless ``keys`` keeps the vertices
     whose data differ apart.
@@ -140,10 +141,9 @@ def weld_mesh_file(mesh: MeshFile, tolerance: float = 0.0, keys: np.ndarray | No
     kept_faces : (F,) bool, which faces of the input remain
     """
     sizes, vertices, kept, report = weld_vertices(mesh.points, mesh.face_sizes, mesh.face_vertices, tolerance, keys)
-    def faces(values):
-        return None if values is None else values[kept]
-    welded = replace(mesh, face_sizes=sizes, face_vertices=vertices, face_lines=faces(mesh.face_lines),
-                     face_groups=faces(mesh.face_groups),
+    per_face = {name: None if values is None else values[kept]
+                for name, values in (("face_lines", mesh.face_lines), ("face_groups", mesh.face_groups))}
+    welded = replace(mesh, face_sizes=sizes, face_vertices=vertices, **per_face,
                      face_attributes={k: v[kept] for k, v in mesh.face_attributes.items()},
                      weld=WeldReport(tolerance=float(tolerance), **report))
     return welded, kept
