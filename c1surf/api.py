@@ -12,12 +12,13 @@ from .evaluation.smoothness import measure_smoothness
 from .construction.surface import Surface, SurfaceOptions, build_surface
 from .evaluation.tessellate import tessellate
 from .io.meshes.read import read_mesh
-from .io.meshes.surface_data import surface_data
+from .io.meshes.surface_data import surface_data, weld_surface_input
 
 
 def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False,
-                      creases_file=None, crease_angle=None, ignore_tags: bool = False, **options):
-    """Read ``path`` (OBJ or PLY) and build its surface.
+                      creases_file=None, crease_angle=None, ignore_tags: bool = False, weld: float | None = 0.0,
+                      **options):
+    """Read ``path`` (OBJ, PLY, OFF, STL), weld it and build its surface.
 
     Parameters
     ----------
@@ -29,17 +30,19 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
     creases_file : sidecar JSON of creases, corners and holes (the file's own tags are always used)
     crease_angle : degrees: edges with a larger dihedral angle become infinitely sharp creases
     ignore_tags : build the smooth surface, without the file's sharp-feature tags
+    weld : welding tolerance relative to the bounding-box diagonal (0: equal positions), or None: the file's vertices
     **options : SurfaceOptions fields (blend, alpha, beta, tangent_rule, interpolate_vertices, triangles)
 
     Returns
     -------
-    (Surface, MeshFile)
+    (Surface, MeshFile): the MeshFile as welded (``MeshFile.weld`` says what changed)
     """
     mesh = read_mesh(path)
     if normals:
         options["interpolate_vertices"] = True
     data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes,
                         creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags)
+    mesh, data = weld_surface_input(mesh, data, weld)
     surface = Surface(mesh.face_sizes, mesh.face_vertices, data.points, SurfaceOptions(**options), **data.surface_kwargs())
     return surface, mesh
 

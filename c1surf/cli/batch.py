@@ -25,7 +25,7 @@ import click
 
 from ..io.registry import MESH_READERS, MESH_WRITERS, PATCH_WRITERS
 from .common import friendly_errors, shows_progress, terminal_bar
-from .options import surface_options
+from .options import surface_options, weld_options, weld_tolerance
 
 
 def expand_inputs(patterns) -> list[Path]:
@@ -62,6 +62,13 @@ def convert_command(path: Path, outputs, resolution, options, extra) -> list[str
     for name, value in options.items():
         command += [f"--{name.replace('_', '-')}", str(value)]
     return command + list(extra)
+
+
+def weld_arguments(tolerance: float | None) -> list[str]:
+    """The child ``convert``'s weld options for ``tolerance`` (None: ``--no-weld``; 0, the default: none)."""
+    if tolerance is None:
+        return ["--no-weld"]
+    return ["--weld", repr(tolerance)] if tolerance else []
 
 
 def failure_line(stderr: str, returncode: int) -> str:
@@ -176,6 +183,7 @@ class NoBar:
               help="Samples per patch side (as in `convert`).")
 @click.option("--float32", is_flag=True, help="Write points and normals as float32 (as in `convert`).")
 @surface_options
+@weld_options
 @click.option("--rebuild", is_flag=True, help="Convert every input, also those whose outputs are newer.")
 @click.option("--shard", default=None, metavar="I/N",
               help="Convert only inputs I, I+N, I+2N, ... of the sorted list (0-based I): one share of a cluster job array.")
@@ -184,7 +192,7 @@ class NoBar:
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar (it only appears on a terminal anyway).")
 @friendly_errors
 def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, float32, blend, alpha, beta, tangent_rule,
-          rebuild, shard, extra, quiet):
+          weld, no_weld, rebuild, shard, extra, quiet):
     """Convert every mesh matching 'GLOB' (quote it; ** recurses) into OUTDIR, -j at a time.
 
     Each input becomes OUTDIR/<stem><format> (and OUTDIR/<stem><patch format>
@@ -200,7 +208,7 @@ def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, floa
     planned = {path: outputs_for(path, out, mesh_suffix, patch_suffixes) for path in inputs}
     todo = {path: outputs for path, outputs in planned.items() if rebuild or not up_to_date(path, outputs)}
     options = {"blend": blend, "alpha": alpha, "beta": beta, "tangent_rule": tangent_rule}
-    extra_args = shlex.split(extra) + (["--float32"] if float32 else [])
+    extra_args = shlex.split(extra) + (["--float32"] if float32 else []) + weld_arguments(weld_tolerance(weld, no_weld))
     commands = {path: convert_command(path, outputs, resolution, options, extra_args) for path, outputs in todo.items()}
     failures = run_conversions(commands, jobs or os.cpu_count() or 1, quiet)
     summarize(len(inputs), len(todo), failures, time.perf_counter() - started)

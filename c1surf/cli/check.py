@@ -10,23 +10,27 @@ from ..evaluation.smoothness import measure_smoothness
 from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
 from ..io.meshes.read import read_mesh
-from .common import friendly_errors
+from ..io.meshes.surface_data import weld_surface_input
+from .common import friendly_errors, weld_notes
 from .convert import build_or_fail, extension_setup
-from .options import extension_options, surface_options
+from .options import extension_options, surface_options, weld_options, weld_tolerance
 
 
-def read_or_build(path, shape: dict) -> PatchSet:
+def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
     """The patches of a patch file, or of the surface of a mesh file built with the options ``shape``.
 
     ``shape``: the values of the surface and extension options (``options.py``),
-    keyed by ``convert.extension_setup``'s parameter names. The notes on the
-    sharp-feature tags go to stderr (the commands using this print a report on stdout).
+    keyed by ``convert.extension_setup``'s parameter names; ``weld``: the welding
+    tolerance (``options.weld_tolerance``; None: the file's vertices). The notes on
+    the sharp-feature tags and the welding go to stderr (the commands using this
+    print a report on stdout).
     """
     if Path(path).suffix.lower() in PATCH_READERS:
         return load_patch_set(path)
     mesh = read_mesh(path)
     options, data = extension_setup(mesh, None, **shape)
-    for note in data.feature_notes:
+    mesh, data = weld_surface_input(mesh, data, weld)
+    for note in data.feature_notes + weld_notes(mesh.weld):
         click.echo(f"c1surf: note: {note}", err=True)
     surface = build_or_fail(mesh, options, data)
     return surface_patch_set(surface, str(path))
@@ -42,17 +46,18 @@ def read_or_build(path, shape: dict) -> PatchSet:
               help="Compare normals up to sign (tangent-plane continuity of non-orientable surfaces such as a Moebius strip).")
 @surface_options
 @extension_options
+@weld_options
 @friendly_errors
-def check(path, tolerance, samples, unoriented, **shape):
+def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
     """Check that a surface is G1 (tangent-plane continuous).
 
-    PATCHES is a patch file written by `convert --patches`; an OBJ/PLY INPUT is
-    converted first (with the surface options below). Shared edges are found
+    PATCHES is a patch file written by `convert --patches`; a mesh INPUT is
+    converted first (with the surface and weld options below). Shared edges are found
     from the patch geometry alone (matching end and mid points), not from the
     construction's bookkeeping. Prints the largest position gap and normal
     jump and exits 1 when the surface is not G1 to within --tolerance.
     """
-    patch_set = read_or_build(path, shape)
+    patch_set = read_or_build(path, shape, weld_tolerance(weld, no_weld))
     groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,
                                 unoriented=unoriented)

@@ -50,6 +50,7 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
     notes = list(getattr(data, "feature_notes", []))
     if getattr(mesh_file, "collapsed_corners", 0):
         notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
+    notes += weld_notes(getattr(mesh_file, "weld", None))
     if r.get("flipped_faces"):
         notes.append(f"flipped {r['flipped_faces']} faces to orient each connected component consistently")
     if r.get("non_orientable"):
@@ -57,10 +58,29 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
                      "(use `c1surf check --unoriented`)")
     if r.get("split_vertices"):
         notes.append(f"split {r['split_vertices']} pinched vertices into one vertex per fan of faces")
-    if r.get("unused_vertices"):
-        notes.append(f"ignored {r['unused_vertices']} vertices used by no face")
+    # welding leaves the merged vertices unused: only the file's own unused vertices are news
+    unused = r.get("unused_vertices", 0) - getattr(getattr(mesh_file, "weld", None), "welded_vertices", 0)
+    if unused > 0:
+        notes.append(f"ignored {unused} vertices used by no face")
     if r.get("boundary_edges"):
         notes.append(f"open mesh: {r['boundary_edges']} boundary edges, closed for the construction by a ghost layer")
+    return notes
+
+
+def weld_notes(weld) -> list[str]:
+    """The notes of a ``io.meshes.mesh_file.WeldReport`` (or None: the mesh was not welded)."""
+    if weld is None:
+        return []
+    where = "at the same position" if weld.tolerance == 0 else f"within {weld.tolerance:g} of the bounding-box diagonal"
+    notes = []
+    if weld.welded_vertices:
+        notes.append(f"welded {weld.welded_vertices} vertices {where} into the vertex they coincide with "
+                     "(--no-weld keeps them)")
+    if weld.unwelded_vertices:
+        notes.append(f"kept {weld.unwelded_vertices} positions as several vertices: welding them would put an edge "
+                     "in more than two faces")
+    if weld.dropped_faces:
+        notes.append(f"dropped {weld.dropped_faces} faces that welding left with fewer than 3 corners")
     return notes
 
 

@@ -16,10 +16,10 @@ from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
 from ..io.patches.formats import write_surface_patches
 from ..io.patches.iges import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
-from ..io.meshes.surface_data import surface_data
+from ..io.meshes.surface_data import surface_data, weld_surface_input
 from .curvature_ply import curvature_properties
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes, topology_failure
-from .options import extension_options, surface_options
+from .options import extension_options, surface_options, weld_options, weld_tolerance
 
 # Peak memory of a tessellation, traced with tracemalloc on spot_quadrangulated (46,848 patches):
 # 465 bytes per patch at N = 2, 4,436 at N = 8, 40,950 at N = 24, i.e. about
@@ -119,6 +119,7 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
               help="Write points and normals of an .obj/.ply output as float32 (smaller files; float64 by default).")
 @surface_options
 @extension_options
+@weld_options
 @click.option("--merge", is_flag=True,
               help="Patch files: also merge rectangles of biquadratic patches into B-spline surfaces "
                    "(JSON key \"merged\", NPZ merged_* arrays; IGES and STEP write them instead of their patches).")
@@ -126,8 +127,8 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
 def convert(input_path, output, patches_paths, resolution, units, no_group, curvature, float32, merge, force, quiet,
-            **shape):
-    """Convert the polygon mesh INPUT (OBJ or PLY, any n-gons) to a smooth surface.
+            weld, no_weld, **shape):
+    """Convert the polygon mesh INPUT (OBJ, PLY or OFF, any n-gons; STL triangles) to a smooth surface.
 
     Writes OUTPUT, a triangle mesh sampled from the surface's Bezier patches
     (shared patch edges share vertices, so a closed input gives a watertight
@@ -135,7 +136,7 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     """
     mesh_suffix, patch_suffixes = output_formats(output, patches_paths, curvature, shape["attributes"])
     progress = Progress(quiet)
-    surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet)
+    surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet, weld_tolerance(weld, no_weld))
     check_tessellation_size(surface.n_patches, resolution, force)
     progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
     # the same welding `c1surf tessellate` reads from the patch file: identical meshes
@@ -152,15 +153,18 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     progress.done()
 
 
-def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: Progress, quiet: bool):
-    """Read the mesh file and build its surface: (Surface, SurfaceData); notes on repairs unless ``quiet``.
+def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: Progress, quiet: bool,
+                   weld: float | None = 0.0):
+    """Read the mesh file, weld it and build its surface: (Surface, SurfaceData); notes on repairs unless ``quiet``.
 
     ``shape``: the values of the surface and extension options (``options.py``),
-    keyed by ``extension_setup``'s parameter names.
+    keyed by ``extension_setup``'s parameter names; ``weld``: the tolerance of
+    ``options.weld_tolerance`` (None: no welding).
     """
     progress.phase(f"reading {input_path}")
     mesh = read_mesh(input_path)
     options, data = extension_setup(mesh, mesh_suffix, **shape)
+    mesh, data = weld_surface_input(mesh, data, weld)
     progress.phase(f"building the surface of {mesh.n_faces} faces")
     surface = build_or_fail(mesh, options, data)
     echo_repair_notes(surface, mesh, quiet, data)

@@ -63,6 +63,25 @@ def feature_options(command):
     return with_options(command, options)
 
 
+def weld_options(command):
+    """Add --weld TOL and --no-weld (vertices at one position become one vertex; ``weld_tolerance``)."""
+    options = [
+        click.option("--weld", type=click.FloatRange(0.0, 1.0), default=None, metavar="TOL",
+                     help="Weld vertices closer than TOL times the bounding-box diagonal (default: weld equal "
+                          "positions only, as STL files and seam-split meshes need)."),
+        click.option("--no-weld", is_flag=True,
+                     help="Keep the file's vertices: faces join only where they share a vertex number."),
+    ]
+    return with_options(command, options)
+
+
+def weld_tolerance(weld: float | None, no_weld: bool) -> float | None:
+    """The welding tolerance of ``--weld``/``--no-weld``: None for no welding, 0 for equal positions."""
+    if no_weld and weld is not None:
+        raise click.BadParameter("--weld and --no-weld contradict each other: give one of them")
+    return None if no_weld else (weld or 0.0)
+
+
 def with_options(command, options: list):
     """Decorate ``command`` with click ``options``, listed in the order --help shows them."""
     for option in reversed(options):

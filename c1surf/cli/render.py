@@ -16,6 +16,7 @@ from ..io.atomic import atomic_output
 from ..io.images.exr import write_exr
 from ..io.images.png import write_png
 from ..io.meshes.read import read_mesh
+from ..io.meshes.surface_data import weld_surface_input
 from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
 from ..render.camera import PROJECTIONS, VIEWS, frame_camera
@@ -26,7 +27,7 @@ from ..io.meshes.surface_data import SurfaceData
 from ..io.meshes.tags.features import sharp_features
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes
 from .convert import available_memory, build_or_fail
-from .options import surface_options
+from .options import surface_options, weld_options, weld_tolerance
 
 # EXR channels, in the order listed by `c1surf render --help` (the file sorts them by name).
 EXR_CHANNELS = ("R", "G", "B", "A") + CURVATURE_NAMES + GEOMETRY_NAMES
@@ -54,15 +55,15 @@ def parse_size(text: str) -> tuple[int, int]:
     return parts[0], parts[1]
 
 
-def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Progress) -> PatchSet:
-    """The patches (with their weights and adjacency) of a mesh or patch file."""
+def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Progress, weld: float | None = 0.0) -> PatchSet:
+    """The patches (with their weights and adjacency) of a mesh (welded with tolerance ``weld``) or patch file."""
     suffix = Path(input_path).suffix.lower()
     if suffix in PATCH_READERS:
         progress.phase(f"reading the patches of {input_path}")
         patches = load_patch_set(input_path)
     else:
         progress.phase(f"reading {input_path}")
-        mesh = read_mesh(input_path)
+        mesh, _ = weld_surface_input(read_mesh(input_path), None, weld)
         progress.phase(f"building the surface of {mesh.n_faces} faces")
         features, notes = sharp_features(mesh)  # the file's own creases, corners and holes
         data = SurfaceData(points=mesh.points, features=features, feature_notes=notes)
@@ -197,12 +198,13 @@ def write_atomically(path, input_path, progress: Progress, write) -> None:
               help="Samples per patch side of the mesh the rays hit first [default: about 600k triangles, 2 to 8]; "
                    "the hit is then moved onto the exact patch by Newton steps.")
 @surface_options
+@weld_options
 @click.option("-q", "--quiet", is_flag=True, help="No progress bars (they only appear on a terminal anyway).")
 @friendly_errors
 def render_command(input_path, output, png_path, zebra_path, view, eye, target, up, size, projection, fov, zoom, atlas,
                    tile, quantity, colormap, value_range, stripes, stripe_axis, mesh_resolution, blend, alpha, beta,
-                   tangent_rule, quiet):
-    """Render the surface of INPUT (a mesh: OBJ, PLY) or PATCHES (a patch file) to images.
+                   tangent_rule, weld, no_weld, quiet):
+    """Render the surface of INPUT (a mesh: OBJ, PLY, OFF, STL) or PATCHES (a patch file) to images.
 
     Each pixel's curvature is exact: the pixel's ray hits a tessellation, the hit
     triangle gives the patch and an approximate (u, v), Newton steps move it onto
@@ -216,7 +218,7 @@ def render_command(input_path, output, png_path, zebra_path, view, eye, target, 
         check_image_size(width * height)
     progress = Progress(quiet)
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule)
-    patches = load_patches(input_path, options, quiet, progress)
+    patches = load_patches(input_path, options, quiet, progress, weld_tolerance(weld, no_weld))
     if stripe_axis is not None and not np.linalg.norm(stripe_axis) > 0:
         raise click.BadParameter("--stripe-axis must not be the zero vector")
     camera = {"view": view, "eye": eye, "target": target, "up": up, "projection": projection, "fov": fov, "zoom": zoom}

@@ -5,7 +5,9 @@ from __future__ import annotations
 import contextlib
 import os
 import secrets
+import signal
 import stat
+import threading
 from pathlib import Path
 
 from .errors import OutputError
@@ -49,14 +51,39 @@ def atomic_output(path, inputs=()):
     target = Path(os.fspath(path))
     path_str = str(target)
     _check_target(target, path_str, inputs)
-    tmp = _create_temporary(target, path_str)
+    # Ctrl-C or SIGTERM between creating the temporary file and entering the try
+    # below would leave it behind: hold those signals until the try is entered
+    # (a pending one is raised there, and the file is removed).
+    blocked = _hold_signals()
     try:
+        tmp = _create_temporary(target, path_str)
+    except BaseException:
+        _release_signals(blocked)
+        raise
+    try:
+        _release_signals(blocked)
         yield tmp
         _move_into_place(tmp, target, path_str)
     except BaseException:
         with contextlib.suppress(OSError):
             os.unlink(tmp)
         raise
+
+
+_HELD = (signal.SIGINT, signal.SIGTERM)
+
+
+def _hold_signals():
+    """Block SIGINT and SIGTERM in this thread (main thread, POSIX); the previous mask, or None."""
+    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
+        return None
+    return signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
+
+
+def _release_signals(previous) -> None:
+    """Restore the mask ``_hold_signals`` returned: a signal that came meanwhile is delivered now."""
+    if previous is not None:
+        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
 
 
 def _create_temporary(target: Path, path_str: str) -> str:

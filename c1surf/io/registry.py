@@ -6,7 +6,8 @@ takes its suffix checks (:func:`suffix_of`) and its help texts
 (:func:`suffix_list`) from here, and the dispatching readers and writers
 (``io.meshes.read.read_mesh``, ``io.meshes.write.write_mesh``,
 ``io.patches.formats``) their functions. To add a format, write its reader or
-writer in ``io/meshes``, ``io/patches`` or ``io/images`` and add one line here.
+writer in ``io/meshes`` (readers beyond OBJ and PLY: ``io/meshes/formats``),
+``io/patches`` or ``io/images`` and add one line here.
 
 Functions are named as ``"module:function"`` and imported on first use, so that
 checking a suffix (or ``c1surf --help``) loads none of the format libraries
@@ -125,6 +126,8 @@ _BOTH = frozenset({"attributes", "properties"})
 MESH_READERS = FormatTable("mesh format", "reads", [
     Format((".obj",), _MESHES + "obj:read_obj", "Wavefront OBJ: polygons of any size, vt/vn, v x y z w weights, groups"),
     Format((".ply",), _MESHES + "ply:read_ply", "PLY (ASCII or binary): polygons, normals, uv, weight, blend, colours"),
+    Format((".stl",), _MESHES + "formats.stl:read_stl", "STL (ASCII or binary, through trimesh): triangles, welded"),
+    Format((".off",), _MESHES + "formats.off:read_off", "OFF text (also COFF, NOFF): polygons of any size"),
 ])
 
 MESH_WRITERS = FormatTable("mesh format", "writes", [

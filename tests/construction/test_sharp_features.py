@@ -211,3 +211,28 @@ def test_feature_edges_respect_orientation_and_ignore_boundaries():
     for faces in (consistent, flipped):
         assert feature_edges(sizes, faces, points, 80.0).tolist() == [[1, 2]]
         assert feature_edges(sizes, faces, points, 100.0).tolist() == []
+
+
+CUBE_POINTS = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+CUBE_FACES = [[1, 4, 3, 2], [5, 6, 7, 8], [1, 2, 6, 5], [2, 3, 7, 6], [3, 4, 8, 7], [4, 1, 5, 8]]
+
+
+def write_obj(path, points, faces, tags):
+    text = "".join(f"v {x} {y} {z}\n" for x, y, z in points) + "".join("f " + " ".join(map(str, f)) + "\n" for f in faces)
+    path.write_text(text + tags)
+    return path
+
+
+def test_sharp_features_follow_welding(tmp_path):
+    """A seam-split cube (vertex 1 doubled) with creases, a corner and a hole, welded, gives the unsplit cube's surface."""
+    tags = "t crease 2/1/0 0 1 3.0\nt crease 2/1/0 1 2 10\nt corner 1/1/0 6 2.5\nt hole 1/0/0 2\n"
+    whole = write_obj(tmp_path / "whole.obj", CUBE_POINTS, CUBE_FACES, tags)
+    split_faces = [[9 if v == 1 and k >= 4 else v for v in f] for k, f in enumerate(CUBE_FACES)]  # faces 4, 5 use vertex 9
+    split = write_obj(tmp_path / "split.obj", CUBE_POINTS + [CUBE_POINTS[0]], split_faces, tags)
+    reference, _ = surface_from_file(whole)
+    welded, mesh = surface_from_file(split)
+    assert mesh.weld.welded_vertices == 1
+    assert welded.n_patches == reference.n_patches == 96 - 16
+    assert np.allclose(coefficients(welded), coefficients(reference), rtol=0, atol=1e-12)
+    unwelded, _ = surface_from_file(split, weld=None)  # the file's vertices: a slit along the seam
+    assert check_surface(unwelded).boundary_edges > check_surface(reference).boundary_edges

@@ -505,9 +505,9 @@ def test_read_mesh_errors(tmp_path):
     raises_at(lambda: read_mesh(tmp_path / "no" / "nope.obj"), None,
               "does not exist either")
     raises_at(lambda: read_mesh(tmp_path), None, "is a directory")
-    err = raises_at(lambda: read_mesh(write(tmp_path, "m.stl", "solid")), None,
-                    "unsupported mesh format", ".obj, .ply")
-    assert "'.stl'" in str(err)
+    err = raises_at(lambda: read_mesh(write(tmp_path, "m.glb", "glTF")), None,
+                    "unsupported mesh format", ".obj, .off, .ply, .stl")
+    assert "'.glb'" in str(err)
     raises_at(lambda: read_mesh(write(tmp_path, "noext", "x")), None,
               "no suffix")
 

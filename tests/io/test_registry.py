@@ -24,8 +24,8 @@ def test_every_format_names_a_function_of_io(table):
 def test_suffix_of_is_the_one_check():
     assert suffix_of("a/B.PLY", MESH_READERS) == ".ply" and suffix_of("x.IGES", PATCH_READERS) == ".iges"
     with pytest.raises(UnsupportedFormat) as info:
-        suffix_of("dir/mesh.stl", MESH_READERS)
-    assert str(info.value) == "dir/mesh.stl: unsupported mesh format (suffix '.stl'): c1surf reads .obj, .ply files"
+        suffix_of("dir/mesh.glb", MESH_READERS)
+    assert str(info.value) == "dir/mesh.glb: unsupported mesh format (suffix '.glb'): c1surf reads .obj, .off, .ply, .stl files"
     assert isinstance(info.value, C1SurfFileError) and isinstance(info.value, ValueError)
     with pytest.raises(UnsupportedFormat, match=r"\(no suffix\): c1surf writes .iges, .igs, .json, .npz, .step, .stp"):
         suffix_of("surface", PATCH_WRITERS)

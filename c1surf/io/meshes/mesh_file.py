@@ -2,14 +2,15 @@
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ...mesh.weld import collapse_repeated_corners, weld_vertices
 from ..errors import MeshInputError
 from .tags.record import SharpTags
 
-__all__ = ["MeshFile"]
+__all__ = ["MeshFile", "WeldReport", "weld_mesh_file", "collapse_repeated_corners"]
 
 
 @dataclass(eq=False)  # eq on numpy fields would be ambiguous
@@ -57,6 +58,10 @@ class MeshFile:
         Sharp-feature tags (OBJ ``t`` lines, PLY ``edge`` creases and vertex
         ``corner``/``sharpness``), read and checked but not honoured yet;
         empty when the file has none.
+    collapsed_corners : int
+        Repeated corners (``f a b c c``) the reader dropped.
+    weld : WeldReport or None
+        What ``weld_mesh_file`` changed; None for a mesh as read.
     """
 
     path: str
@@ -73,6 +78,7 @@ class MeshFile:
     collapsed_corners: int = 0
     group_names: list[str] = field(default_factory=list)
     tags: SharpTags = field(default_factory=SharpTags)
+    weld: "WeldReport | None" = None
 
     @property
     def n_vertices(self) -> int:
@@ -97,38 +103,50 @@ class MeshFile:
         return offs
 
 
-def collapse_repeated_corners(face_sizes: np.ndarray, face_vertices: np.ndarray):
-    """Drop corners that repeat the previous corner (zero-length edges, e.g. ``f 4 3 5 5``).
+@dataclass(frozen=True)
+class WeldReport:
+    """What welding changed in a MeshFile (``c1surf: note:`` lines).
 
-    Exporters write triangles as quads this way; the polygon they mean has the
-    repeat removed. Non-consecutive repeats are left for ``find_repeated_vertex``.
+    tolerance : float, relative to the bounding-box diagonal; 0 for equal positions
+    welded_vertices : int, used vertices merged into another one at their position
+    unwelded_vertices : int, positions kept as several vertices so that no edge lies in more than two faces
+    dropped_faces : int, faces welding left with fewer than 3 corners
+    """
+
+    tolerance: float = 0.0
+    welded_vertices: int = 0
+    unwelded_vertices: int = 0
+    dropped_faces: int = 0
+
+
+def weld_mesh_file(mesh: MeshFile, tolerance: float = 0.0, keys: np.ndarray | None = None):
+    """The mesh with its coincident vertices welded (``mesh.weld.weld_vertices``).
+
+    Points and per-vertex data are kept as read: faces refer to the lowest-numbered
+    vertex of each welded position, so vertex numbers stay the file's (and so do the
+    vertex numbers of ``tags``; their face numbers do not follow dropped faces). Texture
+    coordinates, normals and colours are per vertex in a MeshFile: a welded
+    vertex has those of its representative, unless ``keys`` keeps the vertices
+    whose data differ apart.
 
     Parameters
     ----------
-    face_sizes : (F,) int
-    face_vertices : (sum(face_sizes),) int
+    mesh : MeshFile
+    tolerance : float >= 0, relative to the bounding-box diagonal (0: equal positions)
+    keys : (V, k) float or None, per-vertex data that must be equal to weld
 
     Returns
     -------
-    face_sizes, face_vertices : the collapsed faces (same face count and order)
-    keep : (sum(face_sizes),) bool, which of the given corners remain
+    mesh : MeshFile, with ``weld`` set (per-face data of dropped faces removed)
+    kept_faces : (F,) bool, which faces of the input remain
     """
-    face_sizes = np.asarray(face_sizes, dtype=np.int64)
-    face_vertices = np.asarray(face_vertices, dtype=np.int64)
-    if face_vertices.size == 0:
-        return face_sizes, face_vertices, np.ones(0, bool)
-    offs = np.zeros(len(face_sizes) + 1, dtype=np.int64)
-    np.cumsum(face_sizes, out=offs[1:])
-    face = np.repeat(np.arange(face_sizes.size), face_sizes)
-    nxt = np.arange(face_vertices.size) + 1
-    last = offs[1:] - 1
-    nxt[last[face_sizes > 0]] = offs[:-1][face_sizes > 0]
-    repeat = face_vertices == face_vertices[nxt]
-    keep = ~repeat
-    if not repeat.any():
-        return face_sizes, face_vertices, keep
-    sizes = np.bincount(face[keep], minlength=face_sizes.size).astype(np.int64)
-    return sizes, face_vertices[keep], keep
+    sizes, vertices, kept, report = weld_vertices(mesh.points, mesh.face_sizes, mesh.face_vertices, tolerance, keys)
+    per_face = {name: None if values is None else values[kept]
+                for name, values in (("face_lines", mesh.face_lines), ("face_groups", mesh.face_groups))}
+    welded = replace(mesh, face_sizes=sizes, face_vertices=vertices, **per_face,
+                     face_attributes={k: v[kept] for k, v in mesh.face_attributes.items()},
+                     weld=WeldReport(tolerance=float(tolerance), **report))
+    return welded, kept
 
 
 def collapse_repeated_corners_or_refuse(face_sizes, face_vertices, path, line_of_face):

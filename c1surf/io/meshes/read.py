@@ -6,14 +6,16 @@ import os
 from pathlib import Path
 
 from ..errors import MeshInputError
-from ..registry import MESH_READERS, UnsupportedFormat, suffix_of
+from ..registry import MESH_READERS, UnsupportedFormat, suffix_list, suffix_of
 from .mesh_file import MeshFile
 
 __all__ = ["read_mesh"]
 
 
 def read_mesh(path, keep_degenerate: bool = False) -> MeshFile:
-    """Read an OBJ or PLY polygon mesh (suffix decides, any letter case).
+    """Read a polygon mesh of a format in ``MESH_READERS`` (OBJ, PLY, STL, OFF; suffix decides, any letter case).
+
+    The vertices are as in the file; welding is a separate step (``mesh_file.weld_mesh_file``).
 
     Parameters
     ----------
@@ -42,7 +44,7 @@ def read_mesh(path, keep_degenerate: bool = False) -> MeshFile:
     if p.is_dir():
         raise MeshInputError(
             path_str, "is a directory, not a mesh file: give the path of "
-            "an .obj or .ply file")
+            f"a {suffix_list(MESH_READERS)} file")
     try:
         suffix = suffix_of(path_str, MESH_READERS)
     except UnsupportedFormat as e:

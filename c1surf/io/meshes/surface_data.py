@@ -23,13 +23,16 @@ extensions of the paper use (``core.surface.Surface`` arguments):
 from __future__ import annotations
 
 import json
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import MeshInputError
-from .mesh_file import MeshFile
+from ...construction.features import SharpFeatures
+from ...mesh.weld import coincident_representatives
+from .mesh_file import MeshFile, weld_mesh_file
 from .tags.features import sharp_features
+from .tags.record import mesh_edge_keys
 
 COLOUR_NAMES = ("red", "green", "blue", "alpha")
 
@@ -62,6 +65,14 @@ class SurfaceData:
         """Keyword arguments of ``Surface`` (besides points and options)."""
         return {"face_blend": self.face_blend, "vertex_blend": self.vertex_blend, "weights": self.weights,
                 "vertex_normals": self.vertex_normals, "features": self.features}
+
+    def vertex_keys(self) -> np.ndarray:
+        """(V, k) per-vertex inputs of the construction besides the position (attribute columns,
+        weights, normals, blend ratios): vertices whose keys differ are not welded."""
+        columns = [self.points[:, 3:]]
+        columns += [np.reshape(c, (len(self.points), -1)) for c in (self.weights, self.vertex_normals, self.vertex_blend)
+                    if c is not None]
+        return np.concatenate(columns, axis=1)
 
 
 def _ratio(path, where: str, value) -> float:
@@ -179,6 +190,56 @@ def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = Non
     return data
 
 
+def weld_surface_input(mesh: MeshFile, data: SurfaceData | None, tolerance: float | None):
+    """Weld ``mesh`` (``mesh_file.weld_mesh_file``) without merging vertices whose construction data differ.
+
+    Parameters
+    ----------
+    mesh : MeshFile
+    data : SurfaceData of ``mesh`` or None; its vertex keys keep apart vertices with different
+        texture coordinates or colours (``--attributes``), weights, normals or blend ratios
+    tolerance : float, relative to the bounding-box diagonal (0: equal positions), or None: no welding
+
+    Returns
+    -------
+    (MeshFile, SurfaceData or None): per-face data follows the faces welding keeps
+    """
+    if tolerance is None:
+        return mesh, data
+    keys = None if data is None else data.vertex_keys()
+    welded, kept = weld_mesh_file(mesh, tolerance, keys)
+    if data is not None and data.face_blend is not None:
+        data = replace(data, face_blend=data.face_blend[kept])
+    if data is not None and data.features is not None and (welded.weld.welded_vertices or welded.weld.dropped_faces):
+        data = _welded_features(data, mesh, welded, kept, coincident_representatives(mesh.points, mesh.face_vertices,
+                                                                                     tolerance, keys))
+    return welded, data
+
+
+def _welded_features(data: SurfaceData, mesh: MeshFile, welded: MeshFile, kept: np.ndarray, representative: np.ndarray):
+    """``data`` with its sharp features renumbered for the welded mesh, and a note on any that welding lost.
+
+    Crease and corner vertices move to the vertex they were welded into; hole faces follow
+    the faces welding keeps. A crease pair that is no edge of the welded mesh any more
+    (welding kept its position as several vertices) and a hole on a dropped face are named.
+    """
+    f = data.features
+    new_face = np.cumsum(kept) - 1
+    holes = f.hole_faces[kept[f.hole_faces]]
+    edges = representative[f.crease_edges]
+    n = welded.n_vertices
+    present = np.isin(np.minimum(*edges.T) * n + np.maximum(*edges.T),
+                      mesh_edge_keys(welded.face_sizes, welded.face_vertices, n))
+    features = SharpFeatures(edges[present], f.crease_sharpness[present], representative[f.corner_vertices],
+                             f.corner_sharpness, new_face[holes])
+    notes = list(data.feature_notes)
+    lost = int((~present).sum()) + int(f.hole_faces.size - holes.size)
+    if lost:
+        notes.append(f"{mesh.path}: welding left {int((~present).sum())} crease edges and "
+                     f"{int(f.hole_faces.size - holes.size)} hole faces without their edge or face: they are not used")
+    return replace(data, features=None if features.is_empty() else features, feature_notes=notes)
+
+
 def _blend_ratios(mesh: MeshFile, blend_file):
     """(face_blend (F,), vertex_blend (V,)): the PLY ``blend`` properties, overridden where the sidecar file sets a ratio."""
     face_blend = vertex_blend = None
@@ -246,4 +307,4 @@ def _attribute_columns(mesh: MeshFile):
     return np.where(used[:, None], extra, 0.0), names, colour_scale
 
 
-__all__ = ["SurfaceData", "surface_data", "read_blend_file", "COLOUR_NAMES"]
+__all__ = ["SurfaceData", "surface_data", "weld_surface_input", "read_blend_file", "COLOUR_NAMES"]

@@ -1,0 +1,86 @@
+"""STL reader (ASCII and binary, through trimesh): one triangle per facet, three vertices of its own.
+
+STL has no shared vertices: every facet lists its three corners. The reader
+keeps them as they are (trimesh's STL loader, not ``trimesh.load``, which would
+merge them); c1surf's welding (``io.meshes.mesh_file.weld_mesh_file``) joins the
+triangles into a surface, and ``--no-weld`` leaves them apart.
+"""
+from __future__ import annotations
+
+import io
+import os
+import re
+import warnings
+
+import numpy as np
+
+from ...errors import MeshInputError
+from ..mesh_file import MeshFile
+
+__all__ = ["read_stl"]
+
+_FACET = re.compile(rb"^[ \t]*facet\b", re.IGNORECASE | re.MULTILINE)
+
+
+def read_stl(path) -> MeshFile:
+    """Read an ASCII or binary STL file as separate triangles.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+
+    Returns
+    -------
+    MeshFile
+        ``points`` (3T, 3) float64 (the facets' corners in file order),
+        ``face_sizes`` (T,) all 3, ``face_vertices`` (3T,) = 0, 1, 2, ...;
+        ``face_lines`` (T,) the ``facet`` lines of an ASCII file, else None.
+
+    Raises
+    ------
+    MeshInputError
+        Unreadable file, or no triangles in it (not an STL file, or a binary STL
+        whose length does not match its triangle count).
+    """
+    path = os.fspath(path)
+    try:
+        with open(path, "rb") as fh:
+            data = fh.read()
+    except OSError as exc:
+        raise MeshInputError(path, f"cannot read the file ({exc.strerror or exc}): check the path and its permissions") from None
+    triangles = _triangles(data, path)
+    if not np.all(np.isfinite(triangles)):
+        t = int(np.argmax(~np.all(np.isfinite(triangles), axis=(1, 2))))
+        raise MeshInputError(path, f"triangle {t} has a NaN or infinite coordinate: fix or remove it")
+    n = triangles.shape[0]
+    return MeshFile(path=path, points=triangles.reshape(-1, 3), face_sizes=np.full(n, 3, dtype=np.int64),
+                    face_vertices=np.arange(3 * n, dtype=np.int64), face_lines=_facet_lines(data, n))
+
+
+def _triangles(data: bytes, path: str) -> np.ndarray:
+    """(T, 3, 3) float64 corners of every facet, in file order (all solids of an ASCII file)."""
+    from trimesh.exchange.stl import load_stl  # a format library: imported on first use
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # numpy's fromstring on text that is not numbers
+            loaded = load_stl(io.BytesIO(data))
+    except Exception as exc:  # trimesh raises ValueError, HeaderError, ... on malformed files
+        raise MeshInputError(path, f"not a valid STL file ({exc})") from None
+    solids = list(loaded["geometry"].values()) if "geometry" in loaded else [loaded]
+    corners = [np.asarray(s["vertices"], dtype=np.float64)[np.asarray(s["faces"])] for s in solids]
+    if not corners or sum(len(c) for c in corners) == 0:
+        raise MeshInputError(path, "no triangles found: not an STL file, or a binary STL whose length does not match "
+                             "the triangle count in its header")
+    return np.concatenate(corners)
+
+
+def _facet_lines(data: bytes, n_triangles: int) -> np.ndarray | None:
+    """(T,) 1-based line of each ``facet`` of an ASCII STL, or None (binary, or the count differs)."""
+    if not data[:512].lstrip().lower().startswith(b"solid"):
+        return None
+    starts = np.array([m.start() for m in _FACET.finditer(data)], dtype=np.int64)
+    if starts.size != n_triangles:
+        return None
+    newlines = np.flatnonzero(np.frombuffer(data, dtype=np.uint8) == ord("\n"))
+    return np.searchsorted(newlines, starts) + 1
