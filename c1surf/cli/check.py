@@ -9,7 +9,7 @@ from ..evaluation.smoothness import measure_smoothness
 from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
 from ..io.meshes.read import read_mesh
-from .common import friendly_errors, tag_note
+from .common import file_notes, friendly_errors
 from .convert import build_or_fail, extension_setup
 from .options import extension_options, surface_options
 
@@ -41,7 +41,7 @@ def check(path, tolerance, samples, unoriented, blend, alpha, beta, tangent_rule
         groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     else:
         mesh = read_mesh(path)
-        if note := tag_note(mesh):  # check has no --quiet: the note goes to stderr, the report to stdout
+        for note in file_notes(mesh):  # check has no --quiet: the notes go to stderr, the report to stdout
             click.echo(f"c1surf: note: {note}", err=True)
         options, data = extension_setup(mesh, None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
                                         interpolate_normals, weights, triangles, attributes, refinements)

@@ -48,10 +48,16 @@ def tag_note(mesh_file) -> str | None:
     return f"{mesh_file.path}: sharp-feature tags are not honoured yet and were ignored: {tags.summary()}"
 
 
-def repair_notes(surface, mesh_file) -> list[str]:
-    """One-line notes on what c1surf changed or ignored to make the input usable (the ignored tags first)."""
-    r = getattr(surface, "repairs", {}) or {}
+def file_notes(mesh_file) -> list[str]:
+    """Notes on what reading ``mesh_file`` ignored: its sharp-feature tags, then the reader's own (``reader_notes``)."""
     notes = [note] if (note := tag_note(mesh_file)) else []
+    return notes + list(getattr(mesh_file, "reader_notes", None) or [])
+
+
+def repair_notes(surface, mesh_file) -> list[str]:
+    """One-line notes on what c1surf changed or ignored to make the input usable (what reading ignored first)."""
+    r = getattr(surface, "repairs", {}) or {}
+    notes = file_notes(mesh_file)
     if getattr(mesh_file, "collapsed_corners", 0):
         notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
     if r.get("flipped_faces"):

@@ -57,6 +57,11 @@ class MeshFile:
         Sharp-feature tags (OBJ ``t`` lines, PLY ``edge`` creases and vertex
         ``corner``/``sharpness``), read and checked but not honoured yet;
         empty when the file has none.
+    reader_notes : list of str
+        One line each on input the reader ignored or dropped (OBJ ``l``/``p``
+        records, ``vt``/``vn`` indices that name no record, degenerate PLY
+        strip triangles), printed by the CLI as ``c1surf: note:`` lines
+        (``cli.common.repair_notes``).
     """
 
     path: str
@@ -73,6 +78,7 @@ class MeshFile:
     collapsed_corners: int = 0
     group_names: list[str] = field(default_factory=list)
     tags: SharpTags = field(default_factory=SharpTags)
+    reader_notes: list[str] = field(default_factory=list)
 
     @property
     def n_vertices(self) -> int:
