@@ -24,10 +24,14 @@ $(VENV)/.stamp-bench: pyproject.toml | $(BIN)/python
 	$(BIN)/python -m pip install --quiet -e '.[test,bench]'
 	touch $@
 
+# The whole job on one sample mesh: tessellation, JSON and IGES patch files, an EXR curvature
+# image with its PNG preview and reflection lines, then the G1 check and the exact measures.
 demo: $(VENV)/.stamp-base
 	mkdir -p $(OUT)
-	$(BIN)/c1surf convert $(DEMO_MESH) -o $(OUT)/twisted.ply --patches $(OUT)/twisted.json
+	$(BIN)/c1surf convert $(DEMO_MESH) -o $(OUT)/twisted.ply --patches $(OUT)/twisted.json --patches $(OUT)/twisted.igs
+	$(BIN)/c1surf render $(OUT)/twisted.json -o $(OUT)/twisted.exr --png $(OUT)/twisted.png --zebra $(OUT)/twisted_zebra.png
 	$(BIN)/c1surf check $(OUT)/twisted.json
+	$(BIN)/c1surf measure $(OUT)/twisted.json
 
 test: $(VENV)/.stamp-test
 	$(BIN)/lint-imports

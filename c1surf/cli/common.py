@@ -40,6 +40,11 @@ def topology_failure(error: TopologyError, mesh_file) -> Failure:
     return Failure(f"{where}: {message}")
 
 
+def file_notes(mesh_file) -> list[str]:
+    """Notes on what reading ``mesh_file`` ignored (``MeshFile.reader_notes``: OBJ ``l``/``p`` records, ...)."""
+    return list(getattr(mesh_file, "reader_notes", None) or [])
+
+
 def repair_notes(surface, mesh_file, data=None) -> list[str]:
     """One-line notes on what c1surf changed or ignored to make the input usable (the sharp features first).
 
@@ -47,7 +52,7 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
     ``feature_notes`` say which tags were honoured and which not), or None.
     """
     r = getattr(surface, "repairs", {}) or {}
-    notes = list(getattr(data, "feature_notes", []))
+    notes = list(getattr(data, "feature_notes", [])) + file_notes(mesh_file)
     if getattr(mesh_file, "collapsed_corners", 0):
         notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
     notes += weld_notes(getattr(mesh_file, "weld", None))

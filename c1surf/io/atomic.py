@@ -5,9 +5,7 @@ from __future__ import annotations
 import contextlib
 import os
 import secrets
-import signal
 import stat
-import threading
 from pathlib import Path
 
 from .errors import OutputError
@@ -51,54 +49,39 @@ def atomic_output(path, inputs=()):
     target = Path(os.fspath(path))
     path_str = str(target)
     _check_target(target, path_str, inputs)
-    # Ctrl-C or SIGTERM between creating the temporary file and entering the try
-    # below would leave it behind: hold those signals until the try is entered
-    # (a pending one is raised there, and the file is removed).
-    blocked = _hold_signals()
+    # ``made`` holds the temporary file's name from just before it is created, so an
+    # interrupt (Ctrl-C, SIGTERM) at any point after that removes it as well.
+    made = []
     try:
-        tmp = _create_temporary(target, path_str)
-    except BaseException:
-        _release_signals(blocked)
-        raise
-    try:
-        _release_signals(blocked)
+        tmp = _create_temporary(target, path_str, made)
         yield tmp
         _move_into_place(tmp, target, path_str)
     except BaseException:
-        with contextlib.suppress(OSError):
-            os.unlink(tmp)
+        for name in made:
+            with contextlib.suppress(OSError):
+                os.unlink(name)
         raise
 
 
-_HELD = (signal.SIGINT, signal.SIGTERM)
+def _create_temporary(target: Path, path_str: str, made: list) -> str:
+    """Create an empty file named ``.tmp-c1surf-<random>.<name>`` beside ``target``; return its path.
 
-
-def _hold_signals():
-    """Block SIGINT and SIGTERM in this thread (main thread, POSIX); the previous mask, or None."""
-    if not hasattr(signal, "pthread_sigmask") or threading.current_thread() is not threading.main_thread():
-        return None
-    return signal.pthread_sigmask(signal.SIG_BLOCK, _HELD)
-
-
-def _release_signals(previous) -> None:
-    """Restore the mask ``_hold_signals`` returned: a signal that came meanwhile is delivered now."""
-    if previous is not None:
-        signal.pthread_sigmask(signal.SIG_SETMASK, previous)
-
-
-def _create_temporary(target: Path, path_str: str) -> str:
-    """Create an empty file named ``.tmp-c1surf-<random>.<name>`` beside ``target``; return its path."""
+    ``made`` gets the name before the file is created (and loses it again if the name is taken).
+    """
     directory = target.parent
     for _ in range(100):  # name clashes are astronomically unlikely
         candidate = directory / f"{_PREFIX}{secrets.token_hex(4)}.{target.name}"
+        made.append(str(candidate))
         try:
             # 0o666 & ~umask, like any newly written file (mkstemp would
             # give 0o600).
             fd = os.open(candidate, os.O_WRONLY | os.O_CREAT | os.O_EXCL,
                          0o666)
         except FileExistsError:
+            made.pop()  # somebody else's file
             continue
         except OSError as exc:
+            made.pop()
             raise OutputError(
                 path_str, f"cannot create a file in {str(directory)!r} "
                 f"({exc.strerror or exc}): choose another output folder"

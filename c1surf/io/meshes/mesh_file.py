@@ -62,6 +62,11 @@ class MeshFile:
         Repeated corners (``f a b c c``) the reader dropped.
     weld : WeldReport or None
         What ``weld_mesh_file`` changed; None for a mesh as read.
+    reader_notes : list of str
+        One line each on input the reader ignored or dropped (OBJ ``l``/``p``
+        records, ``vt``/``vn`` indices that name no record, degenerate PLY
+        strip triangles), printed by the CLI as ``c1surf: note:`` lines
+        (``cli.common.repair_notes``).
     """
 
     path: str
@@ -79,6 +84,7 @@ class MeshFile:
     group_names: list[str] = field(default_factory=list)
     tags: SharpTags = field(default_factory=SharpTags)
     weld: "WeldReport | None" = None
+    reader_notes: list[str] = field(default_factory=list)
 
     @property
     def n_vertices(self) -> int:

@@ -10,7 +10,11 @@ Records used: ``v`` (x y z [w], or x y z r g b), ``vt``, ``vn``, ``f``
 (``v``, ``v/vt``, ``v//vn``, ``v/vt/vn``, negative = relative), ``g`` and
 ``o`` (face groups), and OpenSubdiv ``t`` tags (``tags.obj_tags``: creases,
 corners, holes, ... into ``MeshFile.tags``).  Everything else (``s``,
-``usemtl``, ``mtllib``, ``l``, ``p``, ...) and ``#`` comments are ignored.
+``usemtl``, ``mtllib``, ``l``, ``p``, ...) and ``#`` comments are ignored;
+ignored geometry (``l``, ``p``, ``curv``, ``curv2``, ``surf``) is named in
+one of ``MeshFile.reader_notes``.  Lines ending in ``\\`` continue on the
+next line.  Face corners whose ``vt``/``vn`` index names no record are read
+without it, with one note; a bad vertex index is refused.
 """
 
 from __future__ import annotations
@@ -94,20 +98,17 @@ def parse_obj(data: bytes, path="<memory>", keep_degenerate: bool = False) -> Me
         raw_vt = None if raw_vt is None else raw_vt[kept]
         raw_vn = None if raw_vn is None else raw_vn[kept]
         corners = _FaceCorners(text, f_lines, sizes)
-    uvs = normals = None
-    if raw_vt is not None:
-        uvs = _per_vertex(face_vertices, _resolve(raw_vt, np.count_nonzero(text.kind == VT), corners, VT,
-                                                  "texture coordinate", path), _uv_table(text), v_lines.size)
-    if raw_vn is not None:
-        normals = _per_vertex(face_vertices, _resolve(raw_vn, np.count_nonzero(text.kind == VN), corners, VN, "normal",
-                                                      path), _normal_table(text), v_lines.size)
+    uvs, dangling_vt = _corner_attribute(text, raw_vt, corners, face_vertices, v_lines.size, VT, path)
+    normals, dangling_vn = _corner_attribute(text, raw_vn, corners, face_vertices, v_lines.size, VN, path)
     face_groups, group_names = text.groups(f_lines)
     tags = parse_tag_lines(_tag_lines(text), path)
     check_tags(tags, sizes, face_vertices, v_lines.size, path)
+    notes = [n for n in (_dangling_note(text, dangling_vt, dangling_vn, path), _ignored_geometry_note(text, path)) if n]
     return MeshFile(path=path, points=points, face_sizes=sizes.astype(np.int64, copy=False),
                     face_vertices=face_vertices, face_lines=(f_lines + 1).astype(np.int64), vertex_weights=weights,
                     vertex_normals=normals, vertex_uvs=uvs, vertex_attributes=vertex_attributes,
-                    face_groups=face_groups, group_names=group_names, collapsed_corners=collapsed, tags=tags)
+                    face_groups=face_groups, group_names=group_names, collapsed_corners=collapsed, tags=tags,
+                    reader_notes=notes)
 
 
 def _tag_lines(text: ObjText):
@@ -206,6 +207,59 @@ def _normal_table(text: ObjText) -> np.ndarray:
     return nvals[noff[:, None] + np.arange(3)]
 
 
+# ignored records that carry geometry: each is named in a note, never dropped silently
+_IGNORED_GEOMETRY = ((b"l", "line (`l`)"), (b"p", "point (`p`)"), (b"curv", "free-form curve (`curv`)"),
+                     (b"curv2", "curve on a surface (`curv2`)"), (b"surf", "free-form surface (`surf`)"))
+
+
+def _corner_attribute(text: ObjText, raw, corners, face_vertices, n_vert: int, kind_code: int, path: str):
+    """Per-vertex texture coordinates (V, 2) or normals (V, 3) from the face corners, or None.
+
+    Corners that name a ``vt``/``vn`` record the file does not have are
+    ignored (the reader notes them); index 0 is still refused.
+
+    Returns
+    -------
+    values : ndarray, shape (V, 2) or (V, 3), float64, or None
+    dangling : int, corners whose index names no record
+    """
+    if raw is None:
+        return None, 0
+    total = int(np.count_nonzero(text.kind == kind_code))
+    what = "texture coordinate" if kind_code == VT else "normal"
+    idx = _resolve(raw, total, corners, kind_code, what, path, dangling_ok=True)
+    dangling = int(np.count_nonzero((raw != ABSENT) & (idx < 0)))
+    if dangling == raw.size:
+        return None, dangling
+    table = _uv_table(text) if kind_code == VT else _normal_table(text)
+    return _per_vertex(face_vertices, idx, table, n_vert), dangling
+
+
+def _dangling_note(text: ObjText, dangling_vt: int, dangling_vn: int, path: str) -> str | None:
+    """One note on the face corners whose ``vt``/``vn`` index names no record, or None."""
+    parts = []
+    for count, kind_code, what in ((dangling_vt, VT, "texture coordinate"), (dangling_vn, VN, "normal")):
+        if count:
+            kw, total = _KEYWORD[kind_code], int(np.count_nonzero(text.kind == kind_code))
+            parts.append(f"{count} {what} {'index that names' if count == 1 else 'indices that name'} no `{kw}` line "
+                         f"(the file has {total or 'none'})")
+    if not parts:
+        return None
+    return f"{path}: ignored {' and '.join(parts)}: the faces are read without them"
+
+
+def _ignored_geometry_note(text: ObjText, path: str) -> str | None:
+    """One note naming the geometry records c1surf ignores (``l``, ``p``, free-form), or None."""
+    parts = []
+    for keyword, what in _IGNORED_GEOMETRY:
+        count = int(text.records(keyword).size)
+        if count:
+            parts.append(f"{count} {what} record{'s' if count != 1 else ''}")
+    if not parts:
+        return None
+    return f"{path}: ignored {', '.join(parts)}: c1surf builds the surface from the `f` faces only"
+
+
 class _FaceCorners:
     """Where each face corner stands in the file: its line, and the records of a kind above it.
 
@@ -271,7 +325,7 @@ def _check_finite(values, lines, path, message):
         raise MeshInputError(path, message, int(lines[np.argmin(ok)]) + 1)
 
 
-def _resolve(raw, total, corners: _FaceCorners, kind_code: int, what: str, path):
+def _resolve(raw, total, corners: _FaceCorners, kind_code: int, what: str, path, dangling_ok: bool = False):
     """Turn 1-based / negative OBJ indices into 0-based ones, checking range.
 
     Parameters
@@ -283,11 +337,14 @@ def _resolve(raw, total, corners: _FaceCorners, kind_code: int, what: str, path)
     corners : _FaceCorners
         Lines of the corners, and records of ``kind_code`` above them
         (only needed when the file uses negative indices).
+    dangling_ok : bool
+        Out-of-range indices become -1 instead of an error (index 0 is
+        still refused).
 
     Returns
     -------
     ndarray, shape (C,), int64
-        0-based indices, -1 where ``raw`` is ``ABSENT``.
+        0-based indices, -1 where ``raw`` is ``ABSENT`` (or dangling).
     """
     present = raw != ABSENT
     res = np.where(raw > 0, raw - 1, -1)
@@ -297,7 +354,10 @@ def _resolve(raw, total, corners: _FaceCorners, kind_code: int, what: str, path)
     if neg.any():
         n_before = corners.records_above(kind_code)
         res[neg] = n_before[neg] + raw[neg]
-    bad = present & ((raw == 0) | (res < 0) | (res >= total))
+    out = present & (raw != 0) & ((res < 0) | (res >= total))
+    if dangling_ok and out.any():
+        res[out] = -1
+    bad = present & (raw == 0) if dangling_ok else present & ((raw == 0) | out)
     if not bad.any():
         return res
     c = int(np.argmax(bad))

@@ -71,6 +71,11 @@ class ObjText:
         Record kind of each line (``V``, ``F``, ...).
     kw_pos : ndarray, shape (L,), int64
         Byte offset of each line's keyword (-1 for blank lines).
+    kw_len : ndarray, shape (L,), int64
+        Length of each line's keyword (0 for blank lines).
+
+    A line ending in a backslash is joined with the next: the record
+    belongs to its first line, and the lines it continues into are empty.
     """
 
     def __init__(self, data: bytes, path: str):
@@ -87,7 +92,7 @@ class ObjText:
         self.buf = buf
 
         self._blank_comments(nl)
-        self._refuse_continuations(nl)
+        self._join_continuations(nl)
 
         # Control bytes count as blanks here (a 256-entry table lookup
         # costs 10x more); one inside a number still fails the parse.
@@ -118,6 +123,8 @@ class ObjText:
         self.kind = kind
         self.kw_pos = np.full(self.starts.size, -1, dtype=np.int64)
         self.kw_pos[lines] = k0
+        self.kw_len = np.zeros(self.starts.size, dtype=np.int64)
+        self.kw_len[lines] = klen
 
         # Blank the keywords so a record's bytes are just its numbers.
         kw1 = self.kw_pos[(kind == V) | (kind == F)]
@@ -142,19 +149,63 @@ class ObjText:
         idx = np.arange(int(length.sum())) + np.repeat(begin - skip, length)
         buf[idx] = 32
 
-    def _refuse_continuations(self, nl):
-        """Refuse lines ending in a backslash (continued on the next)."""
+    def _join_continuations(self, nl):
+        """Join each line ending in a backslash with the next one (OBJ line continuation).
+
+        The joined record belongs to its first physical line: that line's
+        byte range grows to the end of the last line it continues into, and
+        the continued lines become empty, so line numbers stay physical.
+        The backslashes and the newlines they escape are blanked.
+        """
+        cont = self._continued(nl)
+        if cont is None:
+            return
+        cont[-1] = False  # a backslash on the last line continues into nothing
+        self.buf[self.ends[cont]] = 32  # the escaped newlines
+        idx = np.arange(cont.size)
+        joined = np.concatenate(([False], cont[:-1]))
+        if not joined.any():
+            return
+        open_end = np.flatnonzero(~cont)  # each run of joined lines ends at one of these
+        run_end = self.ends[open_end[np.searchsorted(open_end, idx)]]
+        heads = cont & ~joined
+        self.ends[heads] = run_end[heads]
+        self.starts[joined] = np.minimum(run_end[joined] + 1, self.buf.size)
+        self.ends[joined] = self.starts[joined]
+
+    def _continued(self, nl):
+        """(L,) bool, lines whose last non-blank byte is a backslash (now blanked), or None if there are none."""
         buf = self.buf
         slashes = np.flatnonzero(buf == 92)
         if slashes.size == 0:
-            return
-        lines = np.searchsorted(nl, slashes)
-        # Loop only over backslashes, which are rare in OBJ files.
-        for pos, li in zip(slashes.tolist(), lines.tolist()):
-            if WHITESPACE[buf[pos + 1:self.ends[li]]].all():
-                raise MeshInputError(
-                    self.path, "line continuation with '\\' is not "
-                    "supported: join this line with the next one", li + 1)
+            return None
+        line = np.searchsorted(nl, slashes)
+        tail = self.ends[line] - slashes - 1  # bytes after each backslash on its line
+        blank_after = np.ones(slashes.size, dtype=bool)
+        if tail.sum():
+            # Offsets of all tail bytes, in O(tail bytes), as in _blank_comments.
+            skip = np.cumsum(tail) - tail
+            idx = np.arange(int(tail.sum())) + np.repeat(slashes + 1 - skip, tail)
+            owner = np.repeat(np.arange(slashes.size), tail)
+            blank_after = np.bincount(owner, weights=~WHITESPACE[buf[idx]], minlength=slashes.size) == 0
+        if not blank_after.any():
+            return None
+        buf[slashes[blank_after]] = 32
+        cont = np.zeros(self.starts.size, dtype=bool)
+        cont[line[blank_after]] = True
+        return cont
+
+    def records(self, keyword: bytes) -> np.ndarray:
+        """0-based lines of the records with ``keyword`` among those not parsed (kind ``OTHER``).
+
+        Returns
+        -------
+        ndarray, shape (K,), int64
+        """
+        lines = np.flatnonzero((self.kind == OTHER) & (self.kw_len == len(keyword)))
+        for i, byte in enumerate(keyword):
+            lines = lines[self.buf[self.kw_pos[lines] + i] == byte]
+        return lines
 
     def gather(self, lines):
         """Bytes of the given lines (with newlines), in file order.

@@ -5,6 +5,11 @@ parsing; this module turns its structured arrays into a
 :class:`~c1surf.io.meshes.mesh_file.MeshFile`, checks the mesh, and translates
 ``plyfile``'s many exception types into one-line
 :class:`~c1surf.io.errors.MeshInputError` messages.
+
+Polygons come from a ``face`` element, a ``tristrips`` element (triangle
+strips, -1 restarts a strip; read as triangles, the degenerate ones a strip
+uses to turn dropped with a note), or both (faces first).  The index list is
+``vertex_indices`` or ``vertex_index`` of any integer type.
 """
 
 from __future__ import annotations
@@ -46,7 +51,8 @@ def read_ply(path, keep_degenerate: bool = False) -> MeshFile:
         (sum(face_sizes),); ``face_lines`` (F,) for ASCII files, None for
         binary ones; optional normals, uvs, ``weight`` and any other
         scalar vertex / face properties; ``tags`` from an ``edge`` element
-        (``vertex1 vertex2 crease``) and vertex ``corner``/``sharpness``.
+        (``vertex1 vertex2 crease``) and vertex ``corner``/``sharpness``;
+        ``reader_notes`` on dropped strip triangles.
 
     Raises
     ------
@@ -56,7 +62,7 @@ def read_ply(path, keep_degenerate: bool = False) -> MeshFile:
     path = os.fspath(path)
     ply, rows = _open(path)
     vertex = _vertex_data(path, ply["vertex"], rows)
-    faces = _face_data(path, ply["face"], vertex["points"].shape[0], rows, keep_degenerate)
+    faces = _polygon_data(path, ply, vertex["points"].shape[0], rows, keep_degenerate)
     edges = ply["edge"].data if "edge" in ply else None
     tags = ply_tags(path, ply["vertex"].data, edges, rows.line)
     check_tags(tags, faces["face_sizes"], faces["face_vertices"], vertex["points"].shape[0], path)
@@ -98,10 +104,10 @@ def _open(path: str):
         raise MeshInputError(
             path, "the PLY file has no 'vertex' element: c1surf needs "
             "vertices and faces")
-    if "face" not in ply:
+    if "face" not in ply and "tristrips" not in ply:
         raise MeshInputError(
             path, "has vertices but no faces: c1surf needs polygon faces "
-            "(the PLY file has no 'face' element)")
+            "(the PLY file has no 'face' or 'tristrips' element)")
     return ply, _Rows(ply, header_lines)
 
 
@@ -140,16 +146,31 @@ def _vertex_data(path: str, vert, rows: _Rows) -> dict:
             "vertex_attributes": attributes}
 
 
+def _polygon_data(path: str, ply: PlyData, n_vert: int, rows: _Rows, keep_degenerate: bool = False) -> dict:
+    """The MeshFile face fields from the 'face' element, the 'tristrips' element, or both (faces first)."""
+    has_strips = "tristrips" in ply
+    parts = []
+    if "face" in ply and (len(ply["face"].data) or not has_strips):
+        parts.append(_face_data(path, ply["face"], n_vert, rows, keep_degenerate))
+    if has_strips:
+        parts.append(_strip_data(path, ply["tristrips"], n_vert, rows))
+    return parts[0] if len(parts) == 1 else _concatenate(path, *parts)
+
+
+def _index_name(path: str, element) -> str:
+    """Name of the element's vertex index list property (``vertex_indices`` or ``vertex_index``)."""
+    index_name = next((n for n in _INDEX_NAMES if n in (element.data.dtype.names or ())), None)
+    if index_name is None or not isinstance(element.ply_property(index_name), PlyListProperty):
+        raise MeshInputError(
+            path, f"the '{element.name}' element has no 'vertex_indices' list "
+            "property: c1surf needs faces given as lists of vertex indices")
+    return index_name
+
+
 def _face_data(path: str, face, n_vert: int, rows: _Rows, keep_degenerate: bool = False) -> dict:
     """The MeshFile fields of the face element: sizes (F,), vertices (sum(sizes),), lines, other properties."""
     fdata = face.data
-    index_name = next((n for n in _INDEX_NAMES
-                       if n in (fdata.dtype.names or ())), None)
-    if index_name is None or not isinstance(face.ply_property(index_name),
-                                            PlyListProperty):
-        raise MeshInputError(
-            path, "the 'face' element has no 'vertex_indices' list "
-            "property: c1surf needs faces given as lists of vertex indices")
+    index_name = _index_name(path, face)
     if len(fdata) == 0:
         raise MeshInputError(
             path, "has vertices but no faces: c1surf needs polygon faces "
@@ -170,7 +191,87 @@ def _face_data(path: str, face, n_vert: int, rows: _Rows, keep_degenerate: bool 
         refuse_repeated_vertex(sizes, face_vertices, path, lambda f: rows.line("face", f), lambda f: f"face {f}")
     face_lines = rows.first["face"] + np.arange(sizes.size, dtype=np.int64) if rows.text else None
     return {"face_sizes": sizes, "face_vertices": face_vertices, "face_lines": face_lines,
-            "face_attributes": _extras(face, fdata, {index_name}), "collapsed_corners": collapsed}
+            "face_attributes": _extras(face, fdata, {index_name}), "collapsed_corners": collapsed, "reader_notes": []}
+
+
+def _strip_data(path: str, strips, n_vert: int, rows: _Rows) -> dict:
+    """The MeshFile face fields of a 'tristrips' element: its triangles (T,), degenerate ones dropped with a note.
+
+    Each row is one or more strips (-1 restarts); a triangle's line and
+    per-face properties are those of its row.
+    """
+    index_name = _index_name(path, strips)
+    sizes, flat = _face_lists(strips.data[index_name], path)
+    row_of = np.repeat(np.arange(sizes.size), sizes)
+    bad = (flat < -1) | (flat >= n_vert)
+    if bad.any():
+        c = int(np.argmax(bad))
+        raise MeshInputError(
+            path, f"tristrips {int(row_of[c])} refers to vertex {int(flat[c])} but the file has {n_vert} vertices "
+            f"(valid: 0..{n_vert - 1}, and -1 to restart a strip): fix the index", rows.line("tristrips", row_of[c]))
+    triangles, tri_row = strip_triangles(flat, row_of)
+    degenerate = ((triangles[:, 0] == triangles[:, 1]) | (triangles[:, 1] == triangles[:, 2])
+                  | (triangles[:, 0] == triangles[:, 2]))
+    if degenerate.all():
+        raise MeshInputError(
+            path, "the 'tristrips' element has no triangle with 3 distinct vertices: c1surf needs polygon faces")
+    notes = []
+    if degenerate.any():
+        k = int(degenerate.sum())
+        notes.append(f"{path}: dropped {k} degenerate strip triangle{'s' if k != 1 else ''} (a repeated vertex, "
+                     "where a strip turns)")
+    triangles, tri_row = triangles[~degenerate], tri_row[~degenerate]
+    face_lines = rows.first["tristrips"] + tri_row if rows.text else None
+    attributes = {name: col[tri_row] for name, col in _extras(strips, strips.data, {index_name}).items()}
+    return {"face_sizes": np.full(tri_row.size, 3, dtype=np.int64), "face_vertices": triangles.reshape(-1),
+            "face_lines": face_lines, "face_attributes": attributes, "collapsed_corners": 0, "reader_notes": notes}
+
+
+def strip_triangles(flat: np.ndarray, row_of: np.ndarray):
+    """The triangles of triangle strips, in strip order, alternate ones flipped to keep the orientation.
+
+    Triangle k of a strip is (v_k, v_k+1, v_k+2), or (v_k+1, v_k, v_k+2)
+    for odd k.  Degenerate triangles are kept (the caller drops them).
+
+    Parameters
+    ----------
+    flat : ndarray, shape (N,), int64
+        The strip rows' indices concatenated; -1 restarts a strip.
+    row_of : ndarray, shape (N,), int64
+        Row of each index (non-decreasing); each row starts a new strip.
+
+    Returns
+    -------
+    triangles : ndarray, shape (T, 3), int64
+    rows : ndarray, shape (T,), int64, the row of each triangle
+    """
+    new_row = np.flatnonzero(np.diff(row_of)) + 1
+    seq = np.insert(flat, new_row, -1)
+    seq_row = np.insert(row_of, new_row, -1)
+    brk = seq < 0
+    pos = np.arange(seq.size)
+    start = np.maximum.accumulate(np.where(brk, pos + 1, 0)) if seq.size else pos
+    i = np.flatnonzero(~brk[:-2] & ~brk[1:-1] & ~brk[2:])
+    odd = (i - start[i]) % 2 == 1
+    a, b = seq[i], seq[i + 1]
+    triangles = np.stack([np.where(odd, b, a), np.where(odd, a, b), seq[i + 2]], axis=1)
+    return triangles, seq_row[i]
+
+
+def _concatenate(path: str, faces: dict, strips: dict) -> dict:
+    """The face fields of the 'face' and 'tristrips' elements together (a property on only one is noted, not kept)."""
+    names = faces["face_attributes"].keys() & strips["face_attributes"].keys()
+    dropped = sorted((faces["face_attributes"].keys() | strips["face_attributes"].keys()) - names)
+    notes = faces["reader_notes"] + strips["reader_notes"]
+    if dropped:
+        notes.append(f"{path}: per-face properties {', '.join(dropped)} were not kept: each is on only one of the "
+                     "'face' and 'tristrips' elements")
+    lines = None if faces["face_lines"] is None else np.concatenate([faces["face_lines"], strips["face_lines"]])
+    return {"face_sizes": np.concatenate([faces["face_sizes"], strips["face_sizes"]]),
+            "face_vertices": np.concatenate([faces["face_vertices"], strips["face_vertices"]]),
+            "face_lines": lines, "collapsed_corners": faces["collapsed_corners"], "reader_notes": notes,
+            "face_attributes": {n: np.concatenate([faces["face_attributes"][n], strips["face_attributes"][n]])
+                                for n in sorted(names)}}
 
 
 def _check_indices(path: str, sizes, face_vertices, n_vert: int, rows: _Rows) -> None:
