@@ -12,7 +12,7 @@ from .evaluation.smoothness import measure_smoothness
 from .construction.surface import Surface, SurfaceOptions, build_surface
 from .evaluation.tessellate import tessellate
 from .io.meshes.read import read_mesh
-from .io.meshes.surface_data import surface_data, weld_surface_input
+from .io.meshes.surface_data import prepare_surface_input, surface_data
 
 
 def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False,
@@ -42,7 +42,7 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
         options["interpolate_vertices"] = True
     data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes,
                         creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags)
-    mesh, data = weld_surface_input(mesh, data, weld)
+    mesh, data = prepare_surface_input(mesh, data, weld)
     surface = Surface(mesh.face_sizes, mesh.face_vertices, data.points, SurfaceOptions(**options), **data.surface_kwargs())
     return surface, mesh
 

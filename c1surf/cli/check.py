@@ -10,8 +10,8 @@ from ..evaluation.smoothness import measure_smoothness
 from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
 from ..io.meshes.read import read_mesh
-from ..io.meshes.surface_data import weld_surface_input
-from .common import file_notes, friendly_errors, weld_notes
+from ..io.meshes.surface_data import prepare_surface_input
+from .common import dissolve_notes, file_notes, friendly_errors, weld_notes
 from .convert import build_or_fail, extension_setup
 from .options import extension_options, surface_options, weld_options, weld_tolerance
 
@@ -29,8 +29,8 @@ def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
         return load_patch_set(path)
     mesh = read_mesh(path)
     options, data = extension_setup(mesh, None, **shape)
-    mesh, data = weld_surface_input(mesh, data, weld)
-    for note in data.feature_notes + file_notes(mesh) + weld_notes(mesh.weld):
+    mesh, data = prepare_surface_input(mesh, data, weld)
+    for note in data.feature_notes + file_notes(mesh) + weld_notes(mesh.weld) + dissolve_notes(mesh):
         click.echo(f"c1surf: note: {note}", err=True)
     surface = build_or_fail(mesh, options, data)
     return surface_patch_set(surface, str(path))

@@ -55,7 +55,7 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
     notes = list(getattr(data, "feature_notes", [])) + file_notes(mesh_file)
     if getattr(mesh_file, "collapsed_corners", 0):
         notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
-    notes += weld_notes(getattr(mesh_file, "weld", None))
+    notes += weld_notes(getattr(mesh_file, "weld", None)) + dissolve_notes(mesh_file)
     if r.get("flipped_faces"):
         notes.append(f"flipped {r['flipped_faces']} faces to orient each connected component consistently")
     if r.get("non_orientable"):
@@ -64,12 +64,29 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
     if r.get("split_vertices"):
         notes.append(f"split {r['split_vertices']} pinched vertices into one vertex per fan of faces")
     # welding leaves the merged vertices unused: only the file's own unused vertices are news
-    unused = r.get("unused_vertices", 0) - getattr(getattr(mesh_file, "weld", None), "welded_vertices", 0)
+    unused = (r.get("unused_vertices", 0) - getattr(getattr(mesh_file, "weld", None), "welded_vertices", 0)
+              - len(getattr(mesh_file, "dissolved_vertices", ())))
     if unused > 0:
         notes.append(f"ignored {unused} vertices used by no face")
     if r.get("boundary_edges"):
         notes.append(f"open mesh: {r['boundary_edges']} boundary edges, closed for the construction by a ghost layer")
     return notes
+
+
+def dissolve_notes(mesh_file) -> list[str]:
+    """The notes on repeated faces dropped and interior valence-2 vertices dissolved (``mesh.valence_two``)."""
+    notes = []
+    if getattr(mesh_file, "repeated_faces", 0):
+        notes.append(f"dropped {mesh_file.repeated_faces} faces that repeat an earlier face (the same cycle again, or "
+                     "its reversal where the two make a closed two-sided card)")
+    dissolved = getattr(mesh_file, "dissolved_vertices", ())
+    if not len(dissolved):
+        return notes
+    base = 1 if str(mesh_file.path).lower().endswith(".obj") else 0
+    shown = ", ".join(str(int(v) + base) for v in dissolved[:8]) + (", ..." if len(dissolved) > 8 else "")
+    which = "as in the OBJ file, from 1" if base else "from 0"
+    return notes + [f"dissolved {len(dissolved)} interior vertices of valence 2 into the edges they split (vertices "
+                    f"{shown}, {which}): a 2-sided cell has no A3 filling; their faces lost that corner"]
 
 
 def weld_notes(weld) -> list[str]:

@@ -16,7 +16,7 @@ from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
 from ..io.patches.formats import write_surface_patches
 from ..io.patches.iges import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
-from ..io.meshes.surface_data import surface_data, weld_surface_input
+from ..io.meshes.surface_data import prepare_surface_input, surface_data
 from .curvature_ply import curvature_properties
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes, topology_failure
 from .options import extension_options, surface_options, weld_options, weld_tolerance
@@ -164,7 +164,7 @@ def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: P
     progress.phase(f"reading {input_path}")
     mesh = read_mesh(input_path)
     options, data = extension_setup(mesh, mesh_suffix, **shape)
-    mesh, data = weld_surface_input(mesh, data, weld)
+    mesh, data = prepare_surface_input(mesh, data, weld)
     progress.phase(f"building the surface of {mesh.n_faces} faces")
     surface = build_or_fail(mesh, options, data)
     echo_repair_notes(surface, mesh, quiet, data)

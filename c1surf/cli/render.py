@@ -16,7 +16,7 @@ from ..io.atomic import atomic_output
 from ..io.images.exr import write_exr
 from ..io.images.png import write_png
 from ..io.meshes.read import read_mesh
-from ..io.meshes.surface_data import weld_surface_input
+from ..io.meshes.surface_data import prepare_surface_input
 from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
 from ..render.camera import PROJECTIONS, VIEWS, frame_camera
@@ -63,10 +63,11 @@ def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Pro
         patches = load_patch_set(input_path)
     else:
         progress.phase(f"reading {input_path}")
-        mesh, _ = weld_surface_input(read_mesh(input_path), None, weld)
-        progress.phase(f"building the surface of {mesh.n_faces} faces")
+        mesh = read_mesh(input_path)
         features, notes = sharp_features(mesh)  # the file's own creases, corners and holes
-        data = SurfaceData(points=mesh.points, features=features, feature_notes=notes)
+        mesh, data = prepare_surface_input(mesh, SurfaceData(points=mesh.points, features=features, feature_notes=notes),
+                                           weld)
+        progress.phase(f"building the surface of {mesh.n_faces} faces")
         surface = build_or_fail(mesh, options, data)
         echo_repair_notes(surface, mesh, quiet, data)
         patches = surface_patch_set(surface, str(input_path))

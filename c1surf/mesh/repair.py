@@ -231,7 +231,8 @@ def check_valence(mesh: HalfEdgeMesh, vertex_source: np.ndarray) -> None:
         v = two[0]
         raise TopologyError(
             f"vertex {{0}} is an interior vertex of valence 2 ({two.size} such vertices): it makes a 2-sided cell "
-            "the construction cannot fill; merge its two faces or add an edge there",
+            "the construction cannot fill; merge its two faces or add an edge there (c1surf convert and "
+            "api.surface_from_file dissolve such vertices: mesh.valence_two)",
             np.unique(mesh.face[mesh.origin == v]),
             [vertex_source[v]],
         )

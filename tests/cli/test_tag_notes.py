@@ -96,3 +96,45 @@ def test_render_notes_the_tags_unless_quiet(tmp_path, tagged):
     assert result.exit_code == 0, result.output
     assert notes(result) == expected(tagged)
     assert notes(run("render", tagged, "-o", tmp_path / "b.exr", "--size", 16, "-q")) == []
+
+
+def test_a_creases_sidecar_does_what_the_same_tags_do(tmp_path):
+    plain = tmp_path / "plain.obj"
+    plain.write_text(CUBE)
+    tagged = tmp_path / "tagged.obj"
+    tagged.write_text(CUBE + "t crease 5/1/0 0 1 2 3 0 2.5\nt corner 1/1/0 6 10\nt hole 1/0/0 1\n")
+    sidecar = tmp_path / "creases.json"
+    sidecar.write_text('{"creases": [[0, 1, 2, 3, 0, 2.5]], "corners": [[6, 10]], "holes": [1]}')
+    assert run("convert", tagged, "-o", tmp_path / "a.obj", "-r", 2, "-q").exit_code == 0
+    assert run("convert", plain, "-o", tmp_path / "b.obj", "-r", 2, "-q", "--creases", sidecar).exit_code == 0
+    assert (tmp_path / "a.obj").read_bytes() == (tmp_path / "b.obj").read_bytes()
+
+
+@pytest.mark.parametrize("text,message", [
+    ('{"creases": [[0, 1]]}', "creases[0]: expected [vertex, vertex, ..., sharpness]"),
+    ('{"creases": [[0, 6, 1.0]]}', "crease pair 0 6 is not an edge of the mesh"),
+    ('{"corners": [[9, 1.0]]}', "corner names vertex 9 but the file has 8 vertices"),
+    ('{"holes": [6]}', "hole names face 6 but the file has 6 faces"),
+    ('{"edges": []}', 'expected a JSON object with the keys "creases", "corners" and "holes" only'),
+    ('{"creases": ', "not a JSON file"),
+])
+def test_a_bad_creases_sidecar_is_a_one_line_error(tmp_path, text, message):
+    plain = tmp_path / "plain.obj"
+    plain.write_text(CUBE)
+    sidecar = tmp_path / "creases.json"
+    sidecar.write_text(text)
+    result = run("convert", plain, "-o", tmp_path / "out.obj", "--creases", sidecar)
+    assert result.exit_code == 1 and not (tmp_path / "out.obj").exists()
+    [line] = result.stderr.strip().splitlines()
+    assert line.startswith(f"c1surf: error: {sidecar}") and message in line
+
+
+def test_crease_angle_makes_the_cube_edges_creases(tmp_path):
+    plain = tmp_path / "plain.obj"
+    plain.write_text(CUBE)
+    result = run("convert", plain, "-o", tmp_path / "sharp.obj", "-r", 2, "--crease-angle", 40)
+    assert result.exit_code == 0, result.output
+    assert "--crease-angle 40: 12 edges with a dihedral angle above it are creases" in result.stderr
+    run("convert", plain, "-o", tmp_path / "smooth.obj", "-r", 2, "-q")
+    assert (tmp_path / "sharp.obj").read_bytes() != (tmp_path / "smooth.obj").read_bytes()
+    assert "G1: yes" in run("check", plain, "--crease-angle", 40).stdout

@@ -18,12 +18,10 @@ from conftest import SHARED_MESHES, shared_mesh
 
 OPENSUBDIV = SHARED_MESHES / "opensubdiv"
 TAGGED = sorted(p.name for p in OPENSUBDIV.glob("*.obj") if any(line.startswith("t ") for line in p.open()))
-# Refused before any tag matters, for the reasons the corpus test documents (non-manifold edges and
-# interior valence-2 vertices: the real-meshes issue; a face with fewer than 3 distinct vertices).
+# Refused before any tag matters, for the reasons the corpus test documents (non-manifold edges: the
+# real-meshes issue; a face with fewer than 3 distinct vertices).
 REFUSED = {"catmark_fan.obj": "shared by 3 faces", "catmark_nonman_edge100.obj": "shared by 100 faces",
-           "catmark_nonman_edges.obj": "fewer than 3 distinct vertices", "catmark_val2_nonman.obj": "shared by 4 faces",
-           "catmark_val2_back2back.obj": "valence 2", "catmark_val2_foldover.obj": "valence 2",
-           "catmark_val2_interior.obj": "valence 2"}
+           "catmark_nonman_edges.obj": "fewer than 3 distinct vertices"}
 
 
 def cube_edges(mesh) -> np.ndarray:

@@ -16,7 +16,7 @@ import click
 import numpy as np
 
 from ...construction.topology import build_topology
-from ...io.meshes.surface_data import SurfaceData
+from ...io.meshes.surface_data import SurfaceData, prepare_surface_input
 from ...io.meshes.tags.features import sharp_features
 from ...evaluation.adjacency import patch_adjacency
 from ...io.errors import MeshInputError
@@ -71,8 +71,15 @@ def inspection(path, resolution: int, refinements) -> dict:
     stats = mesh_statistics(*usable_faces(mesh.face_sizes, mesh.face_vertices), mesh.n_vertices)
     topology, repairs = None, None
     features, feature_notes = sharp_features(mesh)  # the file's tags, as convert honours them
+    data = SurfaceData(mesh.points, features=features, feature_notes=feature_notes)
+    built = mesh
     if refusal is None:
-        topology, repairs, refusal = plan(mesh, refinements, features)
+        try:  # welded and with its valence-2 vertices dissolved, as convert builds it
+            built, data = prepare_surface_input(mesh, data, 0.0)
+        except MeshInputError as e:
+            refusal = str(e)
+    if refusal is None:
+        topology, repairs, refusal = plan(built, refinements, data.features)
     outputs = None
     if topology is not None:
         outputs = output_sizes(topology, resolution)
@@ -89,8 +96,7 @@ def inspection(path, resolution: int, refinements) -> dict:
         "collapsed_corners": int(mesh.collapsed_corners),
         "tags": tags_dict(mesh.tags),
         "repairs": repairs,
-        "notes": repair_notes(topology, mesh, SurfaceData(mesh.points, feature_notes=feature_notes))
-                 if topology is not None else feature_notes,
+        "notes": repair_notes(topology, built, data) if topology is not None else data.feature_notes,
         "refused": refusal,
         "patches": None if topology is None else patch_counts(topology),
         "output": outputs,

@@ -6,6 +6,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ...mesh.duplicate_faces import repeated_faces
+from ...mesh.valence_two import dissolve_valence_two
 from ...mesh.weld import collapse_repeated_corners, weld_vertices
 from ..errors import MeshInputError
 from .tags.record import SharpTags
@@ -62,6 +64,10 @@ class MeshFile:
         Repeated corners (``f a b c c``) the reader dropped.
     weld : WeldReport or None
         What ``weld_mesh_file`` changed; None for a mesh as read.
+    dissolved_vertices : ndarray, shape (k,), int64
+        Interior valence-2 vertices taken out of their faces (``dissolve_mesh_file``).
+    repeated_faces : int
+        Faces dropped as later copies of another face (``drop_repeated_faces``, ``mesh.duplicate_faces``).
     reader_notes : list of str
         One line each on input the reader ignored or dropped (OBJ ``l``/``p``
         records, ``vt``/``vn`` indices that name no record, degenerate PLY
@@ -85,6 +91,8 @@ class MeshFile:
     tags: SharpTags = field(default_factory=SharpTags)
     weld: "WeldReport | None" = None
     reader_notes: list[str] = field(default_factory=list)
+    dissolved_vertices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    repeated_faces: int = 0
 
     @property
     def n_vertices(self) -> int:
@@ -123,6 +131,52 @@ class WeldReport:
     welded_vertices: int = 0
     unwelded_vertices: int = 0
     dropped_faces: int = 0
+
+
+def drop_repeated_faces(mesh: MeshFile):
+    """The mesh without faces that repeat an earlier face (``mesh.duplicate_faces.repeated_faces``).
+
+    Returns
+    -------
+    mesh : MeshFile with ``repeated_faces`` set (per-face data of the dropped faces removed)
+    kept_faces : (F,) bool
+    """
+    repeated = repeated_faces(mesh.face_sizes, mesh.face_vertices)
+    kept = ~repeated
+    if not repeated.any():
+        return mesh, kept
+    return _keep_faces(mesh, kept, mesh.face_vertices[np.repeat(kept, mesh.face_sizes)], mesh.face_sizes[kept],
+                       repeated_faces=int(repeated.sum())), kept
+
+
+def _keep_faces(mesh: MeshFile, kept: np.ndarray, face_vertices: np.ndarray, face_sizes: np.ndarray, **fields) -> MeshFile:
+    """``mesh`` with new faces, the per-face data of the faces ``kept`` (F,) bool, and ``fields`` set."""
+    per_face = {name: None if values is None else values[kept]
+                for name, values in (("face_lines", mesh.face_lines), ("face_groups", mesh.face_groups))}
+    return replace(mesh, face_sizes=face_sizes, face_vertices=face_vertices, **per_face,
+                   face_attributes={k: v[kept] for k, v in mesh.face_attributes.items()}, **fields)
+
+
+def dissolve_mesh_file(mesh: MeshFile):
+    """The mesh with its interior valence-2 vertices dissolved (``mesh.valence_two.dissolve_valence_two``).
+
+    Returns
+    -------
+    mesh : MeshFile with ``dissolved_vertices`` set (per-face data of dropped faces removed)
+    kept_faces : (F,) bool, which faces remain
+
+    Raises
+    ------
+    MeshInputError when no face is left (back-to-back face pairs)
+    """
+    sizes, vertices, kept, dissolved = dissolve_valence_two(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices)
+    if dissolved.size == 0:
+        return mesh, kept
+    if sizes.size == 0:
+        raise MeshInputError(mesh.path, f"every vertex is an interior vertex of valence 2 ({dissolved.size}): the faces "
+                             "are back-to-back pairs (each face listed with both orientations), which enclose nothing "
+                             "to smooth")
+    return _keep_faces(mesh, kept, vertices, sizes, dissolved_vertices=dissolved), kept
 
 
 def weld_mesh_file(mesh: MeshFile, tolerance: float = 0.0, keys: np.ndarray | None = None):

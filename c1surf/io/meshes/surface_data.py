@@ -22,7 +22,6 @@ extensions of the paper use (``core.surface.Surface`` arguments):
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -30,8 +29,8 @@ import numpy as np
 from ..errors import MeshInputError
 from ...construction.features import SharpFeatures
 from ...mesh.weld import coincident_representatives
-from .mesh_file import MeshFile, weld_mesh_file
-from .tags.features import sharp_features
+from .mesh_file import MeshFile, dissolve_mesh_file, drop_repeated_faces, weld_mesh_file
+from .tags.features import read_sidecar_json, sharp_features
 from .tags.record import mesh_edge_keys
 
 COLOUR_NAMES = ("red", "green", "blue", "alpha")
@@ -94,15 +93,7 @@ def read_blend_file(path, mesh: MeshFile):
     vertex_blend : (V,) float, NaN where unset, or None when the file names no vertices
     """
     path = str(path)
-    try:
-        with open(path, encoding="utf-8") as f:
-            doc = json.load(f)
-    except FileNotFoundError:
-        raise MeshInputError(path, "no such file: check the --blend-file path") from None
-    except IsADirectoryError:
-        raise MeshInputError(path, "is a directory, not a blend-ratio file") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise MeshInputError(path, f"not a JSON file ({e})", getattr(e, "lineno", None)) from None
+    doc = read_sidecar_json(path, "--blend-file", "a blend-ratio file")
     if not isinstance(doc, dict):
         raise MeshInputError(path, 'expected a JSON object like {"faces": {...}, "vertices": {...}}')
     unknown = set(doc) - {"default", "faces", "vertices"}
@@ -216,6 +207,97 @@ def weld_surface_input(mesh: MeshFile, data: SurfaceData | None, tolerance: floa
     return welded, data
 
 
+def prepare_surface_input(mesh: MeshFile, data: SurfaceData | None, weld: float | None):
+    """``mesh`` and ``data`` as the construction takes them: welded (``weld_surface_input``), without
+    repeated faces (``drop_repeated_surface_faces``), with its interior valence-2 vertices dissolved
+    (``dissolve_surface_input``)."""
+    return dissolve_surface_input(*drop_repeated_surface_faces(*weld_surface_input(mesh, data, weld)))
+
+
+def drop_repeated_surface_faces(mesh: MeshFile, data: SurfaceData | None):
+    """Drop faces that repeat an earlier one (``mesh_file.drop_repeated_faces``); per-face data and holes follow."""
+    dropped, kept = drop_repeated_faces(mesh)
+    if dropped is mesh:
+        return mesh, data
+    return dropped, _faces_kept(data, kept)
+
+
+def _faces_kept(data: SurfaceData | None, kept: np.ndarray) -> SurfaceData | None:
+    """``data`` for the faces ``kept`` (F,) bool: per-face blend ratios and hole faces follow them."""
+    if data is None:
+        return None
+    if data.face_blend is not None:
+        data = replace(data, face_blend=data.face_blend[kept])
+    f = data.features
+    if f is not None and f.hole_faces.size:
+        holes = f.hole_faces[kept[f.hole_faces]]
+        f = SharpFeatures(f.crease_edges, f.crease_sharpness, f.corner_vertices, f.corner_sharpness,
+                          (np.cumsum(kept) - 1)[holes])
+        data = replace(data, features=None if f.is_empty() else f)
+    return data
+
+
+def dissolve_surface_input(mesh: MeshFile, data: SurfaceData | None):
+    """Dissolve the interior valence-2 vertices of ``mesh`` (``mesh_file.dissolve_mesh_file``); ``data`` follows.
+
+    Per-face data follows the faces kept; a crease on either edge of a dissolved vertex
+    becomes a crease of the edge that replaces them (the larger sharpness); a hole on a
+    dropped face and a corner on a dissolved vertex are named in a note.
+    """
+    dissolved, kept = dissolve_mesh_file(mesh)
+    if dissolved is mesh:
+        return mesh, data
+    if data is not None and data.face_blend is not None:
+        data = replace(data, face_blend=data.face_blend[kept])
+    if data is not None and data.features is not None:
+        data = _dissolved_features(data, mesh, dissolved, kept)
+    return dissolved, data
+
+
+def _dissolved_features(data: SurfaceData, mesh: MeshFile, dissolved: MeshFile, kept: np.ndarray) -> SurfaceData:
+    """``data``'s sharp features on the mesh without its dissolved vertices (``dissolve_surface_input``)."""
+    f = data.features
+    gone = np.zeros(mesh.n_vertices, dtype=bool)
+    gone[dissolved.dissolved_vertices] = True
+    edges, sharpness = f.crease_edges, f.crease_sharpness
+    touched = gone[edges].any(axis=1)
+    # a dissolved vertex's two edges a - v - b: replace each creased one by a - b
+    ends = _chain_ends(mesh, gone, edges[touched])
+    edges = np.concatenate([edges[~touched], ends])
+    sharpness = np.concatenate([sharpness[~touched], sharpness[touched]])
+    valid = (edges >= 0).all(axis=1)
+    corners = ~gone[f.corner_vertices]
+    holes = f.hole_faces[kept[f.hole_faces]]
+    features = SharpFeatures(edges[valid], sharpness[valid], f.corner_vertices[corners], f.corner_sharpness[corners],
+                             (np.cumsum(kept) - 1)[holes])
+    notes = list(data.feature_notes)
+    lost = int((~corners).sum()), int(f.hole_faces.size - holes.size)
+    if any(lost):
+        notes.append(f"{mesh.path}: {lost[0]} corners on dissolved valence-2 vertices and {lost[1]} holes on "
+                     "faces they left with two corners are not used")
+    return replace(data, features=None if features.is_empty() else features, feature_notes=notes)
+
+
+def _chain_ends(mesh: MeshFile, gone: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """(k, 2) int, sorted rows: for each edge with a dissolved end, the kept ends a, b of its run a - v.. - b."""
+    sizes = np.asarray(mesh.face_sizes, dtype=np.int64)
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    face = np.repeat(np.arange(sizes.size), sizes)
+    local = np.arange(offsets[-1]) - offsets[face]
+    following = offsets[face] + (local + 1) % sizes[face]
+    before = offsets[face] + (local - 1) % sizes[face]
+    fv = np.asarray(mesh.face_vertices, dtype=np.int64)
+    ahead, back = following.copy(), before.copy()  # the next and previous kept corner of every corner
+    for _ in range(int(sizes.max(initial=0))):  # a run is shorter than its face
+        ahead = np.where(gone[fv[ahead]], following[ahead], ahead)
+        back = np.where(gone[fv[back]], before[back], back)
+    run = np.zeros((mesh.n_vertices, 2), dtype=np.int64)
+    corners = np.flatnonzero(gone[fv])
+    run[fv[corners]] = np.sort(np.stack([fv[back[corners]], fv[ahead[corners]]], axis=1), axis=1)
+    dissolved_end = np.where(gone[edges[:, 1]], edges[:, 1], edges[:, 0])
+    return run[dissolved_end]
+
+
 def _welded_features(data: SurfaceData, mesh: MeshFile, welded: MeshFile, kept: np.ndarray, representative: np.ndarray):
     """``data`` with its sharp features renumbered for the welded mesh, and a note on any that welding lost.
 
@@ -307,4 +389,4 @@ def _attribute_columns(mesh: MeshFile):
     return np.where(used[:, None], extra, 0.0), names, colour_scale
 
 
-__all__ = ["SurfaceData", "surface_data", "weld_surface_input", "read_blend_file", "COLOUR_NAMES"]
+__all__ = ["SurfaceData", "surface_data", "weld_surface_input", "dissolve_surface_input", "prepare_surface_input", "read_blend_file", "COLOUR_NAMES"]

@@ -25,7 +25,7 @@ from ....mesh.feature_edges import feature_edges
 from ...errors import MeshInputError
 from .record import SharpTags, check_tags
 
-__all__ = ["sharp_features", "read_creases_file", "feature_notes"]
+__all__ = ["sharp_features", "read_creases_file", "read_sidecar_json", "feature_notes"]
 
 OTHER_TAGS = {
     "creasemethod": "c1surf's own crease rule is used (stencils.creases)",
@@ -96,6 +96,19 @@ def feature_notes(path, tags: SharpTags, ignore_tags: bool) -> list[str]:
     return [f"{path}: " + "; ".join(parts)]
 
 
+def read_sidecar_json(path: str, option: str, what: str):
+    """The JSON document of a sidecar file given with ``option``; one-line MeshInputError when unreadable."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except FileNotFoundError:
+        raise MeshInputError(path, f"no such file: check the {option} path") from None
+    except IsADirectoryError:
+        raise MeshInputError(path, f"is a directory, not {what}") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as e:
+        raise MeshInputError(path, f"not a JSON file ({e})", getattr(e, "lineno", None)) from None
+
+
 def read_creases_file(path, mesh) -> SharpFeatures:
     """Read a JSON sidecar of creases, corners and holes for ``mesh`` (module docstring), checked against it.
 
@@ -104,15 +117,7 @@ def read_creases_file(path, mesh) -> SharpFeatures:
     MeshInputError, one line naming the entry that is wrong
     """
     path = str(path)
-    try:
-        with open(path, encoding="utf-8") as f:
-            doc = json.load(f)
-    except FileNotFoundError:
-        raise MeshInputError(path, "no such file: check the --creases path") from None
-    except IsADirectoryError:
-        raise MeshInputError(path, "is a directory, not a creases file") from None
-    except (UnicodeDecodeError, json.JSONDecodeError) as e:
-        raise MeshInputError(path, f"not a JSON file ({e})", getattr(e, "lineno", None)) from None
+    doc = read_sidecar_json(path, "--creases", "a creases file")
     if not isinstance(doc, dict) or set(doc) - {"creases", "corners", "holes"}:
         raise MeshInputError(path, 'expected a JSON object with the keys "creases", "corners" and "holes" only')
     edges, edge_sharpness = [], []
