@@ -134,10 +134,10 @@ def coarse_sharpness(mesh, vertex_source: np.ndarray, features: SharpFeatures) -
     slot = np.clip(np.searchsorted(unique_keys, keys), 0, max(unique_keys.size - 1, 0))
     found = (keys >= 0) & (unique_keys.size > 0) & (unique_keys[slot] == keys) if unique_keys.size else np.zeros(keys.size, bool)
     halfedge = np.where(found, largest[slot] if largest.size else 0.0, 0.0)
-    return CoarseSharpness(halfedge, _corner_sharpness(mesh, source, halfedge, features))
+    return CoarseSharpness(halfedge, _corner_sharpness(mesh, source, halfedge, features, n_input))
 
 
-def _corner_sharpness(mesh, source: np.ndarray, halfedge: np.ndarray, features: SharpFeatures) -> np.ndarray:
+def _corner_sharpness(mesh, source: np.ndarray, halfedge: np.ndarray, features: SharpFeatures, n_input: int) -> np.ndarray:
     """(V,) float: tagged corners, and vertices on three or more sharp edges (the mean of theirs)."""
     # each undirected edge once: the half-edge with a twin only from its smaller index, boundary ones always
     once = (mesh.twin < 0) | (np.arange(mesh.n_halfedges) < mesh.twin)
@@ -147,7 +147,7 @@ def _corner_sharpness(mesh, source: np.ndarray, halfedge: np.ndarray, features: 
     count = np.bincount(ends, minlength=mesh.n_vertices)
     total = np.bincount(ends, weights=values, minlength=mesh.n_vertices)
     vertex = np.where(count >= 3, total / np.maximum(count, 1), 0.0)
-    tagged = np.zeros(int(source.max(initial=-1)) + 2 + int(features.corner_vertices.max(initial=0)))
+    tagged = np.zeros(n_input)  # per input vertex
     np.maximum.at(tagged, features.corner_vertices, np.minimum(features.corner_sharpness, INFINITELY_SHARP))
     real = source >= 0
     vertex[real] = np.maximum(vertex[real], tagged[source[real]])
