@@ -36,28 +36,47 @@ def main():
                "--range", "0", "10")
     broken_pair(HERE / "misprint_zebra.png")
     crease_strip(HERE / "crease_sharpness.png")
+    valence_two_diagram(HERE / "valence_two.png")
 
 
-def crease_strip(path):
-    """The sample cube with its 12 edges tagged as creases of sharpness 0, 0.5, 1, 2 and 10, side by side."""
-    import tempfile
-
-    cube = (ROOT / "sample_meshes" / "cube.obj").read_text()
-    faces = [[int(v) - 1 for v in line.split()[1:]] for line in cube.splitlines() if line.startswith("f ")]
-    edges = sorted({tuple(sorted((f[i], f[(i + 1) % 4]))) for f in faces for i in range(4)})
-    tiles = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for s in (0, 0.5, 1, 2, 10):
-            mesh = Path(tmp) / f"cube_{s}.obj"
-            mesh.write_text(cube + "".join(f"t crease 2/1/0 {a} {b} {s}\n" for a, b in edges))
-            png = Path(tmp) / f"cube_{s}.png"
-            c1surf("render", mesh, "--png", png, "--size", "220x200", "--range", "0", "8")
-            tiles.append((Image.open(png).convert("RGB"), f"sharpness {s:g}"))
-    out = Image.new("RGB", (5 * 220, 220), (255, 255, 255))
+def valence_two_diagram(path):
+    """The valence-2 rule (mesh/valence_two.py) drawn: v between two quads, and v between a face and a triangle."""
+    out = Image.new("RGB", (780, 230), (255, 255, 255))
     draw = ImageDraw.Draw(out)
-    for k, (tile, label) in enumerate(tiles):
-        out.paste(tile, (k * 220, 20))
-        draw.text((k * 220 + 6, 4), label, fill=(0, 0, 0))
+    blue, orange, yellow, ink, red = (170, 200, 235), (245, 200, 150), (250, 230, 110), (40, 40, 40), (200, 30, 30)
+
+    def polygon(points, dx, fill):
+        draw.polygon([(x + dx, y) for x, y in points], fill=fill, outline=ink)
+
+    def dot(point, dx, label, colour=ink):
+        x, y = point[0] + dx, point[1]
+        draw.ellipse((x - 4, y - 4, x + 4, y + 4), fill=colour)
+        draw.text((x + 6, y - 14), label, fill=colour)
+
+    a, b = (90, 40), (90, 180)
+    # v on the edge a - b between two quads: both faces lose v and share a - b
+    v = (90, 110)
+    polygon([(20, 40), a, v, b, (20, 180)], 0, blue)
+    polygon([a, (160, 40), (160, 180), b, v], 0, orange)
+    polygon([(20, 40), a, b, (20, 180)], 190, blue)
+    polygon([a, (160, 40), (160, 180), b], 190, orange)
+    # v off the edge, in the left face and in a triangle a, v, b: the triangle would keep two corners,
+    # so it goes, and the left face meets the right one along a - b
+    w = (55, 110)
+    polygon([(10, 40), a, w, b, (10, 180)], 400, blue)
+    polygon([a, b, w][::-1], 400, yellow)
+    polygon([a, (160, 40), (160, 180), b], 400, orange)
+    polygon([(10, 40), a, b, (10, 180)], 590, blue)
+    polygon([a, (160, 40), (160, 180), b], 590, orange)
+    for dx, point in ((0, v), (400, w)):
+        dot(point, dx, "v", red)
+    for dx in (0, 190, 400, 590):
+        dot(a, dx, "a")
+        dot(b, dx, "b")
+    for dx in (170, 570):
+        draw.text((dx, 102), "->", fill=(0, 0, 0))
+    draw.text((10, 200), "v in two quads: out of both, they share a - b", fill=(0, 0, 0))
+    draw.text((400, 200), "v in a face and a triangle a, v, b: the triangle goes", fill=(0, 0, 0))
     out.save(path, optimize=True)
 
 
