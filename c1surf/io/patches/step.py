@@ -158,6 +158,7 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
 
     faces = bspline_faces(patch_set.merged) + bezier_faces(*uncovered_groups(patch_set))
     points = np.concatenate([np.asarray(g, dtype=np.float64)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)])
+    _check_range(path, points)
     shape, _ = sewn_shape(faces, points)
     name = file_name or os.path.basename(os.fspath(path))
     Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
@@ -170,10 +171,42 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
         header.SetName(TCollection_HAsciiString(name))
         header.SetTimeStamp(TCollection_HAsciiString("1970-01-01T00:00:00"))
         header.SetOriginatingSystem(TCollection_HAsciiString("c1surf"))
-        status = writer.Write(os.fspath(path))
-    if status != IFSelect_RetDone:
+        text = _step_text(writer)
+    if text is None:
         raise OutputError(path, "Open CASCADE could not write the STEP file")
+    with open(path, "wb") as f:
+        f.write(text)
     _fix_header(path, name)
+
+
+def _check_range(path, points: np.ndarray) -> None:
+    """Refuse coordinates that are not finite or of magnitude 1e100 and more (a 3-digit exponent overflows Open CASCADE's number buffer)."""
+    if points.size and not np.abs(points).max() < 1e100:  # also catches nan
+        from ..errors import OutputError
+
+        raise OutputError(path, "STEP output needs finite coordinates below 1e100 in magnitude")
+
+
+def _step_text(writer) -> bytes | None:
+    """The STEP file of ``writer``'s model, every real with 17 significant digits (None if Open CASCADE fails).
+
+    ``STEPControl_Writer.Write`` prints reals with 12 digits; this does what it
+    does (``StepSelect_WorkLibrary::WriteFile``: a ``StepData_StepWriter`` on the
+    model, ``SendModel``, ``Print``) with the float format ``%.16E``, so every
+    double reads back to the same bits. Magnitudes below 1e-99 take ``%.15E``:
+    their 3-digit exponent would not fit Open CASCADE's 24-character buffer.
+    """
+    import io
+
+    from OCP.StepData import StepData_StepWriter
+
+    step_writer = StepData_StepWriter(writer.Model())
+    floats = step_writer.FloatWriter()
+    floats.SetFormat("%.16E")  # resets the range format and the zero suppression (which cuts long numbers)
+    floats.SetFormatForRange("%.15E", 0.0, 1e-99)
+    step_writer.SendModel(writer.WS().Protocol())
+    buffer = io.BytesIO()
+    return buffer.getvalue() if step_writer.Print(buffer) else None
 
 
 @contextlib.contextmanager
