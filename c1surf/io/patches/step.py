@@ -283,7 +283,8 @@ def _patch_set(path, by_shape: dict, pieces: list) -> PatchSet:
     rational = any(not np.all(w == w.flat[0]) for w in weights)
     if not rational:
         pieces = [MergedPiece(p.points, None, p.knots_u, p.knots_v, p.patches, p.rotation) for p in pieces]
-    header = {"format": "step", "input": {"path": str(path)}, "counts": {"patches": int(sum(len(g) for g in groups))}}
+    header = {"format": "step", "input": {"path": str(path)}, "counts": {"patches": int(sum(len(g) for g in groups))},
+              "ordered": False}  # faces come in shell order, not in patch order: diff pairs them by their centres
     return PatchSet(groups, None, None, None, header, weights if rational else None, pieces)
 
 
