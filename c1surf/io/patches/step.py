@@ -7,7 +7,14 @@ B-spline surface (``Geom_BSplineSurface``), in place of the patches it
 stands for. The faces are sewn (``BRepBuilderAPI_Sewing``, tolerance 1e-7
 of the bounding-box diagonal); where that gives one closed shell (closed
 input) the file holds the solid it bounds, otherwise the sewn shell(s). The
-header's time stamp is fixed, so the output is reproducible.
+header's time stamp is fixed, so the output is reproducible. Every real is
+written with 17 significant digits (``_step_text``), so the doubles come back.
+
+Reading (``read_patch_set_step``, ``c1surf check`` / ``measure`` / ``diff`` /
+``tessellate``) takes every face back: a Bezier span is a patch of its
+degree, a merged B-spline piece a ``PatchSet.merged`` entry with its patches
+cut out again (as the IGES reader does), a reversed face has u and v
+swapped; other surfaces and trimmed faces are refused with one line.
 """
 from __future__ import annotations
 
