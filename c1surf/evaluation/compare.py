@@ -9,12 +9,20 @@ input (Euclidean distance), and weights by ``tolerance`` times the first's
 largest weight. The differences are listed the way ``tests/test_golden.py``
 does: the patch (its kind and source when the file records one), the
 coefficient index, where it was and where it went, how far it moved.
+
+A file that does not keep the patch order (a STEP file: faces in shell order;
+its reader sets ``header["ordered"] = False``) is compared after pairing its
+patches with the other's, degree run by degree run, by their centres
+(``paired``); a patch keeps its own (u, v), so a turned one counts as moved.
 """
 from __future__ import annotations
 
+import dataclasses
+import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from .patch_set import KIND_BY_DEGREE, PatchSet
 
@@ -152,6 +160,8 @@ def compare_patch_sets(a: PatchSet, b: PatchSet, tolerance: float = 1e-12, show:
     structural = patch_structure(a, b, show)
     if structural:
         return Comparison(structural, tolerance=tolerance)
+    if not (a.header.get("ordered", True) and b.header.get("ordered", True)):
+        b = paired(a, b)
     diagonal = bbox_diagonal(np.concatenate([g[..., :3].reshape(-1, 3) for g in a.groups] or [np.zeros((0, 3))]))
     labels, found = patch_labels(a), []
     starts = np.cumsum([0] + [len(g) for g in a.groups])
@@ -165,6 +175,38 @@ def compare_patch_sets(a: PatchSet, b: PatchSet, tolerance: float = 1e-12, show:
                           "the largest weight"))
     comparison = _collect(found, labels, tolerance, show)
     return _with_merged(comparison, a, b, diagonal, show)
+
+
+def patch_centres(group: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+    """Points at (u, v) = (1/2, 1/2) of Bezier patches (p, du+1, dv+1, >= 3), rational with weights (p, du+1, dv+1).
+
+    The same for a patch turned or transposed in its parameter square. Returns (p, 3) float.
+    """
+    du, dv = group.shape[1] - 1, group.shape[2] - 1
+    bu, bv = (np.array([math.comb(d, i) for i in range(d + 1)]) / 2.0**d for d in (du, dv))
+    w = np.ones(group.shape[:3]) if weights is None else weights
+    wb = w * bu[:, None] * bv[None, :]  # (p, du+1, dv+1)
+    return np.einsum("pij,pijc->pc", wb, group[..., :3]) / wb.sum(axis=(1, 2))[:, None]
+
+
+def paired(a: PatchSet, b: PatchSet) -> PatchSet:
+    """``b`` with the patches of each degree run in the order of ``a``'s, paired by their centres.
+
+    A run whose centres do not pair one to one (nearest centres) is left in
+    ``b``'s order. ``a`` and ``b`` must have the same runs (``patch_structure``).
+    """
+    groups, weights = list(b.groups), None if b.weights is None else list(b.weights)
+    for k, (p, q) in enumerate(zip(a.groups, b.groups)):
+        if not len(p):
+            continue
+        centres_a = patch_centres(p, None if a.weights is None else a.weights[k])
+        centres_b = patch_centres(q, None if b.weights is None else b.weights[k])
+        _, order = cKDTree(centres_b).query(centres_a)
+        if np.array_equal(np.sort(order), np.arange(len(q))):
+            groups[k] = q[order]
+            if weights is not None:
+                weights[k] = weights[k][order]
+    return dataclasses.replace(b, groups=groups, weights=weights)
 
 
 def _collect(found, labels, tolerance: float, show: int) -> Comparison:
@@ -236,5 +278,5 @@ def compare_meshes(points_a, sizes_a, vertices_a, points_b, sizes_b, vertices_b,
     return _collect(found, [f"vertex {v}" for v in range(len(points_a))], tolerance, show)
 
 
-__all__ = ["Comparison", "compare_patch_sets", "compare_meshes", "patch_structure", "mesh_structure", "largest_moves",
+__all__ = ["Comparison", "compare_patch_sets", "paired", "patch_centres", "compare_meshes", "patch_structure", "mesh_structure", "largest_moves",
            "bbox_diagonal", "patch_labels", "SHOW"]

@@ -142,6 +142,7 @@ PATCH_READERS = FormatTable("patch format", "reads", [
     Format((".json",), _PATCHES + "json_patches:read_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
     Format((".npz",), _PATCHES + "npz:read_patch_set_npz", "c1surf patch file as NumPy arrays"),
     Format((".igs", ".iges"), _PATCHES + "iges:read_patch_set_iges", "IGES 5.3 Bezier patches and merged B-splines"),
+    Format((".step", ".stp"), _PATCHES + "step:read_patch_set_step", "STEP Bezier and merged B-spline faces (Open CASCADE)"),
 ])
 
 PATCH_WRITERS = FormatTable("patch format", "writes", [

@@ -200,7 +200,9 @@ def test_tessellate_errors_are_one_line(tmp_path):
         assert code == 1 and len(lines) == 1, lines
         assert lines[0].startswith(f"c1surf: error: {path}") and words in lines[0], lines
     assert not (tmp_path / "x.obj").exists()
-    code, lines = one_line(tmp_path, "tessellate", tmp_path / "x.step", "-o", tmp_path / "x.obj")
+    code, lines = one_line(tmp_path, "tessellate", tmp_path / "x.step", "-o", tmp_path / "x.obj")  # STEP is read now
+    assert code == 1 and len(lines) == 1 and lines[0] == f"c1surf: error: {tmp_path / 'x.step'}: no such file", lines
+    code, lines = one_line(tmp_path, "tessellate", tmp_path / "x.3dm", "-o", tmp_path / "x.obj")
     assert code == 2
 
 

@@ -7,7 +7,14 @@ B-spline surface (``Geom_BSplineSurface``), in place of the patches it
 stands for. The faces are sewn (``BRepBuilderAPI_Sewing``, tolerance 1e-7
 of the bounding-box diagonal); where that gives one closed shell (closed
 input) the file holds the solid it bounds, otherwise the sewn shell(s). The
-header's time stamp is fixed, so the output is reproducible.
+header's time stamp is fixed, so the output is reproducible. Every real is
+written with 17 significant digits (``_step_text``), so the doubles come back.
+
+Reading (``read_patch_set_step``, ``c1surf check`` / ``measure`` / ``diff`` /
+``tessellate``) takes every face back: a Bezier span is a patch of its
+degree, a merged B-spline piece a ``PatchSet.merged`` entry with its patches
+cut out again (as the IGES reader does), a reversed face has u and v
+swapped; other surfaces and trimmed faces are refused with one line.
 """
 from __future__ import annotations
 
@@ -18,10 +25,14 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from .merged import uncovered_groups
+from ...evaluation.merge import MergedPiece
+from ...evaluation.patch_set import PatchSet
+from ..errors import MeshInputError
+from .merged import is_piece_knots, piece_patches, uncovered_groups
 
 SEWING_TOLERANCE = 1e-7  # relative to the bounding-box diagonal of the control points
 _CAD_HINT = "STEP output needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
+_READ_HINT = "reading STEP needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
 
 
 def _ocp() -> SimpleNamespace:
@@ -147,6 +158,15 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
     Weights make rational faces; merged pieces are written as B-spline faces
     in place of their patches. Other formats' options (IGES units, ...) do not apply.
     """
+    faces = bspline_faces(patch_set.merged) + bezier_faces(*uncovered_groups(patch_set))
+    points = np.concatenate([np.asarray(g, dtype=np.float64)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)])
+    _check_range(path, points)
+    shape, _ = sewn_shape(faces, points)
+    write_step_shape(path, shape, file_name or os.path.basename(os.fspath(path)))
+
+
+def write_step_shape(path, shape, name: str) -> None:
+    """Write an Open CASCADE shape as STEP AP214 with full precision and a reproducible header named ``name``."""
     _ocp()
     from OCP.APIHeaderSection import APIHeaderSection_MakeHeader
     from OCP.IFSelect import IFSelect_RetDone
@@ -156,10 +176,6 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
 
     from ..errors import OutputError
 
-    faces = bspline_faces(patch_set.merged) + bezier_faces(*uncovered_groups(patch_set))
-    points = np.concatenate([np.asarray(g, dtype=np.float64)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)])
-    shape, _ = sewn_shape(faces, points)
-    name = file_name or os.path.basename(os.fspath(path))
     Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
     Interface_Static.SetCVal_s("write.step.unit", "MM")
     with _quiet_stdout():  # Open CASCADE prints transfer statistics on stdout
@@ -170,10 +186,203 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
         header.SetName(TCollection_HAsciiString(name))
         header.SetTimeStamp(TCollection_HAsciiString("1970-01-01T00:00:00"))
         header.SetOriginatingSystem(TCollection_HAsciiString("c1surf"))
-        status = writer.Write(os.fspath(path))
-    if status != IFSelect_RetDone:
+        text = _step_text(writer)
+    if text is None:
         raise OutputError(path, "Open CASCADE could not write the STEP file")
+    with open(path, "wb") as f:
+        f.write(text)
     _fix_header(path, name)
+
+
+def _check_range(path, points: np.ndarray) -> None:
+    """Refuse coordinates that are not finite or of magnitude 1e100 and more (a 3-digit exponent overflows Open CASCADE's number buffer)."""
+    if points.size and not np.abs(points).max() < 1e100:  # also catches nan
+        from ..errors import OutputError
+
+        raise OutputError(path, "STEP output needs finite coordinates below 1e100 in magnitude")
+
+
+def _step_text(writer) -> bytes | None:
+    """The STEP file of ``writer``'s model, every real with 17 significant digits (None if Open CASCADE fails).
+
+    ``STEPControl_Writer.Write`` prints reals with 12 digits; this does what it
+    does (``StepSelect_WorkLibrary::WriteFile``: a ``StepData_StepWriter`` on the
+    model, ``SendModel``, ``Print``) with the float format ``%.16E``, so every
+    double reads back to the same bits. Magnitudes below 1e-99 take ``%.15E``:
+    their 3-digit exponent would not fit Open CASCADE's 24-character buffer.
+    """
+    import io
+
+    from OCP.StepData import StepData_StepWriter
+
+    step_writer = StepData_StepWriter(writer.Model())
+    floats = step_writer.FloatWriter()
+    floats.SetFormat("%.16E")  # resets the range format and the zero suppression (which cuts long numbers)
+    floats.SetFormatForRange("%.15E", 0.0, 1e-99)
+    step_writer.SendModel(writer.WS().Protocol())
+    buffer = io.BytesIO()
+    return buffer.getvalue() if step_writer.Print(buffer) else None
+
+
+# ----------------------------------------------------------------------------
+# reading
+
+
+def read_patch_set_step(path) -> PatchSet:
+    """Read the faces of a STEP file as a PatchSet (``c1surf check``, ``measure``, ``diff``, ``tessellate``).
+
+    Every face must be untrimmed (its parameter bounds those of its surface,
+    one wire) on a Bezier surface or a B-spline surface that is one Bezier
+    span (a patch of its degree) or a c1surf merged piece (degree (2, 2),
+    knots 0 0 0 1 ... m m m: a ``PatchSet.merged`` entry, its patches cut out
+    again into the biquadratic group, as the IGES reader does). A reversed
+    face (``TopAbs_REVERSED``) has its u and v swapped, so every normal
+    ``x_u x x_v`` points as the face's. Unequal weights make ``PatchSet.weights``.
+
+    Returns
+    -------
+    PatchSet with groups ordered by degree: biquadratic (3, 3, 3), then
+    bicubic (4, 4, 3), then any other degree; no adjacency or sources
+    (``PatchSet.welding()`` finds the adjacency from the geometry)
+
+    Raises
+    ------
+    MeshInputError
+        one line: no Open CASCADE, no such file, not STEP, no faces, or a face
+        c1surf does not read (other surface types, trimmed faces, other B-splines)
+    """
+    by_shape: dict = {(3, 3): ([], [])}  # (du + 1, dv + 1) -> (patches, weights), in face order
+    pieces = []
+    for number, (knots_u, knots_v, weights, points) in enumerate(_face_nets(path), 1):
+        if _single_span(knots_u, points.shape[0]) and _single_span(knots_v, points.shape[1]):
+            patches, patch_weights = by_shape.setdefault(points.shape[:2], ([], []))
+            patches.append(points)
+            patch_weights.append(weights)
+            continue
+        if not (points.shape[0] >= 3 and is_piece_knots(knots_u) and is_piece_knots(knots_v)
+                and knots_u.size == points.shape[0] + 3 and knots_v.size == points.shape[1] + 3):
+            raise MeshInputError(str(path), f"face {number}: the B-spline surface has interior knots and is not a merged "
+                                 "c1surf surface (degree (2, 2), knots 0 0 0 1 ... m m m): c1surf reads only such "
+                                 "surfaces and single Bezier patches")
+        quad, quad_weights = by_shape[(3, 3)]
+        m, n = points.shape[0] - 2, points.shape[1] - 2
+        piece = MergedPiece(points, weights, knots_u, knots_v, len(quad) + np.arange(m * n).reshape(m, n),
+                            np.zeros((m, n), dtype=np.int64))
+        cut, cut_weights = piece_patches(piece)
+        pieces.append(piece)
+        quad.extend(cut)
+        quad_weights.extend(cut_weights)
+    return _patch_set(path, by_shape, pieces)
+
+
+def _single_span(knots: np.ndarray, n_poles: int) -> bool:
+    """Clamped knots of one Bezier span over ``n_poles`` poles: n_poles equal values, then n_poles equal values."""
+    return knots.size == 2 * n_poles and np.all(knots[:n_poles] == knots[0]) and np.all(knots[n_poles:] == knots[-1])
+
+
+def _patch_set(path, by_shape: dict, pieces: list) -> PatchSet:
+    """The PatchSet of the patches by shape (biquadratic first, then by degree) and the merged pieces."""
+    shapes = [(3, 3)] + sorted(k for k in by_shape if k != (3, 3) and by_shape[k][0])
+    groups = [np.stack(by_shape[k][0]) for k in shapes if by_shape[k][0]]
+    weights = [np.stack(by_shape[k][1]) for k in shapes if by_shape[k][0]]
+    if not groups:
+        raise MeshInputError(str(path), "the STEP file holds no faces: c1surf reads B-spline and Bezier faces")
+    rational = any(not np.all(w == w.flat[0]) for w in weights)
+    if not rational:
+        pieces = [MergedPiece(p.points, None, p.knots_u, p.knots_v, p.patches, p.rotation) for p in pieces]
+    header = {"format": "step", "input": {"path": str(path)}, "counts": {"patches": int(sum(len(g) for g in groups))},
+              "ordered": False}  # faces come in shell order, not in patch order: diff pairs them by their centres
+    return PatchSet(groups, None, None, None, header, weights if rational else None, pieces)
+
+
+def _face_nets(path):
+    """(knots_u, knots_v, weights (nu, nv), points (nu, nv, 3)) of every face of a STEP file, in explorer order.
+
+    Knots are the full sequences (each value repeated by its multiplicity);
+    a reversed face comes with u and v swapped.
+    """
+    shape = _read_shape(path)
+    from OCP.BRep import BRep_Tool
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
+    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopoDS import TopoDS
+
+    to_face = TopoDS.Face_s if hasattr(TopoDS, "Face_s") else TopoDS.Face
+    explorer = TopExp_Explorer(shape, TopAbs_FACE)
+    number = 0
+    while explorer.More():
+        number += 1
+        face = to_face(explorer.Current())
+        knots_u, knots_v, weights, points = _surface_net(path, number, BRep_Tool.Surface_s(face))
+        _check_untrimmed(path, number, face, knots_u, knots_v)
+        if face.Orientation() == TopAbs_REVERSED:
+            knots_u, knots_v, weights, points = knots_v, knots_u, weights.T, points.transpose(1, 0, 2)
+        yield knots_u, knots_v, np.ascontiguousarray(weights), np.ascontiguousarray(points)
+        explorer.Next()
+
+
+def _read_shape(path):
+    """The shape of a STEP file (Open CASCADE's ``STEPControl_Reader``, every root transferred)."""
+    try:
+        import OCP  # noqa: F401
+    except ImportError:
+        raise MeshInputError(str(path), _READ_HINT) from None
+    from OCP.IFSelect import IFSelect_RetDone
+    from OCP.STEPControl import STEPControl_Reader
+
+    if not os.path.exists(path):
+        raise MeshInputError(str(path), "no such file")
+    if os.path.isdir(path):
+        raise MeshInputError(str(path), "is a directory, not a patch file")
+    with _quiet_stdout():  # Open CASCADE prints its load statistics on stdout
+        reader = STEPControl_Reader()
+        if reader.ReadFile(os.fspath(path)) != IFSelect_RetDone:
+            raise MeshInputError(str(path), "not a STEP file Open CASCADE can read")
+        reader.TransferRoots()
+        return reader.OneShape()
+
+
+def _surface_net(path, number: int, surface):
+    """Full knot sequences, weights (nu, nv) and control points (nu, nv, 3) of a Bezier or B-spline surface."""
+    from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
+
+    if isinstance(surface, Geom_BezierSurface):
+        du, dv = surface.UDegree(), surface.VDegree()
+        knots_u, knots_v = np.repeat([0.0, 1.0], du + 1), np.repeat([0.0, 1.0], dv + 1)
+    elif isinstance(surface, Geom_BSplineSurface) and not (surface.IsUPeriodic() or surface.IsVPeriodic()):
+        knots_u = np.repeat([surface.UKnot(i) for i in range(1, surface.NbUKnots() + 1)],
+                            [surface.UMultiplicity(i) for i in range(1, surface.NbUKnots() + 1)])
+        knots_v = np.repeat([surface.VKnot(j) for j in range(1, surface.NbVKnots() + 1)],
+                            [surface.VMultiplicity(j) for j in range(1, surface.NbVKnots() + 1)])
+    else:
+        kind = "a periodic B-spline" if isinstance(surface, Geom_BSplineSurface) else f"a {type(surface).__name__}"
+        raise MeshInputError(str(path), f"face {number} is on {kind} surface: c1surf reads only Bezier and B-spline faces "
+                             "(a single Bezier span or a merged c1surf piece)")
+    nu, nv = surface.NbUPoles(), surface.NbVPoles()
+    poles = [[surface.Pole(i, j) for j in range(1, nv + 1)] for i in range(1, nu + 1)]
+    points = np.array([[(p.X(), p.Y(), p.Z()) for p in row] for row in poles], dtype=np.float64).reshape(nu, nv, 3)
+    rational = surface.IsURational() or surface.IsVRational()
+    weights = np.array([[surface.Weight(i, j) if rational else 1.0 for j in range(1, nv + 1)] for i in range(1, nu + 1)])
+    return np.asarray(knots_u, np.float64), np.asarray(knots_v, np.float64), weights, points
+
+
+def _check_untrimmed(path, number: int, face, knots_u: np.ndarray, knots_v: np.ndarray) -> None:
+    """Refuse a face that covers less than its surface: parameter bounds inside the knot range, or inner wires."""
+    from OCP.BRepTools import BRepTools
+    from OCP.TopAbs import TopAbs_WIRE
+    from OCP.TopExp import TopExp_Explorer
+
+    full = np.array([knots_u[0], knots_u[-1], knots_v[0], knots_v[-1]])
+    bounds = np.array(BRepTools.UVBounds_s(face))
+    span = np.repeat([knots_u[-1] - knots_u[0], knots_v[-1] - knots_v[0]], 2)
+    wires, explorer = 0, TopExp_Explorer(face, TopAbs_WIRE)
+    while explorer.More():
+        wires += 1
+        explorer.Next()
+    if wires != 1 or not np.all(np.abs(bounds - full) <= 1e-9 * span):
+        shown = ", ".join(f"{x:.6g}" for x in bounds)
+        raise MeshInputError(str(path), f"face {number} is trimmed (parameter bounds {shown}, {wires} wire(s)): c1surf "
+                             "reads only untrimmed faces, each on the whole of its surface")
 
 
 @contextlib.contextmanager
@@ -220,4 +429,4 @@ def _step_string(text: str) -> str:
     return f"'{text}'"
 
 
-__all__ = ["write_patch_set_step", "bezier_faces", "bspline_faces", "sewn_shape", "SEWING_TOLERANCE"]
+__all__ = ["write_patch_set_step", "read_patch_set_step", "write_step_shape", "bezier_faces", "bspline_faces", "sewn_shape", "SEWING_TOLERANCE"]
