@@ -154,7 +154,7 @@ def tessellate_patches(patch_groups, adjacency: PatchAdjacency, resolution: int 
             b, db = bernstein_basis(group.shape[1] - 1, t), bernstein_basis(group.shape[1] - 1, t, 1)
             points[ids] = evaluate_grid(group, b, b)
             normals[ids] = unit_normals(evaluate_grid(group[..., :3], db, b), evaluate_grid(group[..., :3], b, db))
-    return Tessellation(points, normals, triangles, None, grid)
+    return Tessellation(points, defined_normals(points, normals, triangles), triangles, None, grid)
 
 
 def _group_grids(grid: np.ndarray, groups, weights=None):
@@ -179,7 +179,49 @@ def _tessellate_rational(groups, weights, adjacency: PatchAdjacency, n: int) -> 
     t = np.linspace(0.0, 1.0, n)
     for ids, group, w in _group_grids(tess.grid, groups, weights):
         normals[ids] = evaluate_rational(group, w, t, t)[1]
-    return Tessellation(points, normals, tess.triangles, None, tess.grid)
+    return Tessellation(points, defined_normals(points, normals, tess.triangles), tess.triangles, None, tess.grid)
+
+
+def defined_normals(points: np.ndarray, normals: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """``normals`` with every undefined row (a degenerate patch point: zero derivative, e.g. at a
+    zero blend ratio, Lemma 1.3.12) replaced by the unit sum of its triangles' area vectors; where
+    those vanish too (a collapsed region), by the mean of the neighbours' normals; zero only where
+    nothing around has one. So no output carries NaN.
+
+    Parameters
+    ----------
+    points : (V, dim) float, normals : (V, 3) float (changed in place and returned), triangles : (T, 3) int
+    """
+    bad = ~np.isfinite(normals).all(axis=1)
+    if not bad.any():
+        return normals
+    touching = bad[triangles].any(axis=1)
+    tri = triangles[touching]
+    p = points[:, :3]
+    area = np.cross(p[tri[:, 1]] - p[tri[:, 0]], p[tri[:, 2]] - p[tri[:, 0]])
+    total = np.zeros((points.shape[0], 3))
+    for corner in range(3):
+        np.add.at(total, tri[:, corner], area)
+    length = np.linalg.norm(total[bad], axis=1, keepdims=True)
+    normals[bad] = np.divide(total[bad], length, out=np.zeros_like(total[bad]), where=length > 0)
+    # where a whole region collapsed (zero-area triangles), take the mean normal of the defined
+    # neighbours, ring by ring: at an edge a zero blend ratio makes sharp, the two sides' mean
+    for _ in range(64):  # a collapsed region is a few samples across
+        empty = np.linalg.norm(normals, axis=1) == 0
+        if not empty.any():
+            break
+        ring = tri[empty[tri].any(axis=1)]
+        edges = np.concatenate([ring[:, [0, 1]], ring[:, [1, 2]], ring[:, [2, 0]]])
+        edges = np.concatenate([edges, edges[:, ::-1]])
+        edges = edges[empty[edges[:, 0]] & ~empty[edges[:, 1]]]
+        total = np.zeros((points.shape[0], 3))
+        np.add.at(total, edges[:, 0], normals[edges[:, 1]])
+        length = np.linalg.norm(total, axis=1, keepdims=True)
+        fill = empty & (length[:, 0] > 0)
+        if not fill.any():
+            break
+        normals[fill] = total[fill] / length[fill]
+    return normals
 
 
 # -- the welded numbering --------------------------------------------------------------
