@@ -1,7 +1,10 @@
 """Per-vertex curvature properties for ``convert --curvature`` (and ``tessellate``)."""
 from __future__ import annotations
 
+import numpy as np
+
 from ..evaluation.curvature import tessellation_curvature
+from ..evaluation.tessellate import fill_from_neighbours
 from ..render.pictures import colormap, curvature_range, rgb8
 
 
@@ -18,9 +21,14 @@ def curvature_properties(groups, tess, progress=None, weights=None) -> dict:
     Returns
     -------
     dict with ``vertex_properties`` (kmax, K, H, quality = kmax) and ``vertex_colors``
-    (kmax through viridis, from 0 to its 98th percentile)
+    (kmax through viridis, from 0 to its 98th percentile); no NaN: where a degenerate patch
+    point has no curvature, the mean of its neighbours' (``tessellate.fill_from_neighbours``)
     """
     c = tessellation_curvature(groups, tess.grid, tess.points.shape[0], progress, weights=weights)
+    # a point without a tangent plane (a zero blend ratio) has no curvature: it takes its neighbours' mean
+    defined = np.isfinite(c["kmax"])
+    if not defined.all():
+        c = {name: fill_from_neighbours(values, defined, tess.triangles) for name, values in c.items()}
     lo, hi = curvature_range(c["kmax"], signed=False)
     colors = rgb8(colormap(c["kmax"], lo, hi, "viridis"))
     props = {"kmax": c["kmax"], "K": c["K"], "H": c["H"], "quality": c["kmax"]}

@@ -182,6 +182,44 @@ def _tessellate_rational(groups, weights, adjacency: PatchAdjacency, n: int) -> 
     return Tessellation(points, defined_normals(points, normals, tess.triangles), tess.triangles, None, tess.grid)
 
 
+def fill_from_neighbours(values: np.ndarray, defined: np.ndarray, triangles: np.ndarray, rings: int = 64,
+                         nonzero: bool = False) -> np.ndarray:
+    """``values`` with undefined rows set to the mean of their defined neighbours, ring by ring.
+
+    Parameters
+    ----------
+    values : (V, k) or (V,) float; defined : (V,) bool; triangles : (T, 3) int, the vertex neighbourhoods
+    rings : int, how far to reach; rows still without a defined neighbour then are 0
+    nonzero : bool, a mean of zero (normals that cancel) does not count as defined
+
+    Returns
+    -------
+    values (a new array), every row finite
+    """
+    out = np.array(values, dtype=np.float64)
+    flat = out.reshape(out.shape[0], -1)
+    known = np.asarray(defined, dtype=bool).copy()
+    flat[~known] = 0.0
+    near = triangles[(~known)[triangles].any(axis=1)]
+    edges = np.concatenate([near[:, [0, 1]], near[:, [1, 2]], near[:, [2, 0]]])
+    edges = np.concatenate([edges, edges[:, ::-1]])
+    for _ in range(rings):
+        if known.all():
+            break
+        step = edges[~known[edges[:, 0]] & known[edges[:, 1]]]
+        if step.size == 0:
+            break
+        total = np.zeros_like(flat)
+        np.add.at(total, step[:, 0], flat[step[:, 1]])
+        count = np.bincount(step[:, 0], minlength=flat.shape[0])
+        fill = count > 0
+        flat[fill] = total[fill] / count[fill, None]
+        if nonzero:
+            fill &= np.any(flat != 0, axis=1)
+        known |= fill
+    return out
+
+
 def defined_normals(points: np.ndarray, normals: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """``normals`` with every undefined row (a degenerate patch point: zero derivative, e.g. at a
     zero blend ratio, Lemma 1.3.12) replaced by the unit sum of its triangles' area vectors; where
@@ -206,21 +244,11 @@ def defined_normals(points: np.ndarray, normals: np.ndarray, triangles: np.ndarr
     normals[bad] = np.divide(total[bad], length, out=np.zeros_like(total[bad]), where=length > 0)
     # where a whole region collapsed (zero-area triangles), take the mean normal of the defined
     # neighbours, ring by ring: at an edge a zero blend ratio makes sharp, the two sides' mean
-    for _ in range(64):  # a collapsed region is a few samples across
-        empty = np.linalg.norm(normals, axis=1) == 0
-        if not empty.any():
-            break
-        ring = tri[empty[tri].any(axis=1)]
-        edges = np.concatenate([ring[:, [0, 1]], ring[:, [1, 2]], ring[:, [2, 0]]])
-        edges = np.concatenate([edges, edges[:, ::-1]])
-        edges = edges[empty[edges[:, 0]] & ~empty[edges[:, 1]]]
-        total = np.zeros((points.shape[0], 3))
-        np.add.at(total, edges[:, 0], normals[edges[:, 1]])
-        length = np.linalg.norm(total, axis=1, keepdims=True)
-        fill = empty & (length[:, 0] > 0)
-        if not fill.any():
-            break
-        normals[fill] = total[fill] / length[fill]
+    empty = np.linalg.norm(normals, axis=1) == 0
+    if empty.any():
+        normals[:] = fill_from_neighbours(normals, ~empty, tri, nonzero=True)
+        length = np.linalg.norm(normals, axis=1, keepdims=True)
+        np.divide(normals, length, out=normals, where=length > 0)
     return normals
 
 

@@ -25,9 +25,10 @@ def test_a_zero_blend_cube_tessellates_without_nan():
     assert np.allclose(np.abs(tess.normals[face_middle]).max(axis=1), 1.0)
 
 
-def test_convert_writes_no_nan_normals(tmp_path):
+def test_convert_writes_no_nan_normals_or_curvature(tmp_path):
     out = tmp_path / "zero.ply"
-    result = CliRunner().invoke(main, ["convert", str(SAMPLES / "cube.obj"), "-o", str(out), "--blend", "0", "-q"])
+    result = CliRunner().invoke(main, ["convert", str(SAMPLES / "cube.obj"), "-o", str(out), "--blend", "0", "-q",
+                                       "--curvature"])
     assert result.exit_code == 0, result.output
     vertex = PlyData.read(str(out))["vertex"].data
     assert all(np.isfinite(np.asarray(vertex[name])).all() for name in vertex.dtype.names)
