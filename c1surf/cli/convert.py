@@ -120,9 +120,11 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @surface_options
 @extension_options
 @weld_options
-@click.option("--merge", is_flag=True,
-              help="Patch files: also merge rectangles of biquadratic patches into B-spline surfaces "
-                   "(JSON key \"merged\", NPZ merged_* arrays; IGES and STEP write them instead of their patches).")
+@click.option("--merge/--no-merge", default=None,
+              help="Merge rectangles of biquadratic patches into B-spline surfaces, which IGES and STEP write "
+                   "instead of their patches (CAD opens few large faces) and JSON/NPZ keep beside them "
+                   "(key \"merged\", merged_* arrays). Default: IGES and STEP files merged, JSON and NPZ not; "
+                   "--merge: every patch file; --no-merge: none (one face per patch).")
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
@@ -144,13 +146,26 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution, surface.patch_weights)
     extra = curvature_columns(surface, tess, progress.advance) if curvature else {}
     progress.phase(f"writing {output}")
-    patch_options = {"adjacency": adjacency, "units": units, "group": not no_group,
-                     "merged": merge_biquadratic(surface) if merge else None}
+    patch_options = {"adjacency": adjacency, "units": units, "group": not no_group}
+    merged = merged_pieces(surface, patch_suffixes, merge)
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:
         write_mesh(mesh_tmp, mesh_suffix, tess, extra, data if shape["attributes"] else None, float32)
         del tess, extra  # written: leave its memory to the patch writers
-        write_patch_files(zip(patches_paths, patch_suffixes), surface, input_path, patch_options, progress)
+        write_patch_files(zip(patches_paths, patch_suffixes), surface, input_path, patch_options, progress, merged)
     progress.done()
+
+
+CAD_SUFFIXES = (".igs", ".iges", ".step", ".stp")  # the patch formats merged by default: CAD opens few large faces
+
+
+def merged_pieces(surface: Surface, patch_suffixes, merge: bool | None) -> dict:
+    """{patch suffix: list of merged pieces or None} for ``--merge/--no-merge`` (None: IGES and STEP only).
+
+    The pieces (``evaluation.merge.merge_biquadratic``) are computed once, when some file takes them.
+    """
+    wanted = {suffix: (merge if merge is not None else suffix in CAD_SUFFIXES) for suffix in patch_suffixes}
+    pieces = merge_biquadratic(surface) if any(wanted.values()) else None
+    return {suffix: pieces if take else None for suffix, take in wanted.items()}
 
 
 def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: Progress, quiet: bool,
@@ -199,15 +214,18 @@ def write_mesh(path, suffix: str, tess, extra: dict, attribute_data, float32: bo
         write_triangle_mesh(path, tess.points, tess.triangles, tess.normals, suffix=suffix, float32=float32, **extra)
 
 
-def write_patch_files(targets, surface: Surface, input_path, patch_options: dict, progress: Progress) -> None:
+def write_patch_files(targets, surface: Surface, input_path, patch_options: dict, progress: Progress,
+                      merged: dict | None = None) -> None:
     """Write the patches into every (path, suffix) of ``targets``: all files appear together, or none.
 
     ``patch_options``: the keyword arguments every patch writer takes besides the
-    paths (adjacency, units, group, merged).
+    paths (adjacency, units, group); ``merged``: {suffix: merged pieces or None}
+    (``merged_pieces``), None for none.
     """
     with contextlib.ExitStack() as patch_files:
         for patches_path, patch_suffix in targets:
             progress.phase(f"writing {patches_path}")
             patch_tmp = patch_files.enter_context(atomic_output(patches_path, inputs=[input_path]))
             write_surface_patches(patch_tmp, surface, patch_suffix, input_path=str(input_path),
-                                  file_name=os.path.basename(patches_path), **patch_options)
+                                  file_name=os.path.basename(patches_path), merged=(merged or {}).get(patch_suffix),
+                                  **patch_options)

@@ -17,12 +17,12 @@ def run(*args):
 
 @pytest.fixture(scope="module")
 def files(tmp_path_factory):
-    """twisted's patches as JSON, NPZ and IGES, and cube's as JSON."""
+    """twisted's patches as JSON, NPZ and IGES, and cube's as JSON (one face per patch in IGES: --no-merge)."""
     folder = tmp_path_factory.mktemp("diff")
     out = {}
     for name in ("twisted", "cube"):
         paths = {s: folder / f"{name}{s}" for s in (".json", ".npz", ".igs")}
-        result = run("convert", SAMPLES / f"{name}.obj", "-o", folder / f"{name}.ply", "-r", "2", "-q",
+        result = run("convert", SAMPLES / f"{name}.obj", "-o", folder / f"{name}.ply", "-r", "2", "-q", "--no-merge",
                      *[a for p in paths.values() for a in ("--patches", p)])
         assert result.exit_code == 0, result.output
         out[name] = paths

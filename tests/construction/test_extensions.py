@@ -669,7 +669,7 @@ def test_rational_patch_files_and_the_command_line(tmp_path):
     lines += ["f " + " ".join(str(v + 1) for v in mesh.face_vertices[offsets[f] : offsets[f + 1]]) for f in range(mesh.n_faces)]
     src.write_text("\n".join(lines) + "\n")
     json_path, iges_path = tmp_path / "w.json", tmp_path / "w.igs"
-    result = run("convert", src, "-o", tmp_path / "w.ply", "--patches", json_path, "--patches", iges_path)
+    result = run("convert", src, "-o", tmp_path / "w.ply", "--patches", json_path, "--patches", iges_path, "--no-merge")
     assert result.exit_code == 0, result.output
     surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, weights=weights)
     patch_set = read_patch_set_json(json_path)

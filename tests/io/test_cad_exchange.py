@@ -11,6 +11,8 @@ Open CASCADE comes from `cadquery-ocp` (test extra); without it these tests fail
 """
 from __future__ import annotations
 
+import json
+
 import numpy as np
 import pytest
 import trimesh
@@ -20,6 +22,7 @@ from click.testing import CliRunner
 from c1surf.api import surface_from_file
 from c1surf.cli.main import main
 from c1surf.evaluation.bezier import evaluate_patches
+from c1surf.evaluation.merge import merge_biquadratic
 
 from conftest import ocp_shapes as shapes
 from conftest import CLOSED_SAMPLES, SAMPLES, read_step, shared_mesh, surface_of
@@ -57,9 +60,11 @@ def need_ocp():
 
 
 def convert(tmp_path, mesh, suffix=".igs", *options):
+    """One face per patch (--no-merge) unless the options say otherwise: these tests compare faces and patches."""
     out = tmp_path / f"surface{suffix}"
+    merge = [] if "--merge" in options else ["--no-merge"]
     result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "mesh.ply"), "-r", "2",
-                                       "--patches", str(out), "-q", *map(str, options)], catch_exceptions=False)
+                                       "--patches", str(out), "-q", *merge, *map(str, options)], catch_exceptions=False)
     assert result.exit_code == 0, result.output
     return out
 
@@ -198,3 +203,27 @@ def test_report_worst_disagreement():
         print(f"\nlargest Open CASCADE vs c1surf disagreement: {WORST[name]:.2e} of the bbox diagonal ({name}); "
               f"over {len(WORST)} meshes")
         assert max(WORST.values()) <= 1e-9
+
+
+@pytest.mark.parametrize("suffix", [".igs", ".step"])
+def test_cad_files_are_packed_by_default(tmp_path, suffix):
+    """Without --merge/--no-merge, IGES and STEP get the merged B-spline faces (few, large), JSON keeps every patch."""
+    mesh = SAMPLES / "twisted.obj"
+    packed = tmp_path / f"packed{suffix}"
+    js = tmp_path / "patches.json"
+    result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "m.ply"), "-r", "2", "-q",
+                                       "--patches", str(packed), "--patches", str(js)], catch_exceptions=False)
+    assert result.exit_code == 0, result.output
+    surface = surface_from_file(mesh)[0]
+    pieces = merge_biquadratic(surface)
+    covered = sum(p.patches.size for p in pieces)
+    expected_faces = len(pieces) + len(surface.biquadratic) - covered + len(surface.bicubic)
+    assert expected_faces < surface.n_patches / 2
+    if suffix == ".igs":
+        face_list = faces(read_iges(packed)[1])
+    else:
+        face_list = faces(read_step(packed))
+    assert len(face_list) == expected_faces
+    assert "merged" not in json.loads(js.read_text())  # JSON: one entry per patch unless --merge
+    report = CliRunner().invoke(main, ["check", str(packed)], catch_exceptions=False)
+    assert "G1: yes" in report.stdout

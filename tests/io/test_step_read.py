@@ -45,9 +45,13 @@ def run(*args, code=0):
 
 
 def convert(tmp_path, mesh, *options):
-    """convert MESH with --patches s.step and s.json in one run: (step path, json path)."""
+    """convert MESH with --patches s.step and s.json in one run: (step path, json path).
+
+    One face per patch (--no-merge) unless the options ask for --merge: both files then hold the same patches.
+    """
     step, js = tmp_path / "s.step", tmp_path / "s.json"
-    run("convert", mesh, "-o", tmp_path / "s.ply", "-r", "2", "--patches", step, "--patches", js, "-q", *options)
+    merge = [] if "--merge" in options else ["--no-merge"]
+    run("convert", mesh, "-o", tmp_path / "s.ply", "-r", "2", "--patches", step, "--patches", js, "-q", *merge, *options)
     return step, js
 
 
