@@ -166,3 +166,25 @@ def test_curvature_of_a_rational_surface_is_the_rational_one(tmp_path):
         for p in (0, len(group) - 1):
             exact = patch_curvature(group, u, v, w, index=np.full(u.size, p)).kmax
             np.testing.assert_allclose(kmax[tess.grid[first + p, 1:-1, 1:-1].ravel()], exact, rtol=1e-5, atol=1e-6)  # float32 in PLY
+
+
+def test_outputs_that_do_not_fit_on_the_disk_are_refused_before_writing(tmp_path, monkeypatch):
+    from c1surf.api import surface_from_file, tessellate_surface
+    from c1surf.cli import convert as convert_module
+
+    out, patches = tmp_path / "out.ply", tmp_path / "p.json"
+    usage = shutil.disk_usage(tmp_path)
+    monkeypatch.setattr(convert_module.shutil, "disk_usage", lambda folder: usage._replace(free=100_000))
+    args = ["convert", str(SAMPLES / "twisted.obj"), "-o", str(out), "--patches", str(patches), "-r", "8", "-q"]
+    result = CliRunner().invoke(main, args)
+    assert result.exit_code == 1
+    [line] = result.stderr.strip().splitlines()
+    assert line.startswith("c1surf: error: the output files would take about 1.") and "0.1 MiB is free" in line
+    assert not out.exists() and not patches.exists() and not [p for p in tmp_path.iterdir() if p.name.startswith(".tmp")]
+    assert CliRunner().invoke(main, args + ["--force"]).exit_code == 0  # --force writes anyway (it fits here)
+    # the estimate is close to what is written: within 10 % for the mesh and the patch file
+    surface, _ = surface_from_file(SAMPLES / "twisted.obj")
+    tess = tessellate_surface(surface, 8)
+    sizes = dict(convert_module.output_bytes(".ply", tess, False, False, [".json"], surface))
+    assert abs(sizes[".ply"] - out.stat().st_size) < 0.1 * out.stat().st_size
+    assert abs(sizes[".json"] - patches.stat().st_size) < 0.1 * patches.stat().st_size
