@@ -240,14 +240,17 @@ class Surface:
         n_quad, d = self.quad_frames.shape[0], x.shape[1]
         biquadratic, bicubic = x[: 9 * n_quad].reshape(n_quad, 3, 3, d), x[9 * n_quad :].reshape(-1, 4, 4, d)
         if self.weights is None:
-            self.biquadratic, self.bicubic = biquadratic + origin, bicubic + origin
+            x += origin  # in place: the coefficients of a large mesh are the largest array here
+            self.biquadratic, self.bicubic = biquadratic, bicubic
             self.biquadratic_weights = self.bicubic_weights = None
             return self
         self.biquadratic_weights, self.bicubic_weights = biquadratic[..., -1], bicubic[..., -1]
         if not (np.all(self.biquadratic_weights > 0) and np.all(self.bicubic_weights > 0)):
             raise ValueError("the vertex weights vary too much: some patch weight is not positive")
-        self.biquadratic = biquadratic[..., :-1] / biquadratic[..., -1:] + origin
-        self.bicubic = bicubic[..., :-1] / bicubic[..., -1:] + origin
+        self.biquadratic = biquadratic[..., :-1] / biquadratic[..., -1:]
+        self.bicubic = bicubic[..., :-1] / bicubic[..., -1:]
+        self.biquadratic += origin
+        self.bicubic += origin
         return self
 
     def stencil(self, flat: bool = False):
