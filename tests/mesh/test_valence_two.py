@@ -120,3 +120,15 @@ def test_convert_notes_the_dissolved_vertices_and_creases_follow(tmp_path):
     smooth = np.linalg.norm(tessellate_surface(surface_from_file(path, ignore_tags=True)[0], 8).points - [1, 0, 0],
                             axis=1).min()
     assert corner < 0.2 * smooth  # the crease on 0-8-9-1 is the crease on 0-1
+
+
+def test_collinear_corners_and_a_sliver_are_g1_and_finite(tmp_path):
+    """A pentagon with three collinear corners (0, 8, 1) beside a thin triangle (8, 1, 5): nothing to repair."""
+    points = list(CUBE) + [(1, 0, 0)]
+    faces = [[0, 3, 2, 1, 8], CUBE_FACES[1], [0, 8, 5, 4], [8, 1, 5], CUBE_FACES[3], CUBE_FACES[4], CUBE_FACES[5]]
+    surface, mesh = surface_from_file(obj(tmp_path / "collinear.obj", points, faces))
+    assert mesh.dissolved_vertices.size == 0 and mesh.repeated_faces == 0
+    report = check_surface(surface)
+    assert report.boundary_edges == 0 and report.max_normal_jump < 1e-12
+    tess = tessellate_surface(surface, 8)
+    assert np.isfinite(tess.points).all() and np.isfinite(tess.normals).all()
