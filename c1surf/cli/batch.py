@@ -23,7 +23,7 @@ from pathlib import Path
 
 import click
 
-from ..io.registry import MESH_READERS, MESH_WRITERS, PATCH_WRITERS
+from ..io.registry import MESH_READERS, MESH_WRITERS, PATCH_WRITERS, suffix_list
 from .common import friendly_errors, shows_progress, terminal_bar
 from .options import surface_options, weld_options, weld_tolerance
 
@@ -228,7 +228,8 @@ def select_inputs(patterns, shard: str | None) -> list[Path]:
     """The inputs of this batch: the files matching ``patterns``, this shard's share, no two of one stem."""
     inputs = expand_inputs(patterns)
     if not inputs:
-        raise click.BadParameter(f"no .obj or .ply file matches {' '.join(patterns)}", param_hint="'GLOB'")
+        raise click.BadParameter(f"no mesh file ({suffix_list(MESH_READERS)}) matches {' '.join(patterns)}",
+                                 param_hint="'GLOB'")
     if shard:
         index, count = parse_shard(shard)
         inputs = inputs[index::count]
