@@ -58,8 +58,8 @@ class MeshFile:
         Group names in order of first use by a face.
     tags : SharpTags
         Sharp-feature tags (OBJ ``t`` lines, PLY ``edge`` creases and vertex
-        ``corner``/``sharpness``), read and checked but not honoured yet;
-        empty when the file has none.
+        ``corner``/``sharpness``), read and checked; ``tags.features.sharp_features``
+        turns them into the construction's ``SharpFeatures``. Empty when the file has none.
     collapsed_corners : int
         Repeated corners (``f a b c c``) the reader dropped.
     weld : WeldReport or None
