@@ -132,11 +132,13 @@ class StackedStage:
         self.shape = (sum(part.shape[0] for part in self.parts), self.parts[0].shape[1])
         self._matrix = None
 
-    def apply(self, points: np.ndarray) -> np.ndarray:
+    def apply(self, points: np.ndarray, offset: np.ndarray | None = None) -> np.ndarray:
+        """(rows out, d) from (rows in, d); ``offset`` (d,) is added to every output row (points relative
+        to an origin: every part's rows sum to 1, so this puts the origin back, block by block in cache)."""
         out = np.empty((self.shape[0], points.shape[1]))
         start = 0
         for part in self.parts:
-            part.apply(points, out=out[start : start + part.shape[0]])
+            part.apply(points, out=out[start : start + part.shape[0]], offset=offset)
             start += part.shape[0]
         return out
 

@@ -228,9 +228,13 @@ class Surface:
         x = points - origin
         if self.weights is not None:
             x = np.concatenate([x * self.weights[:, None], self.weights[:, None]], axis=1)
+        polynomial = self.weights is None
         for stage in self.stages:
             start = time.perf_counter()
-            refined, x = x, stage.apply(x)  # the last stage (the patches) reads the refined points
+            # the last stage (the patches) reads the refined points; a polynomial surface's
+            # patches get the centre back in the same pass
+            last = polynomial and stage is self.stages[-1]
+            refined, x = x, (stage.apply(x, offset=origin) if last else stage.apply(x))
             self.timings[f"apply {stage.name}"] = time.perf_counter() - start
         if self.weights is None:
             refined += origin
@@ -240,7 +244,6 @@ class Surface:
         n_quad, d = self.quad_frames.shape[0], x.shape[1]
         biquadratic, bicubic = x[: 9 * n_quad].reshape(n_quad, 3, 3, d), x[9 * n_quad :].reshape(-1, 4, 4, d)
         if self.weights is None:
-            x += origin  # in place: the coefficients of a large mesh are the largest array here
             self.biquadratic, self.bicubic = biquadratic, bicubic
             self.biquadratic_weights = self.bicubic_weights = None
             return self
