@@ -53,7 +53,7 @@ class Comparison:
     def lines(self) -> list[str]:
         """The report: differences, then one summary line."""
         if self.structural:
-            return self.structural + [f"A and B differ in structure"]
+            return self.structural + ["A and B differ in structure"]
         if self.n_moved:
             return self.moved + [f"{self.n_moved} coefficients moved by more than {self.tolerance:g} "
                                  f"(largest {self.max_relative:.3e} of its scale)"]

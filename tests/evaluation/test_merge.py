@@ -80,13 +80,3 @@ def test_cad_faces_of_the_pieces_stay_g1(name):
     report = measure_smoothness([np.concatenate([cut.reshape(-1, 3, 3, 3), surface.biquadratic[left]]), surface.bicubic])
     assert report.overshared_edges == 0 and report.boundary_edges == 0
     assert report.relative_gap < 1e-12 and report.max_normal_jump < 1e-9
-
-
-def brute_maximal(free, link_i, link_j):
-    """Every maximal rectangle of free, truly adjacent cells, by enumeration: set of (i0, j0, m, n)."""
-    good = {(i, j, m, n) for i in range(free.shape[0]) for j in range(free.shape[1])
-            for m in range(1, free.shape[0] - i + 1) for n in range(1, free.shape[1] - j + 1)
-            if rectangle_ok(free, link_i, link_j, i, j, m, n)}
-    grown = lambda r: [(r[0] - 1, r[1], r[2] + 1, r[3]), (r[0], r[1], r[2] + 1, r[3]),
-                       (r[0], r[1] - 1, r[2], r[3] + 1), (r[0], r[1], r[2], r[3] + 1)]
-    return {r for r in good if not any(g in good for g in grown(r))}
