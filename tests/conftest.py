@@ -79,6 +79,18 @@ def shared_mesh(relative: str) -> Path:
     return path
 
 
+def weighted_cube(tmp_path, rational: bool):
+    """sample_meshes/cube.obj written with OBJ vertex weights (v x y z w), differing from 1 where ``rational``."""
+    mesh = read_obj(SAMPLES / "cube.obj")
+    weights = np.linspace(0.5, 2.0, mesh.n_vertices) if rational else np.ones(mesh.n_vertices)
+    source = tmp_path / "cube.obj"
+    offsets = mesh.face_offsets()
+    source.write_text("".join(f"v {x!r} {y!r} {z!r} {w!r}\n" for (x, y, z), w in zip(mesh.points.tolist(), weights.tolist()))
+                      + "".join("f " + " ".join(str(v + 1) for v in mesh.face_vertices[a:b]) + "\n"
+                                for a, b in zip(offsets[:-1], offsets[1:])))
+    return source
+
+
 def surface_of(path, **options) -> Surface:
     """Build the surface of an OBJ file with SurfaceOptions(**options)."""
     mesh = read_obj(path)

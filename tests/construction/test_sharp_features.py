@@ -152,7 +152,7 @@ def test_features_are_checked(cube):
 
 
 def subdivided_box(n=3, size=(2.0, 1.0, 1.5)):
-    """A box of n x n quads a side, its 6 (n-1)^2-interior grids welded along the edges: (faces, points)."""
+    """A box of n x n quads a side, the six grids welded along the box edges: (faces, points)."""
     points, index = [], {}
 
     def vertex(p):

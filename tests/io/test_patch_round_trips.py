@@ -22,7 +22,7 @@ from c1surf.io.meshes.obj import read_obj
 from c1surf.io.patches.formats import load_patch_set, write_patch_set
 from c1surf.io.patches.merged import piece_patches, uncovered_groups
 
-from conftest import SAMPLES
+from conftest import SAMPLES, weighted_cube
 
 UV = np.array([0.0, 0.3, 0.5, 0.77, 1.0])
 
@@ -109,13 +109,7 @@ def test_iges_gives_back_merged_pieces_and_their_patches(tmp_path, rational):
 @pytest.mark.parametrize("rational", [False, True])
 def test_convert_merge_writes_pieces_to_every_patch_format(tmp_path, rational):
     """convert --merge: JSON and NPZ hold every patch and the pieces; IGES the pieces and the rest; all keep weights."""
-    mesh = read_obj(SAMPLES / "cube.obj")
-    weights = np.linspace(0.5, 2.0, mesh.n_vertices) if rational else np.ones(mesh.n_vertices)
-    source = tmp_path / "cube.obj"
-    offsets = mesh.face_offsets()
-    source.write_text("".join(f"v {x!r} {y!r} {z!r} {w!r}\n" for (x, y, z), w in zip(mesh.points.tolist(), weights.tolist()))
-                      + "".join("f " + " ".join(str(v + 1) for v in mesh.face_vertices[a:b]) + "\n"
-                                for a, b in zip(offsets[:-1], offsets[1:])))
+    source = weighted_cube(tmp_path, rational)
     paths = [tmp_path / f"s{suffix}" for suffix in (".json", ".npz", ".igs")]
     args = ["convert", str(source), "-o", str(tmp_path / "s.ply"), "--merge", "-q"]
     for path in paths:

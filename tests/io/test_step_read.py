@@ -29,11 +29,10 @@ from c1surf.evaluation.compare import bbox_diagonal, patch_centres  # noqa: E402
 from c1surf.evaluation.patch_set import PatchSet  # noqa: E402
 from c1surf.evaluation.smoothness import measure_smoothness  # noqa: E402
 from c1surf.io.errors import MeshInputError  # noqa: E402
-from c1surf.io.meshes.obj import read_obj  # noqa: E402
 from c1surf.io.patches.formats import load_patch_set, write_patch_set  # noqa: E402
 from c1surf.io.patches.step import bezier_faces, bspline_faces, read_patch_set_step, write_step_shape  # noqa: E402
 
-from conftest import CLOSED_SAMPLES, SAMPLES  # noqa: E402
+from conftest import CLOSED_SAMPLES, SAMPLES, weighted_cube  # noqa: E402
 
 WORST = {}  # what -> largest relative disagreement found, for the summary below
 
@@ -113,18 +112,6 @@ def assert_same_measure(a: dict, b: dict, name: str) -> None:
         worst = max(worst, float(np.abs(x - y).max()) / scale)
     WORST[f"measure {name}"] = worst
     assert worst <= 1e-12, (worst, a, b)
-
-
-def weighted_cube(tmp_path, rational: bool):
-    """cube.obj written with OBJ vertex weights (v x y z w), differing from 1 where ``rational``."""
-    mesh = read_obj(SAMPLES / "cube.obj")
-    weights = np.linspace(0.5, 2.0, mesh.n_vertices) if rational else np.ones(mesh.n_vertices)
-    source = tmp_path / "cube.obj"
-    offsets = mesh.face_offsets()
-    source.write_text("".join(f"v {x!r} {y!r} {z!r} {w!r}\n" for (x, y, z), w in zip(mesh.points.tolist(), weights.tolist()))
-                      + "".join("f " + " ".join(str(v + 1) for v in mesh.face_vertices[a:b]) + "\n"
-                                for a, b in zip(offsets[:-1], offsets[1:])))
-    return source
 
 
 @pytest.mark.parametrize("merge", [False, True])
