@@ -281,7 +281,7 @@ def _emit_surfaces(pdw: ParameterWriter, kinds: list[_Kind], kind_of: np.ndarray
                 chars[sel, :nt] = c
                 off[sel, :nt] = o
                 lens[sel, :nt] = ln
-        pdw.emit(ents, chars, off, lens, big=(g == 1 and tmax > _BIG_ENTITY))
+        pdw.emit(ents, chars, off, lens)
         start = end
 
 
@@ -440,7 +440,7 @@ def _write_sections(fh, start_lines: list[str], global_lines: list[str], normali
     if group_form:
         ints = np.concatenate([[402, n_surf], 2 * np.arange(n_surf, dtype=np.int64) + 1])  # members' DE pointers
         ic, io, il = format_ints(ints)
-        pdw.emit(np.array([n_surf]), ic[None, :, :], io[None, :], il[None, :], big=ints.size > _BIG_ENTITY)
+        pdw.emit(np.array([n_surf]), ic[None, :, :], io[None, :], il[None, :])
     n_p = pdw.next_line - 1
     fh.seek(d_offset)
     fh.write(_directory(pdw, bspline, group_form))
