@@ -112,20 +112,19 @@ def _positional_text(d: np.ndarray, k: np.ndarray, chars: np.ndarray | None = No
     s = np.maximum(-k, 0)  # zeros after "0." plus one (0..4)
     kk = np.maximum(k, 0)  # column of the last integer digit
     length = kk + 2 + np.maximum(nd + s - kk - 1, 1)
-    # ext[:, j] = j-th char of the digits preceded by s zeros
-    ext = z[:, 4 : 4 + SLOT - 1]
-    for sv in range(1, 5):
-        sel = s == sv
-        if sel.any():
-            ext = np.where(sel[:, None], z[:, 4 - sv : 4 - sv + SLOT - 1], ext)
+    # ext[:, j] = j-th char of the digits preceded by s zeros (rows of each s copied as slices)
+    ext = z[:, 4 : 4 + SLOT - 1].copy()
+    for sv in np.unique(s[s > 0]).tolist():
+        rows = np.flatnonzero(s == sv)
+        ext[rows] = z[rows, 4 - sv : 4 - sv + SLOT - 1]
     # body char j (stored in column j+1): ext[j] for j <= kk, '.' for j == kk+1, ext[j-1] after it
-    j = np.arange(SLOT - 1, dtype=np.int8)[None, :]
-    kk8 = kk.astype(np.int8)[:, None]
     chars = np.empty((m, SLOT), dtype=np.uint8) if chars is None else chars
     chars[:, 0] = _MINUS
-    chars[:, 1] = ext[:, 0]
-    chars[:, 2:] = np.where(j[:, 1:] <= kk8, ext[:, 1:], ext[:, :-1])
-    chars[:, 1:] = np.where(j == kk8 + 1, np.uint8(_DOT), chars[:, 1:])
+    for kv in np.unique(kk).tolist():  # rows of one decimal point column at a time
+        rows = slice(None) if kv == kk[0] and np.all(kk == kv) else np.flatnonzero(kk == kv)
+        chars[rows, 1 : kv + 2] = ext[rows, : kv + 1]
+        chars[rows, kv + 2] = _DOT
+        chars[rows, kv + 3 :] = ext[rows, kv + 1 : SLOT - 2]
     return chars, length
 
 
