@@ -27,6 +27,7 @@ from ... import __version__
 from ...evaluation.merge import MergedPiece, piece_dicts
 from ...evaluation.patch_set import PatchSet, degree_runs
 from ..errors import MeshInputError
+from .brep.iges_brep import iges_brep
 from .iges_writer import UNITS, bezier_patches_to_surfaces, write_iges
 from .merged import is_piece_knots, piece_patches, uncovered_groups
 
@@ -34,32 +35,42 @@ DEFAULT_UNITS = "mm"
 
 
 def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNITS, group: bool = True,
-                         file_name: str | None = None, **_options) -> None:
-    """Write ``patch_set`` as IGES 5.3: its merged pieces, then the patches they do not stand for.
+                         file_name: str | None = None, brep: bool | None = None, **_options) -> None:
+    """Write ``patch_set`` as IGES 5.3: its merged pieces, then the patches they do not stand for, as a B-rep.
 
     Parameters
     ----------
     path : the file to write (may be a temporary name)
     patch_set : evaluation.patch_set.PatchSet (weights and merged pieces are written)
     units : a key of ``iges_writer.UNITS`` (coordinates are written unscaled; this labels them)
-    group : collect the surfaces in one group entity (402 form 7)
+    group : make CAD show one object: by default through the B-rep (a solid, an open shell, or a
+        402 group of several); ``group=False`` (``convert --no-group``) writes independent surfaces only
     file_name : the name recorded in the Global section (default: basename of ``path``)
+    brep : the surfaces as the faces of a B-rep built from the patch adjacency
+        (``brep.iges_brep``: 186 solids of the closed components, 514 shells, 510 faces, ...);
+        None: when ``group``. ``brep=False, group=True``: the surfaces in one 402 group (no B-rep)
     """
     surfaces = piece_dicts(patch_set.merged)
     for points, weights in zip(*uncovered_groups(patch_set)):
         surfaces.extend(bezier_patches_to_surfaces(points, weights))
+    layout = iges_brep(patch_set, len(surfaces), group) if (group if brep is None else brep) and surfaces else None
     write_iges(path, surfaces, units=units, group=group, file_name=file_name or os.path.basename(os.fspath(path)),
-               description=_description(patch_set))
+               description=_description(patch_set, layout), brep=layout)
 
 
-def _description(patch_set: PatchSet) -> str:
-    """The Start section's text: what was converted, the patch counts and the construction options."""
+def _description(patch_set: PatchSet, layout=None) -> str:
+    """The Start section's text: what was converted, the patch counts, the B-rep and the construction options."""
     input_path = (patch_set.header.get("input") or {}).get("path")
     source = os.path.basename(str(input_path)) if input_path else "a mesh"
     counts = {n: sum(len(g) for g in patch_set.groups if g.shape[1:3] == (n, n)) for n in (3, 4)}
     text = (f"c1surf {__version__}: G1 surface of {source}, {counts[3]} biquadratic and {counts[4]} bicubic Bezier "
             "patches as rational B-spline surfaces (type 128 form 0, "
             f"{'rational' if patch_set.weights is not None else 'polynomial'}), biquadratic first")
+    if layout is not None:
+        shells = layout.closed.size - layout.n_solids
+        text += (f"; the faces of {layout.n_solids} solid{'s' * (layout.n_solids != 1)} (type 186)"
+                 + (f" and {shells} open shell{'s' * (shells != 1)} (type 514)" if shells else "")
+                 + " sharing their edges and vertices")
     o = patch_set.header.get("options")
     if not o:
         return text + "."
@@ -165,11 +176,17 @@ def _single_span(knots: np.ndarray, degree: int) -> bool:
     return knots.size == 2 * degree + 2 and np.all(knots[: degree + 1] == knots[0]) and np.all(knots[degree + 1 :] == knots[-1])
 
 
+_BREP = (186, 514, 510, 508, 504, 502)  # solid, shell, face, loop, edge and vertex lists
+
+
 def _surfaces(path, sections):
     """(line, (knots_u, knots_v, weights (nu, nv), points (nu, nv, 3))) of each entity 128, in Directory order.
 
-    Groups (402), null entities and properties are passed over; any other
-    entity, and a surface with a transformation matrix, is refused.
+    Groups (402), null entities and properties are passed over, and so is the
+    B-rep c1surf writes around its surfaces (186, 514, 510, 508, 504, 502 and
+    the curves 126 they own, physically dependent): its faces are whole
+    surfaces. Any other entity (a free curve too), and a surface with a
+    transformation matrix, is refused.
     """
     param, record = _delimiters(sections["G"])
     de, pd = sections["D"], sections["P"]
@@ -182,8 +199,8 @@ def _surfaces(path, sections):
             etype, pointer, matrix, count = (_int(x) for x in (d1[0:8], d1[8:16], d1[48:56], d2[24:32]))
         except ValueError:
             raise MeshInputError(str(path), "malformed Directory Entry", line_number) from None
-        if etype in (402, 0, 406):  # groups, null entities and properties: nothing to draw
-            continue
+        if etype in (402, 0, 406) or etype in _BREP or (etype == 126 and d1[66:68] == "01"):
+            continue  # groups, null entities, properties; the B-rep of the surfaces and its curves
         if etype != 128:
             raise MeshInputError(str(path), f"entity type {etype} is not supported: c1surf tessellate reads only "
                                  "untrimmed Bezier patches and B-spline surfaces (type 128)", line_number)

@@ -51,6 +51,7 @@ _CHUNK_TOKENS = 1 << 15  # tokens formatted per chunk (memory bound)
 
 _STATUS_INDEPENDENT = b"00000000"
 _STATUS_GROUP_MEMBER = b"00020000"  # logically dependent (member of a 402)
+_STATUS_DEPENDENT = b"00010000"  # physically dependent (the surface of a B-rep face)
 
 
 # ----------------------------------------------------------------------------
@@ -406,28 +407,34 @@ def _default_description(bspline: np.ndarray, group_form: int) -> str:
             + (f", collected in one group (type 402 form {group_form})." if group_form else "."))
 
 
-def _directory(pdw: ParameterWriter, bspline: np.ndarray, group_form: int) -> bytes:
-    """Directory Entry records of the surfaces (``bspline`` (n,) bool: label BSPLINE, else BEZIER) and the group."""
+def _directory(pdw: ParameterWriter, bspline: np.ndarray, group_form: int, brep=None) -> bytes:
+    """Directory Entry records of the surfaces (``bspline`` (n,) bool: label BSPLINE, else BEZIER), the group
+    and the B-rep entities (``brep``: ``io.patches.brep.iges_brep.IgesBRep`` or None; its faces' surfaces are
+    physically dependent)."""
     n_surf = bspline.size
     n_ent = n_surf + (1 if group_form else 0)
     etype = np.full(n_ent, 128, dtype=np.int64)
     form = np.zeros(n_ent, dtype=np.int64)
-    status_idx = np.full(n_ent, 1 if group_form else 0, dtype=np.int64)
+    status_idx = np.full(n_ent, 2 if brep is not None else 1 if group_form else 0, dtype=np.int64)
     label_idx = np.zeros(n_ent, dtype=np.int64)
     label_idx[:n_surf][bspline] = 1
     subscript = np.arange(1, n_ent + 1, dtype=np.int64)
     if group_form:
         etype[-1], form[-1], status_idx[-1], label_idx[-1], subscript[-1] = 402, group_form, 0, 2, 0
-    return de_records(etype, pdw.pd_ptr, pdw.pd_cnt, form, [_STATUS_INDEPENDENT, _STATUS_GROUP_MEMBER], status_idx,
-                      [b"BEZIER", b"BSPLINE", b"C1SURF"], label_idx, subscript)
+    status, labels = [_STATUS_INDEPENDENT, _STATUS_GROUP_MEMBER, _STATUS_DEPENDENT], [b"BEZIER", b"BSPLINE", b"C1SURF"]
+    if brep is not None:
+        etype, form, subscript = np.r_[etype, brep.etype], np.r_[form, brep.form], np.r_[subscript, brep.subscript]
+        status_idx, label_idx = np.r_[status_idx, len(status) + brep.status], np.r_[label_idx, len(labels) + brep.label]
+        status, labels = status + list(brep.STATUS), labels + list(brep.LABELS)
+    return de_records(etype, pdw.pd_ptr, pdw.pd_cnt, form, status, status_idx, labels, label_idx, subscript)
 
 
 def _write_sections(fh, start_lines: list[str], global_lines: list[str], normalised: tuple, bspline: np.ndarray,
-                    group_form: int) -> None:
+                    group_form: int, brep=None) -> None:
     """Write the five sections to the seekable file ``fh``: Parameter Data first, then the Directory indexing it."""
     kinds, kind_of, row_of = normalised
     n_surf = bspline.size
-    n_ent = n_surf + (1 if group_form else 0)
+    n_ent = n_surf + (1 if group_form else 0) + (0 if brep is None else brep.n_entities)
     s_bytes = text_records(start_lines, "S")
     g_bytes = text_records(global_lines, "G")
     d_offset = len(s_bytes) + len(g_bytes)
@@ -441,9 +448,11 @@ def _write_sections(fh, start_lines: list[str], global_lines: list[str], normali
         ints = np.concatenate([[402, n_surf], 2 * np.arange(n_surf, dtype=np.int64) + 1])  # members' DE pointers
         ic, io, il = format_ints(ints)
         pdw.emit(np.array([n_surf]), ic[None, :, :], io[None, :], il[None, :])
+    if brep is not None:
+        brep.emit(pdw)
     n_p = pdw.next_line - 1
     fh.seek(d_offset)
-    fh.write(_directory(pdw, bspline, group_form))
+    fh.write(_directory(pdw, bspline, group_form, brep))
     term = f"S{len(start_lines):07d}G{len(global_lines):07d}D{2 * n_ent:07d}P{n_p:07d}"
     fh.seek(p_offset + n_p * RECORD)
     fh.write(text_records([term], "T"))
@@ -463,6 +472,7 @@ def write_iges(
     product_id: str | None = None,
     timestamp: Any = None,
     resolution: float | None = None,
+    brep: Any = None,
 ) -> None:
     """Write ``surfaces`` to ``path`` as an IGES 5.3 file.
 
@@ -477,6 +487,10 @@ def write_iges(
     them; ``group="ordered"`` uses form 15 (ordered group without back
     pointers) instead.  Group members get status 00020000 (logically
     dependent).  ``group=False``: independent surfaces, status 00000000.
+    ``brep``: the B-rep whose faces these surfaces are
+    (``io.patches.brep.iges_brep.IgesBRep``), written after them; the
+    surfaces are then physically dependent (00010000) and ``group`` is left
+    to the B-rep.
 
     ``units``: key of `UNITS` (``mm``, ``m``, ``cm``, ``in``, ...).
     ``file_name``: name recorded in the Global section (default: basename of
@@ -494,8 +508,8 @@ def write_iges(
         raise ValueError(f"unknown units {units!r}; use one of {sorted(UNITS)}")
     surfaces = list(surfaces)
     normalised = _normalise(surfaces)
-    group_form = _group_form(group, len(surfaces))
-    if 2 * (len(surfaces) + (1 if group_form else 0)) > 9_999_999:
+    group_form = 0 if brep is not None else _group_form(group, len(surfaces))
+    if 2 * (len(surfaces) + (1 if group_form else 0) + (0 if brep is None else brep.n_entities)) > 9_999_999:
         raise ValueError("too many entities for one IGES file")
     max_coord, diag = _extent(normalised[0])
     resolution = float((1e-9 * diag if diag > 0 else 1e-9) if resolution is None else resolution)
@@ -508,4 +522,5 @@ def write_iges(
                              units=ukey, author=author, organization=organization, stamp=_timestamp_string(timestamp), resolution=resolution,
                              max_coord=max_coord)
     with open(path, "wb") as fh:
-        _write_sections(fh, _start_lines(description), pack_text_params(gparams, SG_COLS), normalised, bspline, group_form)
+        _write_sections(fh, _start_lines(description), pack_text_params(gparams, SG_COLS), normalised, bspline, group_form,
+                        brep)
