@@ -404,3 +404,24 @@ def test_surfaces_must_be_the_topology_faces():
     patch_set = expected_patch_set(SAMPLES / "cube.obj", False)
     with pytest.raises(ValueError, match="faces"):
         iges_brep(patch_set, patch_set.n_patches - 1)
+
+
+def test_reader_reads_any_line_layout_alike(tmp_path):
+    """The byte-matrix path (80 columns, LF) and the line-by-line one (CR LF, blank lines) read the same
+    patches, and both report a bad record at its line."""
+    path = convert(tmp_path, SAMPLES / "cube.obj", "--no-merge")
+    want = read_patch_set_iges(path)
+    text = path.read_text()
+    lines = text.splitlines(keepends=True)
+    variants = {"crlf": text.replace("\n", "\r\n"), "blank": "".join(lines[:40] + ["\n"] + lines[40:])}
+    for name, content in variants.items():
+        other = tmp_path / f"{name}.igs"
+        other.write_text(content, newline="")
+        back = read_patch_set_iges(other)
+        assert all(np.array_equal(a, b) for a, b in zip(back.groups, want.groups)), name
+    lines[100] = lines[100][:72] + "X" + lines[100][73:]
+    for name, content in (("bad.igs", "".join(lines)), ("bad_crlf.igs", "".join(lines).replace("\n", "\r\n"))):
+        (tmp_path / name).write_text(content, newline="")
+        with pytest.raises(MeshInputError, match="section letter") as error:
+            read_patch_set_iges(tmp_path / name)
+        assert f"{name}:101: not an IGES file" in str(error.value)

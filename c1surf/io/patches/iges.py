@@ -81,7 +81,28 @@ def _description(patch_set: PatchSet, layout=None) -> str:
 # reading
 
 
+class _Lines:
+    """The records of one section: ``numbers`` (k,) int, their line numbers in the file; ``text`` (k, 80) uint8."""
+
+    def __init__(self, numbers, text):
+        self.numbers = np.asarray(numbers, dtype=np.int64)
+        self.text = text.reshape(-1, 80)
+
+    def __len__(self) -> int:
+        return int(self.numbers.size)
+
+    def joined(self, start: int, stop: int, columns: int) -> str:
+        """Columns 1 .. ``columns`` of records ``start`` .. ``stop`` - 1, as one string."""
+        return self.text[start:stop, :columns].tobytes().decode("ascii")
+
+
 def _records(path) -> dict:
+    """{section letter: _Lines} of an IGES file (Start, Global, Directory, Parameter, Terminate).
+
+    Files of 80-column records with LF line ends (c1surf's, and most) are cut
+    as one byte matrix; any other layout (CR LF, short or blank lines) goes
+    line by line, with the same result.
+    """
     try:
         with open(path, "rb") as f:
             data = f.read()
@@ -89,10 +110,28 @@ def _records(path) -> dict:
         raise MeshInputError(str(path), "no such file") from None
     except IsADirectoryError:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
-    try:
-        text = data.decode("ascii")
-    except UnicodeDecodeError:
-        raise MeshInputError(str(path), "not an IGES file (not ASCII; compressed or binary IGES is not supported)") from None
+    raw = np.frombuffer(data, dtype=np.uint8)
+    if raw.size and raw.max() >= 128:
+        raise MeshInputError(str(path), "not an IGES file (not ASCII; compressed or binary IGES is not supported)")
+    rows = raw.reshape(-1, 81) if raw.size and raw.size % 81 == 0 else None
+    if rows is None or data.count(b"\n") != rows.shape[0] or np.any(rows[:, 80] != 10) \
+            or any(c in data for c in _LINE_BREAKS) or not np.all(_SECTION_LETTER[rows[:, 72]]):
+        return _records_by_line(path, data.decode("ascii"))  # the errors, blank lines and odd layouts too
+    letters = rows[:, 72]
+    sections = {c: _Lines(np.flatnonzero(letters == ord(c)) + 1, np.ascontiguousarray(rows[letters == ord(c), :80]))
+                for c in "SGDPT"}
+    if not len(sections["G"]) or not len(sections["T"]):
+        raise MeshInputError(str(path), "not an IGES file (no Global or Terminate section)")
+    return sections
+
+
+_LINE_BREAKS = (b"\r", b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e")  # where str.splitlines cuts, besides LF
+_SECTION_LETTER = np.zeros(256, dtype=bool)
+_SECTION_LETTER[np.frombuffer(b"SGDPT", dtype=np.uint8)] = True
+
+
+def _records_by_line(path, text: str) -> dict:
+    """``_records`` of a file in any other line layout, line by line (blank lines skipped, short ones padded)."""
     sections: dict = {c: [] for c in "SGDPT"}
     for number, line in enumerate(text.splitlines(), 1):
         if not line.strip():
@@ -102,11 +141,12 @@ def _records(path) -> dict:
         sections[line[72]].append((number, line[:80].ljust(80)))
     if not sections["G"] or not sections["T"]:
         raise MeshInputError(str(path), "not an IGES file (no Global or Terminate section)")
-    return sections
+    return {c: _Lines([n for n, _ in v], np.frombuffer("".join(t for _, t in v).encode("ascii"), dtype=np.uint8))
+            for c, v in sections.items()}
 
 
-def _delimiters(global_lines) -> tuple[str, str]:
-    text = "".join(line[:72] for _, line in global_lines)
+def _delimiters(global_lines: _Lines) -> tuple[str, str]:
+    text = global_lines.joined(0, len(global_lines), 72)
     param, record = ",", ";"
     if text.startswith("1H"):
         param = text[2]
@@ -116,17 +156,32 @@ def _delimiters(global_lines) -> tuple[str, str]:
     return param, record
 
 
-def _parameters(path, pd_lines, start: int, count: int, param: str, record: str):
-    body = "".join(line[:64] for _, line in pd_lines[start - 1 : start - 1 + count])
+def _parameters(path, pd_lines: _Lines, start: int, count: int, param: str, record: str):
+    body = pd_lines.joined(start - 1, start - 1 + count, 64)
     end = body.find(record)
     if end < 0:
-        raise MeshInputError(str(path), "Parameter Data entry without a record delimiter", pd_lines[start - 1][0])
+        raise MeshInputError(str(path), "Parameter Data entry without a record delimiter",
+                             int(pd_lines.numbers[start - 1]) if 0 < start <= len(pd_lines) else None)
     return [t.strip() for t in body[:end].split(param)]
 
 
 def _int(field: str) -> int:
     field = field.strip()
     return int(field) if field else 0
+
+
+def _int_fields(fields: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Right-justified integer fields (k, w) uint8 of the Directory: (values (k,) int64, ok (k,) bool).
+
+    ``ok`` is False where a field is not blanks followed by digits (signs, inner
+    or trailing blanks); those are read one by one (``_int``).
+    """
+    digit = (fields >= 48) & (fields <= 57)
+    blank = fields == 32
+    leading = np.cumsum(digit, axis=1) == 0  # before the first digit
+    ok = np.all(digit | (blank & leading), axis=1)
+    values = (np.where(digit, fields - 48, 0).astype(np.int64) * 10 ** np.arange(fields.shape[1] - 1, -1, -1)).sum(axis=1)
+    return values, ok
 
 
 def _real(token: str) -> float:
@@ -191,16 +246,25 @@ def _surfaces(path, sections):
     param, record = _delimiters(sections["G"])
     de, pd = sections["D"], sections["P"]
     if len(de) % 2:
-        raise MeshInputError(str(path), "the Directory Entry section has an odd number of records", de[-1][0] if de else None)
-    for k in range(0, len(de), 2):
-        line_number, d1 = de[k]
-        d2 = de[k + 1][1]
+        raise MeshInputError(str(path), "the Directory Entry section has an odd number of records",
+                             int(de.numbers[-1]) if len(de) else None)
+    first, second = de.text[0::2], de.text[1::2]
+    fields = [first[:, 0:8], first[:, 8:16], first[:, 48:56], second[:, 24:32]]
+    parsed = [_int_fields(f) for f in fields]
+    well_formed = np.all([ok for _, ok in parsed], axis=0)
+    etype = parsed[0][0]
+    dependent_curve = (etype == 126) & np.all(first[:, 66:68] == np.frombuffer(b"01", dtype=np.uint8), axis=1)
+    passed_over = np.isin(etype, (402, 0, 406) + _BREP) | dependent_curve
+    # groups, null entities, properties, the B-rep of the surfaces and its curves: not even looked at
+    for k in np.flatnonzero(~(passed_over & well_formed)).tolist():
+        line_number = int(de.numbers[2 * k])
         try:
-            etype, pointer, matrix, count = (_int(x) for x in (d1[0:8], d1[8:16], d1[48:56], d2[24:32]))
+            etype, pointer, matrix, count = (int(v[k]) if ok[k] else _int(f[k].tobytes().decode("ascii"))
+                                             for (v, ok), f in zip(parsed, fields))
         except ValueError:
             raise MeshInputError(str(path), "malformed Directory Entry", line_number) from None
-        if etype in (402, 0, 406) or etype in _BREP or (etype == 126 and d1[66:68] == "01"):
-            continue  # groups, null entities, properties; the B-rep of the surfaces and its curves
+        if etype in (402, 0, 406) or etype in _BREP or (etype == 126 and dependent_curve[k]):
+            continue
         if etype != 128:
             raise MeshInputError(str(path), f"entity type {etype} is not supported: c1surf tessellate reads only "
                                  "untrimmed Bezier patches and B-spline surfaces (type 128)", line_number)
@@ -214,7 +278,11 @@ def _surface_128(path, tokens: list, line: int):
     try:
         k1, k2, m1, m2 = (int(t) for t in tokens[1:5])
         n1, n2, nc = k1 + m1 + 2, k2 + m2 + 2, (k1 + 1) * (k2 + 1)
-        values = np.array([_real(t) for t in tokens[10 : 10 + n1 + n2 + 4 * nc]])
+        reals = tokens[10 : 10 + n1 + n2 + 4 * nc]
+        try:
+            values = np.array(reals, dtype=np.float64)  # plain decimal numbers, converted at C speed
+        except ValueError:  # D exponents, defaulted (empty) parameters
+            values = np.array([_real(t) for t in reals])
     except (ValueError, IndexError):
         raise MeshInputError(str(path), "malformed rational B-spline surface (type 128)", line) from None
     if values.size != n1 + n2 + 4 * nc or not np.all(np.isfinite(values)):
