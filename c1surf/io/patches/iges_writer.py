@@ -392,6 +392,15 @@ def _extent(kinds: list[_Kind]) -> tuple[float, float]:
     return float(np.max(np.maximum(np.abs(lo), np.abs(hi)))), float(np.linalg.norm(hi - lo))
 
 
+def _extent_and_resolution(kinds: list[_Kind], resolution: float | None) -> tuple[float, float]:
+    """(largest |coordinate|, the Global section's resolution: given, else 1e-9 of the bounding-box diagonal)."""
+    max_coord, diag = _extent(kinds)
+    resolution = float((1e-9 * diag if diag > 0 else 1e-9) if resolution is None else resolution)
+    if not (np.isfinite(resolution) and resolution > 0):
+        raise ValueError("resolution must be positive")
+    return max_coord, resolution
+
+
 def _start_lines(description: str) -> list[str]:
     """The Start section's text, wrapped to 72 columns (paragraphs kept)."""
     lines: list[str] = []
@@ -487,21 +496,18 @@ def write_iges(
     them; ``group="ordered"`` uses form 15 (ordered group without back
     pointers) instead.  Group members get status 00020000 (logically
     dependent).  ``group=False``: independent surfaces, status 00000000.
-    ``brep``: the B-rep whose faces these surfaces are
-    (``io.patches.brep.iges_brep.IgesBRep``), written after them; the
-    surfaces are then physically dependent (00010000) and ``group`` is left
-    to the B-rep.
+    ``brep``: the ``brep.iges_brep.IgesBRep`` whose faces these surfaces are,
+    written after them (surfaces physically dependent, 00010000; no 402).
 
-    ``units``: key of `UNITS` (``mm``, ``m``, ``cm``, ``in``, ...).
-    ``file_name``: name recorded in the Global section (default: basename of
-    ``path``; pass the final name when writing to a temporary file).
-    ``product_id``: default = ``file_name`` without extension.
+    ``units``: key of `UNITS` (``mm``, ``m``, ``cm``, ``in``, ...).  ``file_name``:
+    name in the Global section (default: basename of ``path``; pass the final
+    name when writing to a temporary file).  ``product_id``: default =
+    ``file_name`` without extension.
     ``timestamp``: datetime (UTC) or seconds since the epoch; default
     ``$SOURCE_DATE_EPOCH`` or 0.  ``resolution``: default 1e-9 * bounding box
     diagonal (1e-9 if that is 0).
 
-    ``path`` must be a seekable regular file (the Parameter section is written
-    before the Directory section it is indexed from).
+    ``path``: a seekable regular file (Parameter Data is written before the Directory).
     """
     ukey = str(units).lower()
     if ukey not in UNITS:
@@ -511,10 +517,7 @@ def write_iges(
     group_form = 0 if brep is not None else _group_form(group, len(surfaces))
     if 2 * (len(surfaces) + (1 if group_form else 0) + (0 if brep is None else brep.n_entities)) > 9_999_999:
         raise ValueError("too many entities for one IGES file")
-    max_coord, diag = _extent(normalised[0])
-    resolution = float((1e-9 * diag if diag > 0 else 1e-9) if resolution is None else resolution)
-    if not (np.isfinite(resolution) and resolution > 0):
-        raise ValueError("resolution must be positive")
+    max_coord, resolution = _extent_and_resolution(normalised[0], resolution)
     fname = os.path.basename(os.fspath(path)) if file_name is None else str(file_name)
     bspline = np.array([s.get("knots_u") is not None for s in surfaces], dtype=bool)
     description = _default_description(bspline, group_form) if description is None else description

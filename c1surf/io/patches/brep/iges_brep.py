@@ -354,6 +354,26 @@ def _pointer(entity) -> np.ndarray:
     return 2 * np.asarray(entity, dtype=np.int64) + 1
 
 
+@dataclass(frozen=True)
+class _Numbers:
+    """The first entity number of each kind, in Directory order (``end``: one past the last)."""
+
+    curve: int
+    pcurve: int
+    vertex_list: int
+    edge_list: int
+    loop: int
+    face: int
+    shell: int
+    solid: int
+    group: int
+    end: int
+
+
+def _blocks(n: int) -> int:
+    return -(-n // LIST_BLOCK)
+
+
 def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRepTopology | None = None) -> IgesBRep:
     """The B-rep entities of ``patch_set`` whose faces are the file's surfaces 0 .. ``first`` - 1.
 
@@ -368,9 +388,6 @@ def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRe
     Returns
     -------
     IgesBRep
-
-    Long: one straight pass numbering every entity kind and assembling its parameter table; split,
-    it would only pass a dozen offsets around.
     """
     topology = brep_topology(patch_set) if topology is None else topology
     f, e, v = topology.n_faces, topology.n_edges, len(topology.vertex_points)
@@ -379,71 +396,92 @@ def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRe
     component, n_comp = _components(topology)
     face_of_use = np.repeat(np.arange(f), np.diff(topology.loop_start))
     closed = np.bincount(component[face_of_use], topology.edge_uses[topology.loop_edge] != 2, minlength=n_comp) == 0
-    volume = _signed_volumes(patch_set, component[_patch_faces(patch_set, topology)], n_comp)
-    outward = volume >= 0
-    solid_of = np.cumsum(closed) - 1  # the solid of each closed component
+    outward = _signed_volumes(patch_set, component[_patch_faces(patch_set, topology)], n_comp) >= 0
     grouped = bool(group) and n_comp > 1
-    blocks = lambda n: -(-n // LIST_BLOCK)  # noqa: E731
     segments, segment_of_use = _distinct_segments(topology.loop_uv)
-    counts = [e, len(segments), blocks(v), blocks(e), f, f, n_comp, int(closed.sum()), int(grouped)]
-    s_curve, s_pcurve, s_vlist, s_elist, s_loop, s_face, s_shell, s_solid, s_group, end = (
-        first + np.r_[0, np.cumsum(counts)]).tolist()
+    counts = [e, len(segments), _blocks(v), _blocks(e), f, f, n_comp, int(closed.sum()), int(grouped)]
+    at = _Numbers(*(first + np.r_[0, np.cumsum(counts)]).tolist())
+    parts, curve_of = _curve_parts(patch_set, topology, at, segments)
+    parts += _list_parts(topology, at, curve_of)
+    loop_parts, loop_rank = _loop_and_face_parts(topology, at, segment_of_use, face_of_use)
+    parts += loop_parts + _shell_parts(at, component, closed, outward, grouped)
+    etype, form, status, label, subscript = _directory_fields(counts, closed, grouped)
+    subscript[etype == 508] = np.argsort(loop_rank) + 1  # a loop is numbered by its face
+    assert etype.size == at.end - first
+    return IgesBRep(topology, first, etype, form, status, label, subscript, closed, outward, tuple(parts))
 
-    # 126: edge curves by degree, then pcurves in loop order
+
+def _curve_parts(patch_set: PatchSet, topology: BRepTopology, at: _Numbers, segments: np.ndarray):
+    """Rows of the 126 edge curves (by degree) and pcurves, and the curve entity of each edge ((E,) int64)."""
     polygons = edge_polygons(patch_set, topology)
-    curve_of = np.empty(e, np.int64)
-    curve_of[np.concatenate([p[0] for p in polygons])] = s_curve + np.arange(e)
-    parts = [(s_curve + int(sum(len(q[0]) for q in polygons[:k])), *_curve_rows(p[1], p[2]))
-             for k, p in enumerate(polygons)]
-    parts.append((s_pcurve, *_pcurve_rows(segments)))
-    # 502 and 504 in blocks
+    curve_of = np.empty(topology.n_edges, np.int64)
+    curve_of[np.concatenate([p[0] for p in polygons])] = at.curve + np.arange(topology.n_edges)
+    offsets = np.cumsum([0] + [len(p[0]) for p in polygons])
+    parts = [(at.curve + int(offsets[k]), *_curve_rows(points, weights)) for k, (_, points, weights) in enumerate(polygons)]
+    parts.append((at.pcurve, *_pcurve_rows(segments)))
+    return parts, curve_of
+
+
+def _list_parts(topology: BRepTopology, at: _Numbers, curve_of: np.ndarray) -> list:
+    """Rows of the 502 vertex lists (full blocks, then the last) and of the 504 edge lists."""
+    v, parts = len(topology.vertex_points), []
     full = v // LIST_BLOCK * LIST_BLOCK
     for a, b in ((0, full), (full, v)):
         if b > a:
-            n_rows = (b - a) // LIST_BLOCK if b == full else 1
-            ints = np.tile(np.array([[502, min(LIST_BLOCK, b - a)]], np.int64), (n_rows, 1))
-            parts.append((s_vlist + a // LIST_BLOCK, ints, topology.vertex_points[a:b].reshape(n_rows, -1)))
-    start_v, end_v = topology.edge_vertices[:, 0], topology.edge_vertices[:, 1]
-    edge_items = np.stack([_pointer(curve_of), _pointer(s_vlist + start_v // LIST_BLOCK), start_v % LIST_BLOCK + 1,
-                           _pointer(s_vlist + end_v // LIST_BLOCK), end_v % LIST_BLOCK + 1], axis=1)
-    parts.append((s_elist, _ragged(504, np.arange(e) // LIST_BLOCK, edge_items, blocks(e)), None))
-    # 508 loops, longest first (fewer, tighter chunks), 510 faces in face order
+            rows = (b - a) // LIST_BLOCK if b == full else 1
+            ints = np.tile(np.array([[502, min(LIST_BLOCK, b - a)]], np.int64), (rows, 1))
+            parts.append((at.vertex_list + a // LIST_BLOCK, ints, topology.vertex_points[a:b].reshape(rows, -1)))
+    start, end = topology.edge_vertices[:, 0], topology.edge_vertices[:, 1]
+    items = np.stack([_pointer(curve_of), _pointer(at.vertex_list + start // LIST_BLOCK), start % LIST_BLOCK + 1,
+                      _pointer(at.vertex_list + end // LIST_BLOCK), end % LIST_BLOCK + 1], axis=1)
+    e = topology.n_edges
+    parts.append((at.edge_list, _ragged(504, np.arange(e) // LIST_BLOCK, items, _blocks(e)), None))
+    return parts
+
+
+def _loop_and_face_parts(topology: BRepTopology, at: _Numbers, segment_of_use: np.ndarray, face_of_use: np.ndarray):
+    """Rows of the 508 loops (longest first: fewer, tighter chunks) and 510 faces; the loop rank of each face."""
+    f = topology.n_faces
     loop_rank = np.empty(f, np.int64)
     loop_rank[np.argsort(-np.diff(topology.loop_start), kind="stable")] = np.arange(f)
     uses = np.argsort(loop_rank[face_of_use], kind="stable")  # loop entries in the loops' Directory order
-    le = topology.loop_edge[uses]
-    use_items = np.stack([np.zeros_like(le), _pointer(s_elist + le // LIST_BLOCK), le % LIST_BLOCK + 1,
-                          topology.loop_forward[uses].astype(np.int64), np.ones_like(le), np.ones_like(le),
-                          _pointer(s_pcurve + segment_of_use[uses])], axis=1)
-    parts.append((s_loop, _ragged(508, loop_rank[face_of_use[uses]], use_items, f), None))
+    edge = topology.loop_edge[uses]
+    ones = np.ones_like(edge)
+    items = np.stack([0 * ones, _pointer(at.edge_list + edge // LIST_BLOCK), edge % LIST_BLOCK + 1,
+                      topology.loop_forward[uses].astype(np.int64), ones, ones,
+                      _pointer(at.pcurve + segment_of_use[uses])], axis=1)
     faces = np.stack([np.full(f, 510), _pointer(np.arange(f)), np.ones(f, np.int64), np.ones(f, np.int64),
-                      _pointer(s_loop + loop_rank)], axis=1)
-    parts.append((s_face, faces, None))
-    # 514 shells per component, 186 solids of the closed ones, the group
-    by_component = np.argsort(component, kind="stable")
-    shell_items = np.stack([_pointer(s_face + by_component), np.ones(f, np.int64)], axis=1)
-    parts.append((s_shell, _ragged(514, component[by_component], shell_items, n_comp), None))
-    if closed.any():
-        shells = np.flatnonzero(closed)
-        solids = np.stack([np.full(shells.size, 186), _pointer(s_shell + shells), outward[shells].astype(np.int64),
-                           np.zeros(shells.size, np.int64)], axis=1)
-        parts.append((s_solid, solids, None))
-    root = np.where(closed, _pointer(s_solid + solid_of), _pointer(s_shell + np.arange(n_comp)))
-    if grouped:
-        parts.append((s_group, np.r_[402, n_comp, root][None, :].astype(np.int64), None))
+                      _pointer(at.loop + loop_rank)], axis=1)
+    return [(at.loop, _ragged(508, loop_rank[face_of_use[uses]], items, f), None), (at.face, faces, None)], loop_rank
 
-    kinds = [(126, 0, _DEPENDENT, _CURVE, e), (126, 0, _PARAMETRIC, _PCURVE, counts[1]), (502, 1, _DEPENDENT, _VERTICES, counts[2]),
-             (504, 1, _DEPENDENT, _EDGES, counts[3]), (508, 1, _DEPENDENT, _LOOP, f), (510, 1, _DEPENDENT, _FACE, f)]
-    etype, form, status, label, subscript = (np.concatenate(c) for c in zip(*[
-        (np.full(n, t), np.full(n, fm), np.full(n, st), np.full(n, lb), np.arange(1, n + 1)) for t, fm, st, lb, n in kinds]))
-    loose = _MEMBER if grouped else _ROOT
-    shell_status = np.where(closed, _DEPENDENT, loose)
-    etype = np.r_[etype, np.full(n_comp, 514), np.full(counts[7], 186), [402] * int(grouped)]
-    form = np.r_[form, np.where(closed, 1, 2), np.zeros(counts[7], np.int64), [7] * int(grouped)]
-    status = np.r_[status, shell_status, np.full(counts[7], loose), [_ROOT] * int(grouped)]
-    label = np.r_[label, np.full(n_comp, _SHELL), np.full(counts[7], _SOLID), [_SOLID] * int(grouped)]
-    subscript = np.r_[subscript, np.arange(1, n_comp + 1), np.arange(1, counts[7] + 1), [0] * int(grouped)]
-    subscript[etype == 508] = np.argsort(loop_rank) + 1  # a loop is numbered by its face
-    assert etype.size == end - first
-    return IgesBRep(topology, first, etype.astype(np.int64), form.astype(np.int64), status.astype(np.int64),
-                    label.astype(np.int64), subscript.astype(np.int64), closed, outward, tuple(parts))
+
+def _shell_parts(at: _Numbers, component: np.ndarray, closed: np.ndarray, outward: np.ndarray, grouped: bool) -> list:
+    """Rows of the 514 shells (one per component), the 186 solids of the closed ones and the 402 group."""
+    by_component = np.argsort(component, kind="stable")
+    items = np.stack([_pointer(at.face + by_component), np.ones(component.size, np.int64)], axis=1)
+    parts = [(at.shell, _ragged(514, component[by_component], items, closed.size), None)]
+    shells = np.flatnonzero(closed)
+    if shells.size:
+        parts.append((at.solid, np.stack([np.full(shells.size, 186), _pointer(at.shell + shells),
+                                          outward[shells].astype(np.int64), np.zeros(shells.size, np.int64)], axis=1), None))
+    if grouped:
+        roots = np.where(closed, _pointer(at.solid + np.cumsum(closed) - 1), _pointer(at.shell + np.arange(closed.size)))
+        parts.append((at.group, np.r_[402, closed.size, roots][None, :].astype(np.int64), None))
+    return parts
+
+
+def _directory_fields(counts: list, closed: np.ndarray, grouped: bool):
+    """Type, form, status, label and subscript (each (N,) int64) of the B-rep entities, in Directory order."""
+    n_curves, n_pcurves, n_vlists, n_elists, f, _, _, n_solids, _ = counts
+    loose = _MEMBER if grouped else _ROOT  # the roots (solids, open shells): in the group, or on their own
+    runs = [(126, 0, _DEPENDENT, _CURVE, n_curves), (126, 0, _PARAMETRIC, _PCURVE, n_pcurves),
+            (502, 1, _DEPENDENT, _VERTICES, n_vlists), (504, 1, _DEPENDENT, _EDGES, n_elists),
+            (508, 1, _DEPENDENT, _LOOP, f), (510, 1, _DEPENDENT, _FACE, f)]
+    runs += [(514, 1, _DEPENDENT, _SHELL, 1) if c else (514, 2, loose, _SHELL, 1) for c in closed.tolist()]
+    runs += [(186, 0, loose, _SOLID, n_solids)] + ([(402, 7, _ROOT, _SOLID, 1)] if grouped else [])
+    sizes = [r[4] for r in runs]
+    etype, form, status, label = (np.repeat(np.array([r[i] for r in runs], np.int64), sizes) for i in range(4))
+    subscript = np.concatenate([np.arange(1, n + 1) for n in sizes]).astype(np.int64)  # numbered within each kind
+    subscript[etype == 514] = np.arange(1, closed.size + 1)
+    subscript[etype == 402] = 0
+    return etype, form, status, label, subscript
