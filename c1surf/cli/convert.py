@@ -153,7 +153,8 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @click.option("--units", type=click.Choice(sorted(UNITS)), default=DEFAULT_UNITS, show_default=True,
               help="Length unit recorded in an IGES patch file (coordinates are written as they are).")
 @click.option("--no-group", is_flag=True,
-              help="IGES patch file: independent surfaces, without the group entity that makes CAD show one object.")
+              help="IGES patch file: independent surfaces only, without the B-rep (solid or shell sharing its edges) "
+                   "that makes CAD show one object: for readers without IGES B-rep support.")
 @click.option("--curvature", is_flag=True,
               help="PLY output: add per-vertex kmax (max |k|), K (Gaussian), H (mean), quality (= kmax) and red/green/blue "
                    "(kmax colour-mapped), evaluated exactly on the patches.")

@@ -1,20 +1,27 @@
-"""Patch files in IGES 5.3 (``.igs`` / ``.iges``): write a PatchSet, read Bezier patches and merged surfaces back.
+"""Patch files in IGES 5.3 (``.igs`` / ``.iges``): write a PatchSet as a B-rep, read Bezier patches and merged surfaces back.
 
 Writing goes through ``iges_writer.write_iges``: one rational B-spline surface
-entity (type 128, form 0) per patch, biquadratic first, then bicubic, clamped
-knots on [0, 1], the patch weights (PROP3 = 1 where they are all equal:
-polynomial), control points with the first (u) index fastest; merged pieces
-(``convert --merge``) come first and replace the patches they stand for. By
-default one group entity (type 402 form 7) collects them so CAD systems show
-one object.
+entity (type 128, form 0) per CAD face, merged pieces first (the default for
+IGES: they replace the patches they stand for), then the remaining patches,
+biquadratic before bicubic, clamped knots on [0, 1], the patch weights (PROP3
+= 1 where they are all equal: polynomial), control points with the first (u)
+index fastest. By default those surfaces are the faces of a B-rep built from
+c1surf's own patch adjacency (``brep.iges_brep``): one manifold solid (186)
+per closed component, an open shell (514 form 2) per open one, faces (510),
+loops (508), shared edges (504) and vertices (502), so a CAD system reads one
+valid solid without sewing. ``group=False`` (``convert --no-group``) writes
+the surfaces alone, independent; ``brep=False`` collects them in one group
+entity (402 form 7) instead (the layout before the B-rep).
 
 Reading accepts everything that writer writes: entities 128 that are single
 Bezier patches (polynomial or rational: unequal weights become
 ``PatchSet.weights``) and c1surf's merged B-spline surfaces (degree (2, 2),
 knots 0 0 0 1 ... m m m: ``PatchSet.merged``, their patches cut out again
-into the patch list), optionally collected by 402 groups. Anything else
-(trimmed surfaces, other B-splines, transformation matrices, other geometry)
-is refused with one line saying so. IGES carries no adjacency:
+into the patch list), in Directory order; 402 groups and the B-rep around the
+surfaces (its curves 126 are physically dependent) are passed over, its faces
+being whole surfaces. Anything else (trimmed surfaces, other B-splines,
+transformation matrices, free curves, other geometry) is refused with one
+line saying so. The reader takes no adjacency from the B-rep:
 ``PatchSet.welding()`` finds it from the geometry.
 """
 from __future__ import annotations

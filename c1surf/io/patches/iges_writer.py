@@ -3,8 +3,10 @@
 Each surface becomes one *Rational B-spline surface entity* (type 128, form 0);
 optionally all of them are collected by one *Unordered group without back
 pointers* (type 402, form 7; or form 15, ordered) so that a CAD system shows a
-single object.  Open CASCADE reads the files without a single load-check
-message; note that it converts file units to millimetres on import.
+single object, or they are the faces of a B-rep whose entities a caller
+builds (``brep``: ``io.patches.brep.iges_brep``) and this writer writes after
+them.  Open CASCADE reads the files without a single load-check message; note
+that it converts file units to millimetres on import.
 
 The file has the five fixed-format sections of IGES 5.3 (Start, Global,
 Directory Entry, Parameter Data, Terminate), 80-column records, LF line ends
@@ -20,7 +22,7 @@ Public API
 ----------
 ``write_iges(path, surfaces, *, units="mm", group=True, author="c1surf",
 description=None, organization="", file_name=None, product_id=None,
-timestamp=None, resolution=None)``
+timestamp=None, resolution=None, brep=None)``
 
 ``bezier_patches_to_surfaces(points_array, weights=None)``
 """

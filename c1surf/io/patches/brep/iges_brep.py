@@ -7,20 +7,22 @@ model (section 4, "BREP"), written after the surfaces (one type 128 per face, in
 the writer's order: merged pieces, then the uncovered patches), in this
 Directory order:
 
-- 126 rational B-spline curve, one per edge (form 0, status 00010000): the
-  edge's Bezier control polygon in its direction (degree 2 or 3, knots
-  ``0..0 1..1``, parameter range [0, 1], the weights of a rational surface,
-  PROP3 = 1 where they are all equal), degree-2 curves first;
+- 126 rational B-spline curve, one per edge (form 0, status 00010000). The
+  edges are maximal (``edge_runs``): a run of k patch sides between the same
+  two faces, straight in both their parameter domains, is one edge whose
+  curve is the C1 quadratic B-spline of those sides (knots 0 0 0 1 .. k k k,
+  range [0, k]); any other edge is one side's Bezier polygon (degree 2 or 3,
+  knots ``0..0 1..1``, range [0, 1]). Weights of a rational surface, PROP3 = 1
+  where they are all equal; curves grouped by degree and spans;
 - 126, the pcurves (status 00010500: use flag 05, parameter space): an edge
   use's straight degree-1 curve in its face's (u, v) domain ([0, m] x [0, n]
   for a piece of knots 0 .. m, [0, 1]^2 for a patch), planar (normal 0 0 1),
-  from the use's start to its end *in loop direction*, over [0, 1]. It runs
+  from the use's start to its end *in loop direction*, over [0, k]. It runs
   with the 3D curve where the loop uses the edge forwards; where backwards,
   the reader reverses it (Open CASCADE's IGESToBRep does) and it runs with the
   curve again, parameter for parameter. Uses with the same segment share one
   entity (IGES lets several entities reference a physically dependent one):
-  every patch face's loop names the same four, so a file holds a few hundred
-  pcurves instead of four per patch;
+  every patch face's loop names the same four;
 - 502 vertex list and 504 edge list (form 1), in blocks of ``LIST_BLOCK``
   entries (an edge names its curve, start and end vertex as (list, index));
 - 508 loop (form 1), one per face: its outer boundary, each entry an edge use
@@ -54,6 +56,7 @@ from ....evaluation.measure import gauss_rule, patch_frames
 from ....evaluation.patch_set import PatchSet
 from ..iges_numbers import SLOT, SPACE, format_ints, format_reals
 from ..iges_records import ParameterWriter
+from .edge_runs import EdgeRuns, edge_runs
 from .topology import FACE_PIECE, BRepTopology, brep_topology
 
 __all__ = ["IgesBRep", "iges_brep", "edge_polygons", "LIST_BLOCK"]
@@ -71,7 +74,7 @@ _CURVE, _PCURVE, _VERTICES, _EDGES, _LOOP, _FACE, _SHELL, _SOLID = range(8)
 class IgesBRep:
     """The B-rep entities of one file, numbered after its ``first`` surfaces, ready for ``iges_writer.write_iges``.
 
-    topology : BRepTopology (faces in the order of the file's surfaces)
+    topology : BRepTopology of the file: maximal edges (``edge_runs``), faces in the order of its surfaces
     first : int, number of surfaces before the B-rep entities (entity k has the DE pointer 2 k + 1)
     etype, form, status, label : (N,) int64, per B-rep entity in Directory order (status and label
         index ``STATUS`` and ``LABELS``)
@@ -234,35 +237,40 @@ def _ragged(etype: int, row: np.ndarray, items: np.ndarray, n_rows: int):
     return values, starts
 
 
-def _curve_rows(points: np.ndarray, weights: np.ndarray | None):
-    """Entity 126 parameters of Bezier curves: ints (n, 7) and reals (n, 5 d + 10).
+def _curve_rows(points: np.ndarray, weights: np.ndarray | None, spans: int):
+    """Entity 126 parameters of clamped B-spline curves of ``spans`` uniform spans: ints (n, 7), reals (n, ...).
 
-    points : (n, d + 1, 3) float; weights : (n, d + 1) float or None (unit weights, polynomial).
-    Knots ``0 .. 0 1 .. 1``, range [0, 1], not flagged planar (normal 0 0 0); PROP2 (closed)
-    where the end points and their weights are equal, PROP3 (polynomial) where all weights are.
+    points : (n, spans + d, 3) float; weights : (n, spans + d) float or None (unit weights, polynomial).
+    Knots ``0 .. 0 1 .. spans - 1 spans .. spans`` (d + 1 fold ends), range [0, spans], not flagged
+    planar (normal 0 0 0); PROP2 (closed) where the end points and their weights are equal, PROP3
+    (polynomial) where all weights are.
     """
-    n, d = points.shape[0], points.shape[1] - 1
+    n, count = points.shape[:2]
+    d = count - spans
     w = np.ones(points.shape[:2]) if weights is None else weights
     closed = np.all(points[:, 0] == points[:, -1], axis=1) & (w[:, 0] == w[:, -1])
     polynomial = np.all(w == w[:, :1], axis=1)
     ints = np.zeros((n, 7), np.int64)
-    ints[:, 0], ints[:, 1], ints[:, 2], ints[:, 4], ints[:, 5] = 126, d, d, closed, polynomial
-    knots = np.r_[np.zeros(d + 1), np.ones(d + 1)]
+    ints[:, 0], ints[:, 1], ints[:, 2], ints[:, 4], ints[:, 5] = 126, count - 1, d, closed, polynomial
+    knots = np.r_[np.zeros(d + 1), np.arange(1.0, spans), np.full(d + 1, float(spans))]
     floats = np.concatenate([np.broadcast_to(knots, (n, knots.size)), w, points.reshape(n, -1),
-                             np.broadcast_to([0.0, 1.0, 0.0, 0.0, 0.0], (n, 5))], axis=1)
+                             np.broadcast_to([0.0, float(spans), 0.0, 0.0, 0.0], (n, 5))], axis=1)
     return ints, floats
 
 
 def _pcurve_rows(uv: np.ndarray):
     """Entity 126 parameters of straight parameter-space segments: ints (L, 7), reals (L, 17).
 
-    uv : (L, 2, 2) float, start and end (u, v). Degree 1, knots 0 0 1 1, unit weights, points
-    (u, v, 0), range [0, 1], planar with the normal 0 0 1.
+    uv : (L, 2, 2) float, start and end (u, v) of axis-parallel segments of whole spans. Degree 1,
+    knots 0 0 k k and range [0, k] for a segment k spans long (so it runs with its edge's curve),
+    unit weights, points (u, v, 0), planar with the normal 0 0 1.
     """
     n = uv.shape[0]
+    spans = np.abs(uv[:, 1] - uv[:, 0]).sum(axis=1)
     ints = np.tile(np.array([126, 1, 1, 1, 0, 1, 0], np.int64), (n, 1))
     floats = np.zeros((n, 17))
-    floats[:, [2, 3, 4, 5, 13, 16]] = 1.0  # knots 0 0 1 1, weights 1 1, range 0 1, normal 0 0 1
+    floats[:, [4, 5, 16]] = 1.0  # weights 1 1, normal 0 0 1
+    floats[:, [2, 3, 13]] = spans[:, None]  # knots 0 0 k k, range 0 k
     floats[:, [6, 7]] = uv[:, 0]
     floats[:, [9, 10]] = uv[:, 1]
     return ints, floats
@@ -390,9 +398,11 @@ def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRe
     IgesBRep
     """
     topology = brep_topology(patch_set) if topology is None else topology
+    if topology.n_faces != first:
+        raise ValueError(f"the B-rep has {topology.n_faces} faces but the file {first} surfaces")
+    runs = edge_runs(topology, edge_polygons(patch_set, topology))
+    topology = runs.topology  # maximal edges: runs of patch sides
     f, e, v = topology.n_faces, topology.n_edges, len(topology.vertex_points)
-    if f != first:
-        raise ValueError(f"the B-rep has {f} faces but the file {first} surfaces")
     component, n_comp = _components(topology)
     face_of_use = np.repeat(np.arange(f), np.diff(topology.loop_start))
     closed = np.bincount(component[face_of_use], topology.edge_uses[topology.loop_edge] != 2, minlength=n_comp) == 0
@@ -401,7 +411,7 @@ def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRe
     segments, segment_of_use = _distinct_segments(topology.loop_uv)
     counts = [e, len(segments), _blocks(v), _blocks(e), f, f, n_comp, int(closed.sum()), int(grouped)]
     at = _Numbers(*(first + np.r_[0, np.cumsum(counts)]).tolist())
-    parts, curve_of = _curve_parts(patch_set, topology, at, segments)
+    parts, curve_of = _curve_parts(runs, at, segments)
     parts += _list_parts(topology, at, curve_of)
     loop_parts, loop_rank = _loop_and_face_parts(topology, at, segment_of_use, face_of_use)
     parts += loop_parts + _shell_parts(at, component, closed, outward, grouped)
@@ -411,13 +421,14 @@ def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRe
     return IgesBRep(topology, first, etype, form, status, label, subscript, closed, outward, tuple(parts))
 
 
-def _curve_parts(patch_set: PatchSet, topology: BRepTopology, at: _Numbers, segments: np.ndarray):
-    """Rows of the 126 edge curves (by degree) and pcurves, and the curve entity of each edge ((E,) int64)."""
-    polygons = edge_polygons(patch_set, topology)
-    curve_of = np.empty(topology.n_edges, np.int64)
-    curve_of[np.concatenate([p[0] for p in polygons])] = at.curve + np.arange(topology.n_edges)
-    offsets = np.cumsum([0] + [len(p[0]) for p in polygons])
-    parts = [(at.curve + int(offsets[k]), *_curve_rows(points, weights)) for k, (_, points, weights) in enumerate(polygons)]
+def _curve_parts(runs: EdgeRuns, at: _Numbers, segments: np.ndarray):
+    """Rows of the 126 edge curves (by degree and spans) and pcurves, and the curve entity of each edge ((E,) int64)."""
+    curve_of = np.empty(runs.topology.n_edges, np.int64)
+    parts, first = [], at.curve
+    for edges, _, spans, points, weights in runs.curves:
+        curve_of[edges] = first + np.arange(edges.size)
+        parts.append((first, *_curve_rows(points, weights, spans)))
+        first += edges.size
     parts.append((at.pcurve, *_pcurve_rows(segments)))
     return parts, curve_of
 
