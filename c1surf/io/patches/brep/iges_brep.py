@@ -1,8 +1,8 @@
 """IGES 5.3 B-rep of a patch set: one solid per closed component (an open shell per open one), from c1surf's own topology.
 
 A reader needs no sewing: the faces share their edges and vertices by
-reference, exactly as ``topology.brep_topology`` found them from the patch
-adjacency. The entities are those of IGES 5.3's boundary-representation solid
+reference, as ``topology.brep_topology`` found them from the patch adjacency
+(its patch-side edges joined into maximal ones by ``edge_runs``). The entities are those of IGES 5.3's boundary-representation solid
 model (section 4, "BREP"), written after the surfaces (one type 128 per face, in
 the writer's order: merged pieces, then the uncovered patches), in this
 Directory order:
@@ -92,7 +92,7 @@ class IgesBRep:
     subscript: np.ndarray
     closed: np.ndarray
     outward: np.ndarray
-    _parts: tuple  # (first entity, ints or _ragged rows, floats or None) of each run of rows, in Directory order
+    _parts: tuple  # (first entity, rows) of each run of entities in Directory order; rows() gives (ints, floats)
 
     STATUS = _STATUS
     LABELS = _LABELS
@@ -107,8 +107,8 @@ class IgesBRep:
 
     def emit(self, pdw: ParameterWriter) -> None:
         """Write the Parameter Data records of every B-rep entity, in Directory order."""
-        for first, ints, floats in self._parts:
-            _emit_rows(pdw, first, ints, floats)
+        for first, rows in self._parts:
+            _emit_rows(pdw, first, *rows())  # tables made when written, one kind at a time: bounded memory
 
 
 # ----------------------------------------------------------------------------
@@ -427,9 +427,9 @@ def _curve_parts(runs: EdgeRuns, at: _Numbers, segments: np.ndarray):
     parts, first = [], at.curve
     for edges, _, spans, points, weights in runs.curves:
         curve_of[edges] = first + np.arange(edges.size)
-        parts.append((first, *_curve_rows(points, weights, spans)))
+        parts.append((first, lambda p=points, w=weights, k=spans: _curve_rows(p, w, k)))
         first += edges.size
-    parts.append((at.pcurve, *_pcurve_rows(segments)))
+    parts.append((at.pcurve, lambda: _pcurve_rows(segments)))
     return parts, curve_of
 
 
@@ -441,13 +441,16 @@ def _list_parts(topology: BRepTopology, at: _Numbers, curve_of: np.ndarray) -> l
         if b > a:
             rows = (b - a) // LIST_BLOCK if b == full else 1
             ints = np.tile(np.array([[502, min(LIST_BLOCK, b - a)]], np.int64), (rows, 1))
-            parts.append((at.vertex_list + a // LIST_BLOCK, ints, topology.vertex_points[a:b].reshape(rows, -1)))
-    start, end = topology.edge_vertices[:, 0], topology.edge_vertices[:, 1]
-    items = np.stack([_pointer(curve_of), _pointer(at.vertex_list + start // LIST_BLOCK), start % LIST_BLOCK + 1,
-                      _pointer(at.vertex_list + end // LIST_BLOCK), end % LIST_BLOCK + 1], axis=1)
-    e = topology.n_edges
-    parts.append((at.edge_list, _ragged(504, np.arange(e) // LIST_BLOCK, items, _blocks(e)), None))
-    return parts
+            points = topology.vertex_points[a:b].reshape(rows, -1)
+            parts.append((at.vertex_list + a // LIST_BLOCK, lambda i=ints, x=points: (i, x)))
+    def edge_lists():
+        start, end = topology.edge_vertices[:, 0], topology.edge_vertices[:, 1]
+        items = np.stack([_pointer(curve_of), _pointer(at.vertex_list + start // LIST_BLOCK), start % LIST_BLOCK + 1,
+                          _pointer(at.vertex_list + end // LIST_BLOCK), end % LIST_BLOCK + 1], axis=1)
+        e = topology.n_edges
+        return _ragged(504, np.arange(e) // LIST_BLOCK, items, _blocks(e)), None
+
+    return parts + [(at.edge_list, edge_lists)]
 
 
 def _loop_and_face_parts(topology: BRepTopology, at: _Numbers, segment_of_use: np.ndarray, face_of_use: np.ndarray):
@@ -455,29 +458,38 @@ def _loop_and_face_parts(topology: BRepTopology, at: _Numbers, segment_of_use: n
     f = topology.n_faces
     loop_rank = np.empty(f, np.int64)
     loop_rank[np.argsort(-np.diff(topology.loop_start), kind="stable")] = np.arange(f)
-    uses = np.argsort(loop_rank[face_of_use], kind="stable")  # loop entries in the loops' Directory order
-    edge = topology.loop_edge[uses]
-    ones = np.ones_like(edge)
-    items = np.stack([0 * ones, _pointer(at.edge_list + edge // LIST_BLOCK), edge % LIST_BLOCK + 1,
-                      topology.loop_forward[uses].astype(np.int64), ones, ones,
-                      _pointer(at.pcurve + segment_of_use[uses])], axis=1)
-    faces = np.stack([np.full(f, 510), _pointer(np.arange(f)), np.ones(f, np.int64), np.ones(f, np.int64),
-                      _pointer(at.loop + loop_rank)], axis=1)
-    return [(at.loop, _ragged(508, loop_rank[face_of_use[uses]], items, f), None), (at.face, faces, None)], loop_rank
+
+    def loops():
+        uses = np.argsort(loop_rank[face_of_use], kind="stable")  # loop entries in the loops' Directory order
+        edge = topology.loop_edge[uses]
+        ones = np.ones_like(edge)
+        items = np.stack([0 * ones, _pointer(at.edge_list + edge // LIST_BLOCK), edge % LIST_BLOCK + 1,
+                          topology.loop_forward[uses].astype(np.int64), ones, ones,
+                          _pointer(at.pcurve + segment_of_use[uses])], axis=1)
+        return _ragged(508, loop_rank[face_of_use[uses]], items, f), None
+
+    def faces():
+        return np.stack([np.full(f, 510), _pointer(np.arange(f)), np.ones(f, np.int64), np.ones(f, np.int64),
+                         _pointer(at.loop + loop_rank)], axis=1), None
+
+    return [(at.loop, loops), (at.face, faces)], loop_rank
 
 
 def _shell_parts(at: _Numbers, component: np.ndarray, closed: np.ndarray, outward: np.ndarray, grouped: bool) -> list:
     """Rows of the 514 shells (one per component), the 186 solids of the closed ones and the 402 group."""
     by_component = np.argsort(component, kind="stable")
     items = np.stack([_pointer(at.face + by_component), np.ones(component.size, np.int64)], axis=1)
-    parts = [(at.shell, _ragged(514, component[by_component], items, closed.size), None)]
+    shells_rows = _ragged(514, component[by_component], items, closed.size)
+    parts = [(at.shell, lambda: (shells_rows, None))]
     shells = np.flatnonzero(closed)
     if shells.size:
-        parts.append((at.solid, np.stack([np.full(shells.size, 186), _pointer(at.shell + shells),
-                                          outward[shells].astype(np.int64), np.zeros(shells.size, np.int64)], axis=1), None))
+        solids = np.stack([np.full(shells.size, 186), _pointer(at.shell + shells), outward[shells].astype(np.int64),
+                           np.zeros(shells.size, np.int64)], axis=1)
+        parts.append((at.solid, lambda: (solids, None)))
     if grouped:
         roots = np.where(closed, _pointer(at.solid + np.cumsum(closed) - 1), _pointer(at.shell + np.arange(closed.size)))
-        parts.append((at.group, np.r_[402, closed.size, roots][None, :].astype(np.int64), None))
+        group = np.r_[402, closed.size, roots][None, :].astype(np.int64)
+        parts.append((at.group, lambda: (group, None)))
     return parts
 
 
