@@ -77,6 +77,11 @@ class PatchSource:
             self._groups.append(groups)
 
     @property
+    def dim(self) -> int:
+        """Columns of the coefficients (those of the input points)."""
+        return self.refined.shape[1] - (1 if self.rational else 0)
+
+    @property
     def counts(self) -> tuple:
         """(Nq, Nc): the patches of each kind."""
         return tuple(layout.n_patches for layout in self.layouts)
