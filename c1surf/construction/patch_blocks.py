@@ -57,15 +57,15 @@ class PatchSource:
     refined : (Vr, d) float, the refined points the stage reads (centred, homogeneous when rational)
     origin : (d,) float, the centre taken off the input points (put back on every coefficient)
     rational : bool, ``refined`` carries the homogeneous weight as its last column
-    cache_bytes : int, the most coefficient blocks kept at once
+    cache_bytes : int or None, the most bytes of coefficient blocks kept at once (None: ``DEFAULT_CACHE_BYTES``)
     """
 
     def __init__(self, layouts, refined: np.ndarray, origin: np.ndarray, rational: bool,
-                 cache_bytes: int = DEFAULT_CACHE_BYTES):
+                 cache_bytes: int | None = None):
         self.layouts = tuple(layouts)
         self.refined = np.ascontiguousarray(refined)
         self.origin, self.rational = origin, rational
-        self.cache_bytes = cache_bytes
+        self.cache_bytes = DEFAULT_CACHE_BYTES if cache_bytes is None else cache_bytes
         self._cache: OrderedDict = OrderedDict()
         self._cached = 0
         self._groups = []

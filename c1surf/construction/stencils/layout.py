@@ -50,14 +50,18 @@ def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray
     return out
 
 
+_BLOCK_POINTS = 1 << 15  # gathered points per product block: its work arrays stay in cache
+_THREAD_POINTS = 1 << 19  # fewer gathered points than this per thread are not worth a thread
+
+
 def _step(m: int) -> int:
-    """Items per product block when each reads m points (its work arrays stay in cache)."""
-    return max(1, (1 << 15) // m)
+    """Items per product block when each reads m points."""
+    return max(1, _BLOCK_POINTS // m)
 
 
 def _minimum(m: int) -> int:
-    """Fewer items than this per thread are not worth a thread (``parallel.for_each_range``)."""
-    return max(1, (1 << 19) // m)
+    """Fewest items per thread (``parallel.for_each_range``)."""
+    return max(1, _THREAD_POINTS // m)
 
 
 def product_blocks(k: int, m: int) -> tuple[np.ndarray, bool]:

@@ -19,8 +19,9 @@ from __future__ import annotations
 import numpy as np
 
 from ...parallel import blas_on_one_thread, thread_count
-from ..tessellate import (_BLOCK_SAMPLES, _Bases, _corner_block, _grid_block, _interior_block, _owned_block,
-                          _side_block, _Welding, grid_triangles)
+from .. import tessellate
+from ..tessellate import (_Bases, _corner_block, _grid_block, _interior_block, _owned_block, _side_block, _Welding,
+                          grid_triangles)
 
 __all__ = ["StreamedTessellation", "UndefinedNormals"]
 
@@ -68,12 +69,12 @@ class StreamedTessellation:
 
         Raises UndefinedNormals at a block with a sample without a normal.
         """
-        w, dim = self.welding, self.dim
-        for a in range(0, w.n_corners, _BLOCK_SAMPLES):
-            z = min(a + _BLOCK_SAMPLES, w.n_corners)
+        w, dim, samples = self.welding, self.dim, tessellate._BLOCK_SAMPLES  # the in-memory blocks, whatever they are
+        for a in range(0, w.n_corners, samples):
+            z = min(a + samples, w.n_corners)
             yield self._checked(*self._owned(w.corner_owner[a:z], 1, self._corner))
         inner = w.inner
-        step = max(1, _BLOCK_SAMPLES // max(inner, 1))
+        step = max(1, samples // max(inner, 1))
         for a in range(0, w.n_edges, step):
             z = min(a + step, w.n_edges)
             points, normals = self._owned(w.edge_owner[a:z], inner, self._side)
@@ -84,7 +85,7 @@ class StreamedTessellation:
         for k in range(2):
             for a in range(self.starts[k], self.starts[k + 1], w.patch_block):
                 z = min(a + w.patch_block, self.starts[k + 1])
-                step = max(1, _BLOCK_SAMPLES // m)
+                step = max(1, samples // m)
                 for lo in range(a, z, step):
                     hi = min(lo + step, z)
                     flat = self.source.coefficients(k, np.arange(lo, hi) - self.starts[k])[0].reshape(hi - lo, -1)
