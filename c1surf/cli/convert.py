@@ -29,6 +29,10 @@ from .options import extension_options, surface_options, weld_options, weld_tole
 BYTES_PER_PATCH = 220
 BYTES_PER_SAMPLE = 72
 WRITER_HEADROOM = 1.1
+# A streamed conversion holds, besides the surface, the sample matrices of both patch degrees
+# ((S d) x (N^2 d) and 2 (S x N^2) float64 for S = 9 and 16 control points, d = 3: 2,200 bytes per
+# sample) and one block of at least one patch: counted from the array shapes, as 2,400 bytes per sample.
+STREAMED_BYTES_PER_SAMPLE = 2400
 
 
 def available_memory() -> int:
@@ -232,6 +236,11 @@ def write_streamed(input_path, output, mesh_suffix: str, surface: Surface, resol
     (``UndefinedNormals``: a degenerate patch point takes its neighbours' normal) needs the whole
     tessellation: that file is written again in memory, with the same bytes the in-memory path writes.
     """
+    needed, available = STREAMED_BYTES_PER_SAMPLE * resolution * resolution, available_memory()
+    if needed > 0.8 * available and not force:
+        raise Failure(f"tessellating at --resolution {resolution} would need about {needed / 2**30:.1f} GiB for one "
+                      f"patch but about {available / 2**30:.1f} GiB is available: lower --resolution, or pass --force "
+                      "to try anyway")
     adjacency = patch_adjacency(surface.refined, surface.frames)
     tess = StreamedTessellation(surface.patch_source(), adjacency, resolution)
     check_disk_space([output], output_bytes(mesh_suffix, tess, float32, False, [], surface), force)

@@ -137,3 +137,16 @@ def test_streamed_counts_match_the_file(monkeypatch, tmp_path):
     body = len(data) - data.index(b"end_header") - len(b"end_header\n")
     assert body == vertices * 48 + faces * 13
     assert np.isfinite(np.frombuffer(data[-body:][: vertices * 48], dtype="<f8")).all()
+
+
+def test_a_streamed_output_is_refused_on_memory_per_patch_and_on_disk(monkeypatch, tmp_path):
+    """No whole-tessellation memory guard: one patch's sample matrices must fit, and the file on the disk."""
+    monkeypatch.delenv("C1SURF_STREAM", raising=False)
+    mesh = ROOT / "sample_meshes" / "cube.obj"
+    runner = CliRunner()
+    result = runner.invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "o.ply"), "-q", "-r", "100000"])
+    assert result.exit_code == 1 and "for one patch" in result.output and "--force" in result.output
+    monkeypatch.setattr(convert_module.shutil, "disk_usage", lambda folder: type("U", (), {"free": 10_000})())
+    result = runner.invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "o.ply"), "-q", "-r", "3"])
+    assert result.exit_code == 1 and "MiB but only" in result.output
+    assert not list(tmp_path.iterdir())  # nothing written, no temporary file left

@@ -57,12 +57,19 @@ class StreamedTessellation:
             raise ValueError("streamed tessellation needs dense adjacency ids of every patch")
         self.starts = np.cumsum([0, *source.counts])
         self.dim = source.dim
-        self.bases = [_Bases.of(d, self.n, self.dim) for d in (2, 3)]
+        self._bases = None  # (n-2)^2-sized matrices: made by the first vertex block, after the caller's size checks
         self.local = grid_triangles(self.n).ravel()
         self.n_vertices, self.dtype = w.n_vertices, w.dtype
         self.n_triangles = w.n_patches * 2 * (self.n - 1) ** 2
         self._groups = [np.empty((count, 0)) for count in source.counts]  # only their lengths are read
         self._hold = thread_count() > 1  # as run_tasks holds BLAS for the in-memory blocks
+
+    @property
+    def bases(self) -> list:
+        """The sample matrices of the two degrees (``tessellate._Bases``), made on first use."""
+        if self._bases is None:
+            self._bases = [_Bases.of(d, self.n, self.dim) for d in (2, 3)]
+        return self._bases
 
     def vertex_blocks(self):
         """Yield (points (c, dim), normals (c, 3)) float for vertex ids 0, 1, ... in order.
