@@ -28,13 +28,22 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..bezier import bernstein_basis
+from ..rational import homogeneous
+
 # The most segments one patch side gets: a guard against absurd tolerances (the memory guard of the
 # command line refuses the output long before: 4096^2 cells of one patch are 33 M triangles).
 MAX_SEGMENTS = 4096
 
 
-def second_derivative_bounds(group: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
+def second_derivative_bounds(group: np.ndarray, weights: np.ndarray | None = None, pieces: int = 2) -> np.ndarray:
     """Upper bounds of |x_uu|, |x_uv|, |x_vv| over each patch of a group.
+
+    Each patch is cut into ``pieces`` x ``pieces`` sub-patches (de Casteljau: the
+    control net of a piece lies closer to its surface, measured here: 1.6-2.0 x the
+    true bicubic maxima from the whole net, 1.1-1.3 x from 2 x 2 pieces), each piece
+    is bounded as below in its own parameter s = pieces (u - a) and the largest,
+    times pieces^2 (x_ss = x_uu / pieces^2), is the patch's bound.
 
     Polynomial: d(d-1) max |Delta^2_u P|, d^2 max |Delta_u Delta_v P|, d(d-1) max |Delta^2_v P|.
 
@@ -46,22 +55,58 @@ def second_derivative_bounds(group: np.ndarray, weights: np.ndarray | None = Non
     |x_u| <= (|G_u| + |w_u| R) / w_min and
     |x_uu| <= (|G_uu| + 2 |w_u| |x_u| + |w_uu| R) / w_min (x_uv alike), every |.| of
     G and w bounded by its control differences as above. With all weights 1 this
-    is the polynomial bound.
+    is the polynomial bound. No measuring: conservative, and guaranteed.
 
     Parameters
     ----------
     group : (p, du+1, dv+1, dim) float, patches (x, y, z first)
     weights : None or (p, du+1, dv+1) float > 0 (rational patches)
+    pieces : int >= 1
 
     Returns
     -------
     (p, 3) float: M_uu, M_uv, M_vv
     """
     points = np.asarray(group, dtype=np.float64)[..., :3]
+    h = points if weights is None else homogeneous(points, weights)
+    out = np.zeros((points.shape[0], 3))
+    for lo in range(0, points.shape[0], _BOUND_BLOCK):
+        block = h[lo : lo + _BOUND_BLOCK]
+        for piece in _pieces(block, pieces):
+            if weights is None:
+                m = _net_bounds(piece)
+            else:
+                m = _rational_net_bounds(piece[..., :3] / piece[..., 3:], piece[..., 3])
+            np.maximum(out[lo : lo + _BOUND_BLOCK], m * pieces * pieces, out=out[lo : lo + _BOUND_BLOCK])
+    return out
+
+
+_BOUND_BLOCK = 1 << 15  # patches bounded at once (their pieces: 4 copies)
+
+
+def _pieces(block: np.ndarray, k: int):
+    """Yield the k x k sub-patches (p, du+1, dv+1, c) of patches ``block``, each on [a/k, (a+1)/k] x [b/k, (b+1)/k]."""
+    du, dv = block.shape[1] - 1, block.shape[2] - 1
+
+    def restriction(d, a):  # control points of the piece from those of the patch: (d+1, d+1)
+        t = np.linspace(0.0, 1.0, d + 1)
+        return np.linalg.solve(bernstein_basis(d, t), bernstein_basis(d, (a + t) / k))
+
+    for a in range(k):
+        ru = restriction(du, a)
+        for b in range(k):
+            yield np.einsum("ij,pjlc,ml->pimc", ru, block, restriction(dv, b), optimize=True)
+
+
+def _net_bounds(points: np.ndarray) -> np.ndarray:
+    """(p, 3) bounds of |x_uu|, |x_uv|, |x_vv| of polynomial patches (p, du+1, dv+1, 3) from their control net."""
     du, dv = points.shape[1] - 1, points.shape[2] - 1
-    if weights is None:
-        return np.stack(_difference_maxima(points, du, dv)[2:], axis=1)
-    w = np.asarray(weights, dtype=np.float64)
+    return np.stack(_difference_maxima(points, du, dv)[2:], axis=1)
+
+
+def _rational_net_bounds(points: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(p, 3) bounds of rational patches (Euclidean control points (p, du+1, dv+1, 3), weights (p, du+1, dv+1))."""
+    du, dv = points.shape[1] - 1, points.shape[2] - 1
     low, high = points.min(axis=(1, 2)), points.max(axis=(1, 2))
     centre = 0.5 * (low + high)  # (p, 3)
     radius = np.linalg.norm(points - centre[:, None, None], axis=-1).max(axis=(1, 2))
@@ -156,7 +201,8 @@ def patch_segments(bounds: np.ndarray, tau: float) -> np.ndarray:
         first_m, (ma, mc) = grid, ((a, c) if first_is_u else (c, a))
         second = _fewest_second(first_m, ma, b, mc, tau)
         pair = np.stack([first_m, second], axis=-1) if first_is_u else np.stack([second, first_m], axis=-1)
-        cells = np.where(np.isfinite(second), first_m * second, np.inf)
+        # fewest cells; among equal counts the squarer one (its sides match more neighbours)
+        cells = np.where(np.isfinite(second), first_m * second + 1e-3 * (first_m + second), np.inf)
         pick = np.argmin(cells, axis=1)
         chosen = np.take_along_axis(pair, pick[:, None, None], axis=1)[:, 0]
         chosen_cells = np.take_along_axis(cells, pick[:, None], axis=1)[:, 0]
@@ -196,4 +242,39 @@ def side_segments(edges: np.ndarray, segments: np.ndarray):
     return per_edge[flat].reshape(own.shape), per_edge
 
 
-__all__ = ["second_derivative_bounds", "bound", "patch_segments", "side_segments", "MAX_SEGMENTS"]
+def template_triangles(segments: np.ndarray, sides: np.ndarray) -> np.ndarray:
+    """(P,) int64, triangles of ``triangulate.template`` for (m_u, m_v) ``segments`` (P, 2) and ``sides`` (P, 4).
+
+    Regular (every side at the patch's own count): 2 m_u m_v. Otherwise the interior grid of
+    n_u x n_v samples (n = m - 1, or 1 for one segment) gives 2 (n_u - 1)(n_v - 1) and each side's
+    strip s + n - 1 (its two rows merged).
+    """
+    m_u, m_v = segments[:, 0], segments[:, 1]
+    regular = (sides[:, 0] == m_u) & (sides[:, 2] == m_u) & (sides[:, 1] == m_v) & (sides[:, 3] == m_v)
+    n_u, n_v = np.maximum(m_u - 1, 1), np.maximum(m_v - 1, 1)
+    ring = 2 * (n_u - 1) * (n_v - 1) + sides.sum(axis=1) + 2 * (n_u - 1) + 2 * (n_v - 1)
+    return np.where(regular, 2 * m_u * m_v, ring)
+
+
+def fewer_triangles(segments: np.ndarray, sides: np.ndarray) -> np.ndarray:
+    """(P, 2) int64: each patch's interior counts raised to its opposite sides' where that gives fewer triangles.
+
+    A side takes the larger count of its two patches, so a patch may get sides
+    finer than its interior; raising m_u up to min(s_0, s_2) (m_v up to
+    min(s_1, s_3)) can turn the border strip into the plain grid (cheaper for one
+    segment: the strip puts an interior line at 1/2). It only shrinks h, so the
+    bound still holds, and it leaves every side count as it is (they are at least
+    the new counts), so no neighbour changes.
+    """
+    best, best_count = segments, template_triangles(segments, sides)
+    up_u, up_v = np.minimum(sides[:, 0], sides[:, 2]), np.minimum(sides[:, 1], sides[:, 3])
+    for candidate in (np.stack([up_u, segments[:, 1]], 1), np.stack([segments[:, 0], up_v], 1), np.stack([up_u, up_v], 1)):
+        count = template_triangles(candidate, sides)
+        better = count < best_count
+        best = np.where(better[:, None], candidate, best)
+        best_count = np.where(better, count, best_count)
+    return best
+
+
+__all__ = ["second_derivative_bounds", "bound", "patch_segments", "side_segments", "template_triangles",
+           "fewer_triangles", "MAX_SEGMENTS"]

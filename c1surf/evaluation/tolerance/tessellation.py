@@ -25,7 +25,7 @@ from ..adjacency import PatchAdjacency
 from ..bezier import patch_columns, sample_derivatives, unit_normals
 from ..rational import euclidean_derivatives, homogeneous
 from ..tessellate import defined_normals
-from .resolution import patch_segments, second_derivative_bounds, side_segments
+from .resolution import fewer_triangles, patch_segments, second_derivative_bounds, side_segments
 from .triangulate import template
 
 _CHUNK = 1 << 17  # samples evaluated at once: bounded work arrays
@@ -129,6 +129,7 @@ def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=
     segments = patch_segments(bounds, tolerance * diagonal if diagonal > 0 else tolerance)
     corners, edges = _compact(adjacency.corners), _compact(adjacency.edges)
     sides, per_edge = side_segments(edges, segments)
+    segments = fewer_triangles(segments, sides)
     keys, template_of = np.unique(np.concatenate([segments, sides], axis=1), axis=0, return_inverse=True)
     template_of = template_of.reshape(-1)
     tpls = [template(tuple(k)) for k in keys.tolist()]
