@@ -283,9 +283,10 @@ def write_patch_files(targets, surface: Surface, input_path, patch_options: dict
                                   **patch_options)
 
 
-# --tolerance: peak bytes per output vertex besides the patches' (traced with tracemalloc on spot_quadrangulated:
-# points, normals, the evaluating patch and parameters of each vertex, about two triangles, and the blocks' ids)
-TOLERANCE_BYTES_PER_VERTEX = 150
+# --tolerance: peak bytes per output vertex besides BYTES_PER_PATCH (traced with tracemalloc on spot_quadrangulated:
+# 158 at --tolerance 1e-5, 1.1 M vertices; points, normals, the evaluating patch and parameters of each vertex, about
+# two triangles, and the template blocks' ids)
+TOLERANCE_BYTES_PER_VERTEX = 160
 
 
 def tessellate_within(groups, adjacency, tolerance: float, weights, force: bool, progress: Progress, quiet: bool):

@@ -81,7 +81,7 @@ def second_derivative_bounds(group: np.ndarray, weights: np.ndarray | None = Non
     return out
 
 
-_BOUND_BLOCK = 1 << 15  # patches bounded at once (their pieces: 4 copies)
+_BOUND_BLOCK = 1 << 13  # patches bounded and given segments at once (bounded work arrays)
 
 
 def _pieces(block: np.ndarray, k: int):
@@ -92,10 +92,11 @@ def _pieces(block: np.ndarray, k: int):
         t = np.linspace(0.0, 1.0, d + 1)
         return np.linalg.solve(bernstein_basis(d, t), bernstein_basis(d, (a + t) / k))
 
+    p, c = block.shape[0], block.shape[-1]
     for a in range(k):
-        ru = restriction(du, a)
+        along_u = np.matmul(restriction(du, a), block.reshape(p, du + 1, (dv + 1) * c)).reshape(block.shape)
         for b in range(k):
-            yield np.einsum("ij,pjlc,ml->pimc", ru, block, restriction(dv, b), optimize=True)
+            yield np.matmul(restriction(dv, b), along_u)  # over the v axis: (dv+1, dv+1) @ (p, du+1, dv+1, c)
 
 
 def _net_bounds(points: np.ndarray) -> np.ndarray:
@@ -176,7 +177,9 @@ def patch_segments(bounds: np.ndarray, tau: float) -> np.ndarray:
     M_uu, M_uv, M_vv; Lagrange), i.e. m_u : m_v = sqrt(a) : sqrt(c). The integers
     next to 0.75 to 1.35 times it (and the isotropic count, and one segment) are tried
     in each direction, the other direction made minimal; the one with the fewest
-    cells wins (tests: within 2 % of a brute-force search). Flat directions get one segment (a flat patch is two triangles).
+    cells wins (tests: within 2 % of a brute-force search). Flat directions get one
+    segment (a flat patch is two triangles). Blocks of patches at a time: the
+    candidates are some 60 numbers per patch.
 
     Parameters
     ----------
@@ -190,9 +193,15 @@ def patch_segments(bounds: np.ndarray, tau: float) -> np.ndarray:
     """
     if not (np.isfinite(tau) and tau > 0):
         raise ValueError(f"the tolerance must be a positive number, got {tau}")
+    out = np.zeros((bounds.shape[0], 2), dtype=np.int64)
+    for lo in range(0, bounds.shape[0], _BOUND_BLOCK):
+        out[lo : lo + _BOUND_BLOCK] = _block_segments(bounds[lo : lo + _BOUND_BLOCK], tau)
+    return out
+
+
+def _block_segments(bounds: np.ndarray, tau: float) -> np.ndarray:
+    """``patch_segments`` of one block of patches."""
     p = bounds.shape[0]
-    if p == 0:
-        return np.zeros((0, 2), dtype=np.int64)
     a, b, c = (np.maximum(bounds[:, k], 0.0)[:, None] for k in range(3))
     iso = np.maximum(1.0, np.ceil(np.sqrt((a + 2 * b + c) / (8 * tau))))
     with np.errstate(divide="ignore", invalid="ignore"):

@@ -28,7 +28,7 @@ from ..tessellate import defined_normals
 from .resolution import fewer_triangles, patch_segments, second_derivative_bounds, side_segments
 from .triangulate import template
 
-_CHUNK = 1 << 17  # samples evaluated at once: bounded work arrays
+_CHUNK = 1 << 15  # samples evaluated at once: bounded work arrays (some 50 doubles a sample)
 
 
 @dataclass(frozen=True)
