@@ -284,3 +284,17 @@ def test_points_carry_attribute_columns_and_exact_normals():
     mesh = trimesh.Trimesh(tess.points[:, :3], tess.triangles, process=False)
     assert np.all(np.einsum("ij,ij->i", mesh.vertex_normals, tess.normals) > 0.9)
     np.testing.assert_allclose(np.linalg.norm(tess.normals, axis=1), 1.0)
+
+
+@pytest.mark.parametrize("name", ["torus.obj", "cube.obj", "high_valence.obj"])
+def test_never_more_triangles_than_the_uniform_grid_with_the_same_guarantee(name):
+    """The uniform N whose bound meets T on every patch is one of the plans tried: never beaten by transitions."""
+    groups, adjacency, _ = parts(surface_of(SAMPLES / name))
+    for tolerance in (1e-2, 1e-3):
+        plan = plan_tolerance(groups, adjacency, tolerance)
+        bounds = np.concatenate([second_derivative_bounds(g) for g in groups])
+        m = 1
+        while np.any(bound(bounds, np.full((len(bounds), 2), m)) > tolerance * plan.diagonal):
+            m += 1
+        assert plan.n_triangles <= 2 * m * m * plan.n_patches
+        assert np.all(bound(bounds, plan.segments) <= tolerance * plan.diagonal * (1 + 1e-12))

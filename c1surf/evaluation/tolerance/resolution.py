@@ -292,5 +292,43 @@ def fewer_triangles(segments: np.ndarray, sides: np.ndarray) -> np.ndarray:
     return best
 
 
-__all__ = ["second_derivative_bounds", "bound", "patch_segments", "side_segments", "template_triangles",
+def least_triangles(segments: np.ndarray, bounds: np.ndarray, tau: float, edges: np.ndarray):
+    """(segments, sides): the per-patch counts, or a floor under them, that give the fewest triangles.
+
+    Transitions cost triangles (a border strip where a side is finer than its
+    patch), so where neighbours need nearly the same counts a few more
+    segments everywhere can give fewer triangles in all. Tried: the counts as
+    chosen, raised to floors k = 2 .. the uniform count (geometrically spaced), and
+    the uniform count that meets the bound on every patch (so the result never has
+    more triangles than that uniform grid). Raising counts only shrinks h: the bound
+    holds for every candidate. Each is counted with ``fewer_triangles`` and
+    ``template_triangles``, without building templates.
+
+    Parameters
+    ----------
+    segments : (P, 2) int64 (``patch_segments``); bounds : (P, 3) float; tau : float; edges : (P, 4) int64
+
+    Returns
+    -------
+    segments (P, 2) int64 after ``fewer_triangles``; sides (P, 4) int64; per_edge (n_edges,) int64
+    """
+    if segments.shape[0] == 0:
+        sides, per_edge = side_segments(edges, segments)
+        return segments, sides, per_edge
+    uniform = int(np.maximum(1, np.ceil(np.sqrt(bounds.clip(min=0) @ [1.0, 2.0, 1.0] / (8 * tau)))).max())
+    while uniform < MAX_SEGMENTS and np.any(bound(bounds, np.full(segments.shape, uniform)) > tau * (1 + 1e-12)):
+        uniform += 1
+    floors = np.unique(np.round(np.geomspace(2, max(uniform, 2), 8)).astype(np.int64))
+    candidates = [segments] + [np.maximum(segments, k) for k in floors if k > 1] + [np.full(segments.shape, uniform)]
+    best = None
+    for candidate in candidates:
+        sides, per_edge = side_segments(edges, candidate)
+        raised = fewer_triangles(candidate, sides)
+        count = int(template_triangles(raised, sides).sum())
+        if best is None or count < best[0]:
+            best = (count, raised, sides, per_edge)
+    return best[1:]
+
+
+__all__ = ["least_triangles", "second_derivative_bounds", "bound", "patch_segments", "side_segments", "template_triangles",
            "fewer_triangles", "MAX_SEGMENTS"]

@@ -25,7 +25,7 @@ from ..adjacency import PatchAdjacency
 from ..bezier import patch_columns, sample_derivatives, unit_normals
 from ..rational import euclidean_derivatives, homogeneous
 from ..tessellate import defined_normals
-from .resolution import fewer_triangles, patch_segments, second_derivative_bounds, side_segments
+from .resolution import least_triangles, patch_segments, second_derivative_bounds
 from .triangulate import template
 
 _CHUNK = 1 << 15  # samples evaluated at once: bounded work arrays (some 50 doubles a sample)
@@ -126,10 +126,9 @@ def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=
     diagonal = corner_diagonal(groups)
     bounds = np.concatenate([second_derivative_bounds(g, None if weights is None else weights[k])
                              for k, g in enumerate(groups)] or [np.zeros((0, 3))])
-    segments = patch_segments(bounds, tolerance * diagonal if diagonal > 0 else tolerance)
+    tau = tolerance * diagonal if diagonal > 0 else tolerance
     corners, edges = _compact(adjacency.corners), _compact(adjacency.edges)
-    sides, per_edge = side_segments(edges, segments)
-    segments = fewer_triangles(segments, sides)
+    segments, sides, per_edge = least_triangles(patch_segments(bounds, tau), bounds, tau, edges)
     keys, template_of = np.unique(np.concatenate([segments, sides], axis=1), axis=0, return_inverse=True)
     template_of = template_of.reshape(-1)
     tpls = [template(tuple(k)) for k in keys.tolist()]
