@@ -67,14 +67,14 @@ def chordal_errors(groups, points: np.ndarray, triangles_count: int, blocks, wei
     out = np.full(triangles_count, np.nan)
     starts = np.concatenate([[0], np.cumsum([len(g) for g in groups])])
     xyz = np.asarray(points)[:, :3]
+    nets = [g[..., :3] if weights is None else homogeneous(g[..., :3], weights[k]) for k, g in enumerate(groups)]
     for patches, uv, local, ids, rows in blocks:
         # (T S, 2) parameters of the samples, the same for every patch of the block
         params = np.einsum("sk,tkc->tsc", barycentric, uv[local]).reshape(-1, 2)
-        for k, group in enumerate(groups):
+        for k, h in enumerate(nets):
             mine = np.flatnonzero((patches >= starts[k]) & (patches < starts[k + 1]))
             if not mine.size:
                 continue
-            h = group[..., :3] if weights is None else homogeneous(group[..., :3], weights[k])
             d_u, d_v = h.shape[1] - 1, h.shape[2] - 1
             basis = np.einsum("qi,qj->qij", bernstein_basis(d_u, params[:, 0]),
                               bernstein_basis(d_v, params[:, 1])).reshape(params.shape[0], -1)  # (T S, C)

@@ -67,12 +67,6 @@ class TolerancePlan:
     def n_triangles(self) -> int:
         return int(self.triangle_start[-1])
 
-    @property
-    def n_samples(self) -> int:
-        """Samples of all patches, shared ones counted once per patch (the work of curvature and measuring)."""
-        sizes = np.array([template(tuple(k)).uv.shape[0] for k in self.keys.tolist()], dtype=np.int64)
-        return int(sizes[self.template_of].sum())
-
     def blocks(self):
         """Yield (template, patches (n,) int64, vertex ids (n, L) int64) for every distinct tuple.
 
