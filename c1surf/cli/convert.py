@@ -297,7 +297,10 @@ def tessellate_within(groups, adjacency, tolerance: float, weights, force: bool,
     triangle count and the measured chordal error (``chordal.measured_chordal_error``).
     """
     progress.phase(f"choosing resolutions for a chordal error within {tolerance:g} of the diagonal")
-    plan = plan_tolerance(groups, adjacency, tolerance, weights)
+    try:
+        plan = plan_tolerance(groups, adjacency, tolerance, weights)
+    except ValueError as e:  # more than MAX_SEGMENTS a side
+        raise Failure(f"--tolerance {tolerance:g}: {e}") from None
     needed = (plan.n_patches * BYTES_PER_PATCH + TOLERANCE_BYTES_PER_VERTEX * plan.n_vertices) * WRITER_HEADROOM
     available = available_memory()
     if needed > 0.8 * available and not force:

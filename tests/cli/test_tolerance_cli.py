@@ -99,3 +99,11 @@ def test_the_memory_guard_counts_the_tolerance_mesh(tmp_path, monkeypatch):
     assert line.startswith("c1surf: error: the tessellation would need about") and "--tolerance 0.0001" in line
     assert "raise --tolerance, or pass --force" in line
     assert invoke("convert", SAMPLES / "twisted.obj", "-o", out, "--tolerance", "0.0001", "-q", "--force").exit_code == 0
+
+
+def test_a_tolerance_beyond_the_segment_limit_is_refused(tmp_path):
+    out = tmp_path / "x.ply"
+    result = invoke("convert", SAMPLES / "cube.obj", "-o", out, "--tolerance", "1e-12", "--force")
+    assert result.exit_code == 1 and not out.exists()
+    [line] = result.stderr.strip().splitlines()
+    assert line.startswith("c1surf: error: --tolerance 1e-12: a chordal error of 1e-12 of the diagonal needs more than")

@@ -25,7 +25,7 @@ from ..adjacency import PatchAdjacency
 from ..bezier import patch_columns, sample_derivatives, unit_normals
 from ..rational import euclidean_derivatives, homogeneous
 from ..tessellate import defined_normals
-from .resolution import least_triangles, patch_segments, second_derivative_bounds
+from .resolution import MAX_SEGMENTS, bound, least_triangles, patch_segments, second_derivative_bounds
 from .triangulate import template
 
 _CHUNK = 1 << 15  # samples evaluated at once: bounded work arrays (some 50 doubles a sample)
@@ -112,7 +112,7 @@ def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=
 
     Returns
     -------
-    TolerancePlan
+    TolerancePlan; a ValueError when some patch would need more than MAX_SEGMENTS segments a side
     """
     tolerance = float(tolerance)
     if not (np.isfinite(tolerance) and tolerance > 0):
@@ -123,6 +123,9 @@ def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=
     tau = tolerance * diagonal if diagonal > 0 else tolerance
     corners, edges = _compact(adjacency.corners), _compact(adjacency.edges)
     segments, sides, per_edge = least_triangles(patch_segments(bounds, tau), bounds, tau, edges)
+    if np.any(bound(bounds, segments) > tau * (1 + 1e-12)):
+        raise ValueError(f"a chordal error of {tolerance:g} of the diagonal needs more than {MAX_SEGMENTS} segments on "
+                         "a patch side: give a larger tolerance")
     keys, template_of = np.unique(np.concatenate([segments, sides], axis=1), axis=0, return_inverse=True)
     template_of = template_of.reshape(-1)
     tpls = [template(tuple(k)) for k in keys.tolist()]
