@@ -21,7 +21,8 @@ from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import prepare_surface_input, surface_data
 from .curvature_ply import curvature_properties
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes, topology_failure
-from .options import extension_options, surface_options, weld_options, weld_tolerance
+from .options import extension_options, surface_options, tolerance_option, tolerance_value, weld_options, weld_tolerance
+from ..evaluation.tolerance import plan_tolerance, tessellate_plan, measured_chordal_error
 
 # Peak memory of a tessellation, traced with tracemalloc on spot_quadrangulated (46,848 patches):
 # 465 bytes per patch at N = 2, 4,436 at N = 8, 40,950 at N = 24, i.e. about
@@ -163,6 +164,7 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
                    "repeat for several formats.")
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="Samples per patch side: each patch becomes an N x N grid of welded vertices.")
+@tolerance_option
 @click.option("--units", type=click.Choice(sorted(UNITS)), default=DEFAULT_UNITS, show_default=True,
               help="Length unit recorded in an IGES patch file (coordinates are written as they are).")
 @click.option("--no-group", is_flag=True,
@@ -184,8 +186,8 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
               help="Write even when the output is estimated not to fit in memory or on the disk.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
-def convert(input_path, output, patches_paths, resolution, units, no_group, curvature, float32, merge, force, quiet,
-            weld, no_weld, **shape):
+def convert(input_path, output, patches_paths, resolution, tolerance, units, no_group, curvature, float32, merge, force,
+            quiet, weld, no_weld, **shape):
     """Convert the polygon mesh INPUT (OBJ, PLY or OFF, any n-gons; STL triangles) to a smooth surface.
 
     Writes OUTPUT, a triangle mesh sampled from the surface's Bezier patches
@@ -193,19 +195,26 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     output, with exact normals), and optionally the patches themselves.
     """
     mesh_suffix, patch_suffixes = output_formats(output, patches_paths, curvature, shape["attributes"])
+    tolerance = tolerance_value(tolerance)
     progress = Progress(quiet)
-    stream = streams(mesh_suffix, patches_paths, curvature, shape["attributes"])
+    # a plain binary PLY at a uniform resolution is tessellated and written by blocks (--tolerance plans
+    # per-patch resolutions over the whole surface first, so it keeps the in-memory path)
+    stream = tolerance is None and streams(mesh_suffix, patches_paths, curvature, shape["attributes"])
     surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet, weld_tolerance(weld, no_weld),
                                    lazy_patches=stream)
     if stream and surface.lazy_patches:  # polynomial: tessellated and written by blocks
         write_streamed(input_path, output, mesh_suffix, surface, resolution, float32, force, progress)
         progress.done()
         return
-    check_tessellation_size(surface.n_patches, resolution, force)
-    progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
     # the same welding `c1surf tessellate` reads from the patch file: identical meshes
     adjacency = patch_adjacency(surface.refined, surface.frames)
-    tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution, surface.patch_weights)
+    if tolerance is not None:
+        tess = tessellate_within([surface.biquadratic, surface.bicubic], adjacency, tolerance, surface.patch_weights,
+                                 force, progress, quiet)
+    else:
+        check_tessellation_size(surface.n_patches, resolution, force)
+        progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
+        tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution, surface.patch_weights)
     extra = curvature_columns(surface, tess, progress.advance) if curvature else {}
     check_disk_space([output, *patches_paths], output_bytes(mesh_suffix, tess, float32, curvature, patch_suffixes,
                                                            surface), force)
@@ -328,3 +337,37 @@ def write_patch_files(targets, surface: Surface, input_path, patch_options: dict
             write_surface_patches(patch_tmp, surface, patch_suffix, input_path=str(input_path),
                                   file_name=os.path.basename(patches_path), merged=(merged or {}).get(patch_suffix),
                                   **patch_options)
+
+
+# --tolerance: peak bytes per output vertex besides BYTES_PER_PATCH (traced with tracemalloc on spot_quadrangulated:
+# 158 at --tolerance 1e-5, 1.1 M vertices; points, normals, the evaluating patch and parameters of each vertex, about
+# two triangles, and the template blocks' ids)
+TOLERANCE_BYTES_PER_VERTEX = 160
+
+
+def tessellate_within(groups, adjacency, tolerance: float, weights, force: bool, progress: Progress, quiet: bool):
+    """``--tolerance``: the tessellation to a chordal tolerance (``evaluation.tolerance``), after the memory guard.
+
+    The plan (segment counts, templates, numbering) comes first and is cheap, so the
+    guard refuses with its exact vertex count; unless ``quiet``, a note gives the
+    triangle count and the measured chordal error (``chordal.measured_chordal_error``).
+    """
+    progress.phase(f"choosing resolutions for a chordal error within {tolerance:g} of the diagonal")
+    try:
+        plan = plan_tolerance(groups, adjacency, tolerance, weights)
+    except ValueError as e:  # more than MAX_SEGMENTS a side
+        raise Failure(f"--tolerance {tolerance:g}: {e}") from None
+    needed = (plan.n_patches * BYTES_PER_PATCH + TOLERANCE_BYTES_PER_VERTEX * plan.n_vertices) * WRITER_HEADROOM
+    available = available_memory()
+    if needed > 0.8 * available and not force:
+        raise Failure(f"the tessellation would need about {needed / 2**30:.1f} GiB ({plan.n_vertices} vertices at "
+                      f"--tolerance {tolerance:g}) but about {available / 2**30:.1f} GiB is available: raise --tolerance, "
+                      "or pass --force to try anyway")
+    progress.phase(f"tessellating {plan.n_patches} patches at 1 to {int(plan.segments.max(initial=1))} segments a side")
+    tess = tessellate_plan(groups, plan, weights)
+    if not quiet:
+        progress.phase("measuring the chordal error")
+        error = measured_chordal_error(groups, tess, weights)
+        click.echo(f"c1surf: note: --tolerance {tolerance:g}: {len(tess.triangles)} triangles, {len(tess.points)} "
+                   f"vertices; measured chordal error {error:.3g} of the bounding-box diagonal", err=True)
+    return tess
