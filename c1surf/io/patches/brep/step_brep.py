@@ -36,6 +36,7 @@ import numpy as np
 
 from ...errors import OutputError
 from ..merged import piece_patches
+from .edge_chains import EdgeChains, chain_curve, edge_chains
 from .topology import FACE_PIECE, BRepTopology, brep_topology, edge_curves
 
 RELATIVE_TOLERANCE = 1e-9  # of the bounding-box diagonal: the faces meet to round-off, ~1e-15 of it
@@ -50,14 +51,15 @@ def occ_classes() -> SimpleNamespace:
     except ImportError:
         raise OutputError("STEP", _CAD_HINT) from None
     from OCP.BRep import BRep_Builder
-    from OCP.Geom import Geom_BezierCurve, Geom_BezierSurface, Geom_BSplineSurface
-    from OCP.Geom2d import Geom2d_Line
-    from OCP.gp import gp_Dir2d, gp_Pnt, gp_Pnt2d
+    from OCP.Geom import Geom_BezierSurface, Geom_BSplineCurve, Geom_BSplineSurface
+    from OCP.Geom2d import Geom2d_BSplineCurve
+    from OCP.gp import gp_Pnt, gp_Pnt2d
     from OCP.TopAbs import TopAbs_FORWARD, TopAbs_REVERSED
     from OCP.TopoDS import TopoDS_Compound, TopoDS_Edge, TopoDS_Face, TopoDS_Shell, TopoDS_Solid, TopoDS_Vertex, TopoDS_Wire
 
     try:  # cadquery-ocp 7.x
         from OCP.TColgp import TColgp_Array1OfPnt as Array1OfPnt
+        from OCP.TColgp import TColgp_Array1OfPnt2d as Array1OfPnt2d
         from OCP.TColgp import TColgp_Array2OfPnt as Array2OfPnt
         from OCP.TColStd import TColStd_Array1OfInteger as Array1OfInt
         from OCP.TColStd import TColStd_Array1OfReal as Array1OfReal
@@ -65,14 +67,15 @@ def occ_classes() -> SimpleNamespace:
     except ImportError:  # cadquery-ocp 8: NCollection arrays live in OCP.collections
         from OCP.collections import Array1_double as Array1OfReal
         from OCP.collections import Array1_gp_Pnt as Array1OfPnt
+        from OCP.collections import Array1_gp_Pnt2d as Array1OfPnt2d
         from OCP.collections import Array1_int as Array1OfInt
         from OCP.collections import Array2_double as Array2OfReal
         from OCP.collections import Array2_gp_Pnt as Array2OfPnt
     return SimpleNamespace(
-        Builder=BRep_Builder, BezierCurve=Geom_BezierCurve, Bezier=Geom_BezierSurface, BSpline=Geom_BSplineSurface,
-        Line2d=Geom2d_Line, Dir2d=gp_Dir2d, Pnt=gp_Pnt, Pnt2d=gp_Pnt2d, FORWARD=TopAbs_FORWARD, REVERSED=TopAbs_REVERSED,
+        Builder=BRep_Builder, BSplineCurve=Geom_BSplineCurve, Bezier=Geom_BezierSurface, BSpline=Geom_BSplineSurface,
+        BSpline2d=Geom2d_BSplineCurve, Pnt=gp_Pnt, Pnt2d=gp_Pnt2d, FORWARD=TopAbs_FORWARD, REVERSED=TopAbs_REVERSED,
         Compound=TopoDS_Compound, Edge=TopoDS_Edge, Face=TopoDS_Face, Shell=TopoDS_Shell, Solid=TopoDS_Solid,
-        Vertex=TopoDS_Vertex, Wire=TopoDS_Wire, Array1OfPnt=Array1OfPnt, Array2OfPnt=Array2OfPnt,
+        Vertex=TopoDS_Vertex, Wire=TopoDS_Wire, Array1OfPnt=Array1OfPnt, Array1OfPnt2d=Array1OfPnt2d, Array2OfPnt=Array2OfPnt,
         Array1OfReal=Array1OfReal, Array2OfReal=Array2OfReal, Array1OfInt=Array1OfInt)
 
 
@@ -105,6 +108,14 @@ def occ_reals(occ, values: np.ndarray):
     return out
 
 
+def occ_integers(occ, values: np.ndarray):
+    """A (n,) int array as an Open CASCADE array of integers (1-based)."""
+    out = occ.Array1OfInt(1, values.size)
+    for i, x in enumerate(values.tolist()):
+        out.SetValue(i + 1, int(x))
+    return out
+
+
 def bezier_surface(occ, points: np.ndarray, weights: np.ndarray | None = None):
     """The exact ``Geom_BezierSurface`` over [0, 1]^2 of one patch: points (du+1, dv+1, >= 3), weights (du+1, dv+1) or None."""
     poles = occ_poles(occ, np.asarray(points, np.float64)[..., :3])
@@ -117,9 +128,7 @@ def bspline_surface(occ, piece):
     for values in (piece.knots_u, piece.knots_v):
         distinct, counts = np.unique(values, return_counts=True)
         knots.append(occ_reals(occ, distinct))
-        multiplicities.append(occ.Array1OfInt(1, distinct.size))
-        for i, c in enumerate(counts.tolist()):
-            multiplicities[-1].SetValue(i + 1, c)
+        multiplicities.append(occ_integers(occ, counts))
     weights = np.ones(piece.points.shape[:2]) if piece.weights is None else piece.weights
     return occ.BSpline(occ_poles(occ, np.asarray(piece.points, np.float64)[..., :3]),
                        occ_reals(occ, np.asarray(weights, np.float64)), knots[0], knots[1], multiplicities[0],
@@ -167,9 +176,10 @@ def brep_shape(patch_set, topology: BRepTopology | None = None) -> BRepShape:
                             + [np.zeros((0, 3))])
     tolerance = brep_tolerance(points)
     faces = _faces(occ, builder, patch_set, topology, tolerance)
-    edges = _edges(occ, builder, patch_set, topology, tolerance)
-    _pcurves(occ, builder, topology, faces, edges, tolerance)
-    _wires(occ, builder, topology, faces, edges)
+    chains = edge_chains(topology)
+    edges = _edges(occ, builder, patch_set, topology, chains, tolerance)
+    _pcurves(occ, builder, chains, faces, edges, tolerance)
+    _wires(occ, builder, chains, faces, edges)
     component = face_components(topology)
     closed = np.ones(int(component.max(initial=-1)) + 1, dtype=bool)
     f_of_use = np.repeat(np.arange(topology.n_faces), np.diff(topology.loop_start))
@@ -195,18 +205,24 @@ def _faces(occ, builder, patch_set, topology: BRepTopology, tolerance: float) ->
     return faces
 
 
-def _edges(occ, builder, patch_set, topology: BRepTopology, tolerance: float) -> list:
-    """One TopoDS_Edge per topology edge: its Bezier curve over [0, 1], start vertex FORWARD, end vertex REVERSED."""
-    vertices = []
-    for x, y, z in topology.vertex_points.tolist():
-        vertex = occ.Vertex()
-        builder.MakeVertex(vertex, occ.Pnt(x, y, z), tolerance)
-        vertices.append(vertex)
+def _edges(occ, builder, patch_set, topology: BRepTopology, chains: EdgeChains, tolerance: float) -> list:
+    """One TopoDS_Edge per chain: its B-spline curve over [0, k], start vertex FORWARD, end vertex REVERSED.
+
+    Vertices are made only where chains end (the topology vertices inside chains disappear).
+    """
+    vertices = {}
+    for v in np.unique(chains.chain_vertices).tolist():
+        vertices[v] = occ.Vertex()
+        builder.MakeVertex(vertices[v], occ.Pnt(*topology.vertex_points[v].tolist()), tolerance)
     curves, weights = edge_curves(patch_set, topology)
     edges = []
-    for e, (start, end) in enumerate(topology.edge_vertices.tolist()):
-        poles = occ_poles(occ, curves[e])
-        curve = occ.BezierCurve(poles) if weights is None else occ.BezierCurve(poles, occ_reals(occ, weights[e]))
+    for c, (start, end) in enumerate(chains.chain_vertices.tolist()):
+        run = chains.edges(c)
+        degree, poles, pole_weights, knots, multiplicities = chain_curve(
+            chains.chain_edges[run], chains.chain_forward[run], curves, weights)
+        pole_weights = np.ones(len(poles)) if pole_weights is None else pole_weights
+        curve = occ.BSplineCurve(occ_poles(occ, poles), occ_reals(occ, pole_weights), occ_reals(occ, knots),
+                                 occ_integers(occ, multiplicities), degree)
         edge = occ.Edge()
         builder.MakeEdge(edge, curve, tolerance)
         builder.Add(edge, vertices[start].Oriented(occ.FORWARD))
@@ -215,50 +231,64 @@ def _edges(occ, builder, patch_set, topology: BRepTopology, tolerance: float) ->
     return edges
 
 
-def _pcurves(occ, builder, topology: BRepTopology, faces: list, edges: list, tolerance: float) -> None:
-    """Every edge's pcurve on each face that uses it (two on a face that uses it twice: a seam), then its flags.
+def _pcurves(occ, builder, chains: EdgeChains, faces: list, edges: list, tolerance: float) -> None:
+    """Every chain's pcurve on each face that uses it (two on a face that uses it twice: a seam), then its flags.
 
-    A use's pcurve is the straight unit segment of the face's domain from the
-    (u, v) of the edge's start to that of its end (``topology.loop_uv``, turned
-    for a use against the edge), as a ``Geom2d_Line`` whose parameter is the
-    arc length: the edge's own parameter t in [0, 1].
+    A use's pcurve is the straight segment of the face's domain from the (u, v)
+    of the chain's start to that of its end (``chains.loop_uv``, turned for a
+    use against the chain), k unit steps along u or v for a chain of k edges,
+    run at unit speed: the chain's own parameter t in [0, k].
     """
-    uv = topology.loop_uv
-    start = np.where(topology.loop_forward[:, None], uv[:, 0], uv[:, 1])  # (L, 2): the edge's start in each use
-    direction = np.where(topology.loop_forward[:, None], uv[:, 1] - uv[:, 0], uv[:, 0] - uv[:, 1])
-    if not np.array_equal(np.abs(direction).sum(axis=1), np.ones(len(uv))):
-        raise ValueError("brep topology: a pcurve segment is not a unit step along u or v")
-    face_of = np.repeat(np.arange(topology.n_faces), np.diff(topology.loop_start))
-    order = np.lexsort((~topology.loop_forward, topology.loop_edge, face_of))  # by face and edge, FORWARD use first
-    key = face_of[order] * topology.n_edges + topology.loop_edge[order]
+    uv, forward = chains.loop_uv, chains.loop_forward
+    start = np.where(forward[:, None], uv[:, 0], uv[:, 1])  # (M, 2): the chain's start in each use
+    end = np.where(forward[:, None], uv[:, 1], uv[:, 0])
+    length = np.diff(chains.chain_start)[chains.loop_chain]  # (M,) edges in the chain
+    if not np.array_equal(np.abs(end - start).sum(axis=1), length) or np.any(np.all(end != start, axis=1)):
+        raise ValueError("brep topology: a chain's pcurve is not as many unit steps along u or v as it has edges")
+    face_of = np.repeat(np.arange(len(faces)), np.diff(chains.loop_start))
+    order = np.lexsort((~forward, chains.loop_chain, face_of))  # by face and chain, FORWARD use first
+    key = face_of[order] * chains.n_chains + chains.loop_chain[order]
     runs = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-    lines = [occ.Line2d(occ.Pnt2d(*p), occ.Dir2d(*d)) for p, d in zip(start.tolist(), direction.tolist())]
+    lines = [_segment(occ, p, q, k) for p, q, k in zip(start.tolist(), end.tolist(), length.tolist())]
     for a, b in zip(runs.tolist(), np.r_[runs[1:], order.size].tolist()):
         uses = order[a:b].tolist()
-        edge, face = edges[int(topology.loop_edge[uses[0]])], faces[int(face_of[uses[0]])]
+        edge, face = edges[int(chains.loop_chain[uses[0]])], faces[int(face_of[uses[0]])]
         if len(uses) == 1:
             builder.UpdateEdge(edge, lines[uses[0]], face, tolerance)
-        elif len(uses) == 2 and topology.loop_forward[uses[0]] and not topology.loop_forward[uses[1]]:
+        elif len(uses) == 2 and forward[uses[0]] and not forward[uses[1]]:
             builder.UpdateEdge(edge, lines[uses[0]], lines[uses[1]], face, tolerance)  # a seam: FORWARD, REVERSED
         else:
-            raise ValueError(f"brep topology: face {int(face_of[uses[0]])} uses edge {int(topology.loop_edge[uses[0]])} "
+            raise ValueError(f"brep topology: face {int(face_of[uses[0]])} uses chain {int(chains.loop_chain[uses[0]])} "
                              f"{len(uses)} times, not once or as a seam (once each way)")
-    for edge in edges:
-        builder.Range(edge, 0.0, 1.0)  # the 3D curve and every pcurve
+    for edge, k in zip(edges, np.diff(chains.chain_start).tolist()):
+        builder.Range(edge, 0.0, float(k))  # the 3D curve and every pcurve
         builder.SameRange(edge, True)
         builder.SameParameter(edge, True)
 
 
-def _wires(occ, builder, topology: BRepTopology, faces: list, edges: list) -> None:
-    """Each face's one closed wire: its loop's edges in order, FORWARD where the loop runs along the edge."""
+def _segment(occ, start: list, end: list, length: int):
+    """The pcurve from ``start`` to ``end`` (2 floats each) over [0, length]: a ``Geom2d_BSplineCurve`` of degree 1.
+
+    Not an unbounded ``Geom2d_Line``: Open CASCADE's STEP reader projects each
+    vertex onto its pcurve over the whole of an unbounded one, across every span
+    of a large piece (spot: 48 s to read instead of 12 s, before chains).
+    """
+    poles = occ.Array1OfPnt2d(1, 2)
+    poles.SetValue(1, occ.Pnt2d(*start))
+    poles.SetValue(2, occ.Pnt2d(*end))
+    return occ.BSpline2d(poles, occ_reals(occ, np.array([0.0, length])), occ_integers(occ, np.array([2, 2])), 1)
+
+
+def _wires(occ, builder, chains: EdgeChains, faces: list, edges: list) -> None:
+    """Each face's one closed wire: its loop's chains in order, FORWARD where the loop runs along the chain."""
     orientation = [occ.REVERSED, occ.FORWARD]
-    forward = topology.loop_forward.tolist()
-    loop_edge = topology.loop_edge.tolist()
+    forward = chains.loop_forward.tolist()
+    loop_chain = chains.loop_chain.tolist()
     for f, face in enumerate(faces):
         wire = occ.Wire()
         builder.MakeWire(wire)
-        for k in range(int(topology.loop_start[f]), int(topology.loop_start[f + 1])):
-            builder.Add(wire, edges[loop_edge[k]].Oriented(orientation[forward[k]]))
+        for k in range(int(chains.loop_start[f]), int(chains.loop_start[f + 1])):
+            builder.Add(wire, edges[loop_chain[k]].Oriented(orientation[forward[k]]))
         wire.Closed(True)
         builder.Add(face, wire)
 
