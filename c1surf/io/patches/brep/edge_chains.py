@@ -167,6 +167,11 @@ def chain_curve(edges: np.ndarray, forward: np.ndarray, curves: list, weights: l
     A rational chain's spans are rescaled (a rational Bezier curve does not change when
     its weights are) so that each starts with the weight the one before ends with.
     """
+    k = len(edges)
+    if k == 1 and weights is None:  # the common case, quickly
+        degree = curves[edges[0]].shape[0] - 1
+        poles = curves[edges[0]] if forward[0] else curves[edges[0]][::-1]
+        return degree, poles, None, np.array([0.0, 1.0]), np.array([degree + 1, degree + 1])
     degree = max(curves[e].shape[0] - 1 for e in edges.tolist())
     spans = []
     for e, along in zip(edges.tolist(), forward.tolist()):
@@ -179,8 +184,8 @@ def chain_curve(edges: np.ndarray, forward: np.ndarray, curves: list, weights: l
             h = h * (spans[-1][-1, 3] / h[0, 3])
         spans.append(h)
     joined = np.concatenate([spans[0]] + [s[1:] for s in spans[1:]])
-    k = len(spans)
-    multiplicities = np.r_[degree + 1, np.full(k - 1, degree), degree + 1]
+    multiplicities = np.full(k + 1, degree)
+    multiplicities[[0, -1]] = degree + 1
     pole_weights = None if weights is None else joined[:, 3]
     return degree, joined[:, :3] / joined[:, 3:], pole_weights, np.arange(k + 1, dtype=np.float64), multiplicities
 

@@ -41,6 +41,7 @@ from .topology import FACE_PIECE, BRepTopology, brep_topology, edge_curves
 
 RELATIVE_TOLERANCE = 1e-9  # of the bounding-box diagonal: the faces meet to round-off, ~1e-15 of it
 ROUNDING_TOLERANCE = 1e-12  # of the largest coordinate magnitude: round-off of a surface far from the origin
+_KNOT_ARRAYS: dict = {}  # (spans, degree) or ("segment", length) -> Open CASCADE knots and multiplicities
 _CAD_HINT = "STEP output needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
 
 
@@ -218,11 +219,12 @@ def _edges(occ, builder, patch_set, topology: BRepTopology, chains: EdgeChains, 
     edges = []
     for c, (start, end) in enumerate(chains.chain_vertices.tolist()):
         run = chains.edges(c)
-        degree, poles, pole_weights, knots, multiplicities = chain_curve(
-            chains.chain_edges[run], chains.chain_forward[run], curves, weights)
-        pole_weights = np.ones(len(poles)) if pole_weights is None else pole_weights
-        curve = occ.BSplineCurve(occ_poles(occ, poles), occ_reals(occ, pole_weights), occ_reals(occ, knots),
-                                 occ_integers(occ, multiplicities), degree)
+        degree, poles, pole_weights, _, _ = chain_curve(chains.chain_edges[run], chains.chain_forward[run], curves, weights)
+        knots, multiplicities = knot_arrays(occ, run.stop - run.start, degree)
+        if pole_weights is None:
+            curve = occ.BSplineCurve(occ_poles(occ, poles), knots, multiplicities, degree)
+        else:
+            curve = occ.BSplineCurve(occ_poles(occ, poles), occ_reals(occ, pole_weights), knots, multiplicities, degree)
         edge = occ.Edge()
         builder.MakeEdge(edge, curve, tolerance)
         builder.Add(edge, vertices[start].Oriented(occ.FORWARD))
@@ -276,7 +278,23 @@ def _segment(occ, start: list, end: list, length: int):
     poles = occ.Array1OfPnt2d(1, 2)
     poles.SetValue(1, occ.Pnt2d(*start))
     poles.SetValue(2, occ.Pnt2d(*end))
-    return occ.BSpline2d(poles, occ_reals(occ, np.array([0.0, length])), occ_integers(occ, np.array([2, 2])), 1)
+    key = ("segment", length)  # knots 0, length with multiplicities 2, 2: two poles, parameter = arc length
+    if key not in _KNOT_ARRAYS:
+        _KNOT_ARRAYS[key] = (occ_reals(occ, np.array([0.0, length])), occ_integers(occ, np.array([2, 2])))
+    return occ.BSpline2d(poles, *_KNOT_ARRAYS[key], 1)
+
+
+def knot_arrays(occ, spans: int, degree: int):
+    """Open CASCADE arrays of the knots 0, 1, ..., spans and multiplicities degree + 1, degree, ..., degree + 1.
+
+    Made once per (spans, degree) and shared (``_KNOT_ARRAYS``): the curve constructors copy them.
+    """
+    key = (spans, degree)
+    if key not in _KNOT_ARRAYS:
+        multiplicities = np.full(spans + 1, degree)
+        multiplicities[[0, -1]] = degree + 1
+        _KNOT_ARRAYS[key] = (occ_reals(occ, np.arange(spans + 1, dtype=np.float64)), occ_integers(occ, multiplicities))
+    return _KNOT_ARRAYS[key]
 
 
 def _wires(occ, builder, chains: EdgeChains, faces: list, edges: list) -> None:
@@ -313,11 +331,12 @@ def face_volumes(patch_set, topology: BRepTopology) -> np.ndarray:
     """(F,) float: each face's share of the signed enclosed volume, 1/3 of the integral of (x - o) . (x_u x x_v).
 
     Summed over a closed component it is the volume it bounds, negative when
-    its normals point inwards (which ``brep_shape`` then turns). Exact Gauss
-    rules for polynomial faces (``evaluation.measure``); rational ones to the
-    rule's accuracy, which decides the sign all the same.
+    its normals point inwards (which ``brep_shape`` then turns). Gauss rules of
+    ceil(3 d / 2) points per direction are exact for polynomial faces (the
+    density has degree 3 d - 1); rational ones are integrated to the rule's
+    accuracy, which decides the sign all the same.
     """
-    from ....evaluation.measure import integrate_patches
+    from ....evaluation.measure import gauss_rule, patch_frames
 
     corners = topology.vertex_points
     origin = 0.5 * (corners.min(axis=0) + corners.max(axis=0)) if len(corners) else np.zeros(3)
@@ -336,15 +355,17 @@ def face_volumes(patch_set, topology: BRepTopology) -> np.ndarray:
         owner.setdefault(shape, []).append(np.full(len(points), f))
     volume = np.zeros(topology.n_faces)
     for shape in nets:
+        points, owners = np.concatenate(nets[shape]), np.concatenate(owner[shape])
         weights = np.concatenate(net_weights[shape]) if patch_set.weights else None
-        values, _ = integrate_patches(np.concatenate(nets[shape]), weights, _volume_integrand, origin)
-        volume += np.bincount(np.concatenate(owner[shape]), weights=values[:, 0], minlength=topology.n_faces)
+        u, wu = gauss_rule((3 * (shape[0] - 1) + 1) // 2)  # x . (x_u x x_v) has degree 3 d - 1 in u
+        v, wv = gauss_rule((3 * (shape[1] - 1) + 1) // 2)
+        for chunk in range(0, len(points), 4096):
+            part = slice(chunk, chunk + 4096)
+            x, xu, xv = patch_frames(points[part], None if weights is None else weights[part], u, v)
+            density = np.einsum("pabi,pabi->pab", x - origin, np.cross(xu, xv)) / 3.0
+            volume += np.bincount(owners[part], weights=np.einsum("pab,a,b->p", density, wu, wv),
+                                  minlength=topology.n_faces)
     return volume
-
-
-def _volume_integrand(x: np.ndarray, xu: np.ndarray, xv: np.ndarray, origin: np.ndarray) -> np.ndarray:
-    """(..., 1): (x - origin) . (x_u x x_v) / 3, the divergence theorem's volume density."""
-    return np.einsum("...i,...i->...", x - origin, np.cross(xu, xv))[..., None] / 3.0
 
 
 def _assemble(occ, builder, faces: list, component: np.ndarray, closed: np.ndarray, inward: np.ndarray):
