@@ -9,13 +9,16 @@ vertices are; here every item becomes its Open CASCADE counterpart through
   of a merged piece over [0, m] x [0, n], ``Geom_BezierSurface`` of a patch over
   [0, 1]^2; rational where the patch set has weights), each bounded by one wire
   on its natural bounds, so the STEP reader still sees untrimmed faces;
-- **edges**: one per topology edge, its 3D curve the edge's ``Geom_BezierCurve``
-  (degree 2 or 3, rational with weights) over [0, 1], and on each face that uses
-  it a ``Geom2d_Line`` pcurve run at unit speed over the same [0, 1], so both
-  representations share their parameter (SameParameter, SameRange); a seam (one
-  face using an edge twice, a piece that closes on itself) gets both pcurves on
-  that face (FORWARD use first, as ``BRep_CurveOnClosedSurface`` wants);
-- **vertices**: one per topology vertex, at its corner coefficient;
+- **edges**: one per chain of topology edges (``edge_chains``: the patch
+  sides between the same two faces, joined where nothing else meets them), its
+  3D curve the sides' Bezier curves one after the other as a ``Geom_BSplineCurve``
+  over [0, k] (degree 2 or 3, rational with weights), and on each face that uses
+  it a straight pcurve, a ``Geom2d_BSplineCurve`` of degree 1 over the same
+  [0, k] run at unit speed, so both representations share their parameter
+  (SameParameter, SameRange); a seam (one face using an edge twice: a piece that
+  closes on itself) gets both pcurves on that face (FORWARD use first, as
+  ``BRep_CurveOnClosedSurface`` wants);
+- **vertices**: one at each chain end, at its corner coefficient;
 - **shells**: one per connected component (faces joined through shared edges);
   a closed component (every edge in two faces) is made a solid, turned so that
   its enclosed volume is positive; several components go into one compound.
@@ -24,7 +27,8 @@ Tolerances (:func:`brep_tolerance`) come from the size, not from Open CASCADE's
 absolute default: the faces of a c1surf surface meet to round-off (a few units
 in the last place of the coordinates), and the tolerance is 1e-9 of the
 bounding-box diagonal, six orders of magnitude above that and far below any
-feature of the surface. ``BRep_Tool.Tolerance`` never reports less than
+feature of the surface (or 1e-12 of the largest coordinate, where a small
+surface far from the origin has coarser coordinates). ``BRep_Tool.Tolerance`` never reports less than
 ``Precision::Confusion()`` (1e-7), so that is the floor Open CASCADE checks with.
 """
 from __future__ import annotations
