@@ -101,6 +101,7 @@ def edge_chains(topology: BRepTopology) -> EdgeChains:
                                np.where(chain_forward[chain_start[1:] - 1], ev[last, 1], ev[last, 0])], axis=1)
     along = np.empty(topology.n_edges, bool)
     along[chain_edges] = chain_forward
+    inner[chain_vertices[:, 0]] = False  # where _walk cut a chain of inner vertices only (none on c1surf surfaces)
     return EdgeChains(chain_start, chain_edges, chain_forward, chain_vertices,
                       *_chain_loops(topology, inner, chain_of, along))
 
