@@ -10,7 +10,9 @@ from __future__ import annotations
 
 from .evaluation.smoothness import measure_smoothness
 from .construction.surface import Surface, SurfaceOptions, build_surface
+from .evaluation.adjacency import patch_adjacency
 from .evaluation.tessellate import tessellate
+from .evaluation.tolerance import tessellate_to_tolerance
 from .io.meshes.read import read_mesh
 from .io.meshes.surface_data import prepare_surface_input, surface_data
 
@@ -47,9 +49,14 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
     return surface, mesh
 
 
-def tessellate_surface(surface: Surface, resolution: int = 8):
-    """Welded N x N sampling of every patch of ``surface`` (a ``Tessellation``)."""
-    return tessellate([surface.biquadratic, surface.bicubic], surface.refined, surface.frames, resolution, surface.patch_weights)
+def tessellate_surface(surface: Surface, resolution: int = 8, tolerance: float | None = None):
+    """Welded N x N sampling of every patch of ``surface`` (a ``Tessellation``); with ``tolerance``, a
+    ``ToleranceTessellation`` whose chordal error is at most that fraction of the bounding-box diagonal."""
+    groups = [surface.biquadratic, surface.bicubic]
+    if tolerance is not None:
+        return tessellate_to_tolerance(groups, patch_adjacency(surface.refined, surface.frames), tolerance,
+                                       surface.patch_weights)
+    return tessellate(groups, surface.refined, surface.frames, resolution, surface.patch_weights)
 
 
 def check_surface(surface: Surface, samples: int = 11):

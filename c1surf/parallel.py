@@ -73,9 +73,22 @@ def for_each_range(n: int, work, minimum: int = 1 << 16, uses_blas: bool = False
     minimum : int, fewer rows than this per thread are not worth a thread
     uses_blas : bool, as for ``run_tasks``
     """
+    bounds = ranges_of(n, minimum)
+    run_tasks([partial(work, bounds[k], bounds[k + 1]) for k in range(len(bounds) - 1)], uses_blas)
+
+
+def ranges_of(n: int, minimum: int = 1 << 16) -> list:
+    """The bounds of ``for_each_range``'s ranges: [0, ..., n], one range per thread."""
     threads = min(thread_count(), max(1, n // minimum))
-    bounds = [n * k // threads for k in range(threads + 1)]
-    run_tasks([partial(work, bounds[k], bounds[k + 1]) for k in range(threads)], uses_blas)
+    return [n * k // threads for k in range(threads + 1)]
+
+
+@contextmanager
+def blas_on_one_thread(hold: bool = True):
+    """Hold BLAS to one thread inside (when ``hold`` and the BLAS can be told), as ``run_tasks`` does for its
+    tasks: a product computed alone then gives the bits it gives inside those tasks."""
+    with _single_threaded_blas(_blas_threads() if hold else None):
+        yield
 
 
 _blas_lock = threading.Lock()

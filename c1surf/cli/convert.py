@@ -10,9 +10,10 @@ import click
 from ..mesh.errors import TopologyError
 from ..construction.surface import Surface, SurfaceOptions
 from ..evaluation.merge import merge_biquadratic
+from ..evaluation.stream import StreamedTessellation, UndefinedNormals
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
-from ..io.meshes.write import write_attribute_mesh, write_triangle_mesh
+from ..io.meshes.write import write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
 from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
 from ..io.patches.formats import write_surface_patches
 from ..io.patches.iges import DEFAULT_UNITS, UNITS
@@ -20,7 +21,8 @@ from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import prepare_surface_input, surface_data
 from .curvature_ply import curvature_properties
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes, topology_failure
-from .options import extension_options, surface_options, weld_options, weld_tolerance
+from .options import extension_options, surface_options, tolerance_option, tolerance_value, weld_options, weld_tolerance
+from ..evaluation.tolerance import plan_tolerance, tessellate_plan, measured_chordal_error
 
 # Peak memory of a tessellation, traced with tracemalloc on spot_quadrangulated (46,848 patches):
 # 465 bytes per patch at N = 2, 4,436 at N = 8, 40,950 at N = 24, i.e. about
@@ -28,6 +30,10 @@ from .options import extension_options, surface_options, weld_options, weld_tole
 BYTES_PER_PATCH = 220
 BYTES_PER_SAMPLE = 72
 WRITER_HEADROOM = 1.1
+# A streamed conversion holds, besides the surface, the sample matrices of both patch degrees
+# ((S d) x (N^2 d) and 2 (S x N^2) float64 for S = 9 and 16 control points, d = 3: 2,200 bytes per
+# sample) and one block of at least one patch: counted from the array shapes, as 2,400 bytes per sample.
+STREAMED_BYTES_PER_SAMPLE = 2400
 
 
 def available_memory() -> int:
@@ -42,16 +48,20 @@ def available_memory() -> int:
     return 8 << 30
 
 
-def build_or_fail(mesh, options: SurfaceOptions, data=None) -> Surface:
+def build_or_fail(mesh, options: SurfaceOptions, data=None, lazy_patches: bool = False) -> Surface:
     """Build the surface of a MeshFile; topology problems become one-line failures.
 
     ``data``: an ``io.meshes.surface_data.SurfaceData`` (blend ratios, weights, normals,
-    attribute columns) for the paper's extensions, or None.
+    attribute columns) for the paper's extensions, or None. ``lazy_patches``: the patch
+    arrays are made when first used (``Surface``), for a polynomial surface only (a
+    rational one checks its patch weights here).
     """
     try:
         if data is None:
-            return Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, options)
-        return Surface(mesh.face_sizes, mesh.face_vertices, data.points, options, **data.surface_kwargs())
+            return Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, options, lazy_patches=lazy_patches)
+        kwargs = data.surface_kwargs()
+        lazy_patches = lazy_patches and kwargs["weights"] is None
+        return Surface(mesh.face_sizes, mesh.face_vertices, data.points, options, lazy_patches=lazy_patches, **kwargs)
     except TopologyError as e:
         raise topology_failure(e, mesh) from None
     except ValueError as e:  # extension data the construction cannot use (e.g. weights making a patch weight <= 0)
@@ -104,8 +114,12 @@ def output_bytes(mesh_suffix: str, tess, float32: bool, curvature: bool, patch_s
     if float32 and mesh_suffix in (".ply", ".obj"):
         per_vertex //= 2
     per_vertex += CURVATURE_BYTES if curvature else 0
-    rows = 9 * len(surface.biquadratic) + 16 * len(surface.bicubic)
-    sizes = [(mesh_suffix, 1024 + per_vertex * len(tess.points) + per_triangle * len(tess.triangles))]
+    rows = 9 * surface.quad_frames.shape[0] + 16 * surface.cubic_frames.shape[0]
+    if isinstance(tess, StreamedTessellation):
+        n_vertices, n_triangles = tess.n_vertices, tess.n_triangles
+    else:
+        n_vertices, n_triangles = len(tess.points), len(tess.triangles)
+    sizes = [(mesh_suffix, 1024 + per_vertex * n_vertices + per_triangle * n_triangles)]
     return sizes + [(suffix, 4096 + PATCH_FILE_BYTES[suffix] * rows) for suffix in patch_suffixes]
 
 
@@ -151,6 +165,7 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
                    "repeat for several formats.")
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="Samples per patch side: each patch becomes an N x N grid of welded vertices.")
+@tolerance_option
 @click.option("--units", type=click.Choice(sorted(UNITS)), default=DEFAULT_UNITS, show_default=True,
               help="Length unit recorded in an IGES patch file (coordinates are written as they are).")
 @click.option("--no-group", is_flag=True,
@@ -173,8 +188,8 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
               help="Write even when the output is estimated not to fit in memory or on the disk.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
-def convert(input_path, output, patches_paths, resolution, units, no_group, curvature, float32, merge, force, quiet,
-            weld, no_weld, **shape):
+def convert(input_path, output, patches_paths, resolution, tolerance, units, no_group, curvature, float32, merge, force,
+            quiet, weld, no_weld, **shape):
     """Convert the polygon mesh INPUT (OBJ, PLY or OFF, any n-gons; STL triangles) to a smooth surface.
 
     Writes OUTPUT, a triangle mesh sampled from the surface's Bezier patches
@@ -182,13 +197,26 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
     output, with exact normals), and optionally the patches themselves.
     """
     mesh_suffix, patch_suffixes = output_formats(output, patches_paths, curvature, shape["attributes"])
+    tolerance = tolerance_value(tolerance)
     progress = Progress(quiet)
-    surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet, weld_tolerance(weld, no_weld))
-    check_tessellation_size(surface.n_patches, resolution, force)
-    progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
+    # a plain binary PLY at a uniform resolution is tessellated and written by blocks (--tolerance plans
+    # per-patch resolutions over the whole surface first, so it keeps the in-memory path)
+    stream = tolerance is None and streams(mesh_suffix, patches_paths, curvature, shape["attributes"])
+    surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet, weld_tolerance(weld, no_weld),
+                                   lazy_patches=stream)
+    if stream and surface.lazy_patches:  # polynomial: tessellated and written by blocks
+        write_streamed(input_path, output, mesh_suffix, surface, resolution, float32, force, progress)
+        progress.done()
+        return
     # the same welding `c1surf tessellate` reads from the patch file: identical meshes
     adjacency = patch_adjacency(surface.refined, surface.frames)
-    tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution, surface.patch_weights)
+    if tolerance is not None:
+        tess = tessellate_within([surface.biquadratic, surface.bicubic], adjacency, tolerance, surface.patch_weights,
+                                 force, progress, quiet)
+    else:
+        check_tessellation_size(surface.n_patches, resolution, force)
+        progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution}")
+        tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution, surface.patch_weights)
     extra = curvature_columns(surface, tess, progress.advance) if curvature else {}
     check_disk_space([output, *patches_paths], output_bytes(mesh_suffix, tess, float32, curvature, patch_suffixes,
                                                            surface), force)
@@ -200,6 +228,41 @@ def convert(input_path, output, patches_paths, resolution, units, no_group, curv
         del tess, extra  # written: leave its memory to the patch writers
         write_patch_files(zip(patches_paths, patch_suffixes), surface, input_path, patch_options, progress, merged)
     progress.done()
+
+
+def streams(mesh_suffix: str, patches_paths, curvature: bool, attributes: bool) -> bool:
+    """Whether ``convert`` writes its mesh by blocks: a format written so (``MESH_WRITERS.streamed()``), and no
+    option that needs the whole surface (patch files, ``--curvature``, ``--attributes``; rational surfaces are
+    told apart after reading). ``C1SURF_STREAM=0`` turns it off."""
+    if os.environ.get("C1SURF_STREAM", "1").strip() == "0":
+        return False
+    return mesh_suffix in MESH_WRITERS.streamed() and not (patches_paths or curvature or attributes)
+
+
+def write_streamed(input_path, output, mesh_suffix: str, surface: Surface, resolution: int, float32: bool,
+                   force: bool, progress: Progress) -> None:
+    """Tessellate and write ``output`` by blocks (``evaluation.stream``), never holding the patches or the mesh.
+
+    Memory is not the limit then, only the disk (``check_disk_space``). A sample without a normal
+    (``UndefinedNormals``: a degenerate patch point takes its neighbours' normal) needs the whole
+    tessellation: that file is written again in memory, with the same bytes the in-memory path writes.
+    """
+    needed, available = STREAMED_BYTES_PER_SAMPLE * resolution * resolution, available_memory()
+    if needed > 0.8 * available and not force:
+        raise Failure(f"tessellating at --resolution {resolution} would need about {needed / 2**30:.1f} GiB for one "
+                      f"patch but about {available / 2**30:.1f} GiB is available: lower --resolution, or pass --force "
+                      "to try anyway")
+    adjacency = patch_adjacency(surface.refined, surface.frames)
+    tess = StreamedTessellation(surface.patch_source(), adjacency, resolution)
+    check_disk_space([output], output_bytes(mesh_suffix, tess, float32, False, [], surface), force)
+    progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution} into {output}")
+    with atomic_output(output, inputs=[input_path]) as mesh_tmp:
+        try:
+            write_streamed_mesh(mesh_tmp, tess, mesh_suffix, float32)
+        except UndefinedNormals:
+            check_tessellation_size(surface.n_patches, resolution, force)
+            whole = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution)
+            write_mesh(mesh_tmp, mesh_suffix, whole, {}, None, float32)
 
 
 CAD_SUFFIXES = (".igs", ".iges", ".step", ".stp")  # the patch formats merged by default: CAD opens few large faces
@@ -216,19 +279,19 @@ def merged_pieces(surface: Surface, patch_suffixes, merge: bool | None) -> dict:
 
 
 def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: Progress, quiet: bool,
-                   weld: float | None = 0.0):
+                   weld: float | None = 0.0, lazy_patches: bool = False):
     """Read the mesh file, weld it and build its surface: (Surface, SurfaceData); notes on repairs unless ``quiet``.
 
     ``shape``: the values of the surface and extension options (``options.py``),
     keyed by ``extension_setup``'s parameter names; ``weld``: the tolerance of
-    ``options.weld_tolerance`` (None: no welding).
+    ``options.weld_tolerance`` (None: no welding); ``lazy_patches``: ``build_or_fail``'s.
     """
     progress.phase(f"reading {input_path}")
     mesh = read_mesh(input_path)
     options, data = extension_setup(mesh, mesh_suffix, **shape)
     mesh, data = prepare_surface_input(mesh, data, weld)
     progress.phase(f"building the surface of {mesh.n_faces} faces")
-    surface = build_or_fail(mesh, options, data)
+    surface = build_or_fail(mesh, options, data, lazy_patches)
     echo_repair_notes(surface, mesh, quiet, data)
     return surface, data
 
@@ -276,3 +339,37 @@ def write_patch_files(targets, surface: Surface, input_path, patch_options: dict
             write_surface_patches(patch_tmp, surface, patch_suffix, input_path=str(input_path),
                                   file_name=os.path.basename(patches_path), merged=(merged or {}).get(patch_suffix),
                                   **patch_options)
+
+
+# --tolerance: peak bytes per output vertex besides BYTES_PER_PATCH (traced with tracemalloc on spot_quadrangulated:
+# 158 at --tolerance 1e-5, 1.1 M vertices; points, normals, the evaluating patch and parameters of each vertex, about
+# two triangles, and the template blocks' ids)
+TOLERANCE_BYTES_PER_VERTEX = 160
+
+
+def tessellate_within(groups, adjacency, tolerance: float, weights, force: bool, progress: Progress, quiet: bool):
+    """``--tolerance``: the tessellation to a chordal tolerance (``evaluation.tolerance``), after the memory guard.
+
+    The plan (segment counts, templates, numbering) comes first and is cheap, so the
+    guard refuses with its exact vertex count; unless ``quiet``, a note gives the
+    triangle count and the measured chordal error (``chordal.measured_chordal_error``).
+    """
+    progress.phase(f"choosing resolutions for a chordal error within {tolerance:g} of the diagonal")
+    try:
+        plan = plan_tolerance(groups, adjacency, tolerance, weights)
+    except ValueError as e:  # more than MAX_SEGMENTS a side
+        raise Failure(f"--tolerance {tolerance:g}: {e}") from None
+    needed = (plan.n_patches * BYTES_PER_PATCH + TOLERANCE_BYTES_PER_VERTEX * plan.n_vertices) * WRITER_HEADROOM
+    available = available_memory()
+    if needed > 0.8 * available and not force:
+        raise Failure(f"the tessellation would need about {needed / 2**30:.1f} GiB ({plan.n_vertices} vertices at "
+                      f"--tolerance {tolerance:g}) but about {available / 2**30:.1f} GiB is available: raise --tolerance, "
+                      "or pass --force to try anyway")
+    progress.phase(f"tessellating {plan.n_patches} patches at 1 to {int(plan.segments.max(initial=1))} segments a side")
+    tess = tessellate_plan(groups, plan, weights)
+    if not quiet:
+        progress.phase("measuring the chordal error")
+        error = measured_chordal_error(groups, tess, weights)
+        click.echo(f"c1surf: note: --tolerance {tolerance:g}: {len(tess.triangles)} triangles, {len(tess.points)} "
+                   f"vertices; measured chordal error {error:.3g} of the bounding-box diagonal", err=True)
+    return tess

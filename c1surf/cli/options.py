@@ -1,9 +1,13 @@
 """Click options shared by the commands that build a surface."""
 from __future__ import annotations
 
+import math
+
 import click
+from click.core import ParameterSource
 
 from ..construction.surface import TANGENT_RULES, TRIANGLE_RULES
+from .common import Failure
 
 
 def surface_options(command):
@@ -87,3 +91,36 @@ def with_options(command, options: list):
     for option in reversed(options):
         command = option(command)
     return command
+
+
+class UsageFailure(Failure):
+    """A one-line ``c1surf: error:`` for a bad option value, with the exit status of bad usage (2)."""
+
+    exit_code = 2
+
+
+def tolerance_option(command):
+    """Add --tolerance T (a per-patch resolution instead of --resolution's uniform one; ``tolerance_value``)."""
+    return click.option(
+        "--tolerance", type=float, default=None, metavar="T",
+        help="Instead of --resolution: each patch gets its own grid, fine enough that every triangle is within T "
+             "times the bounding-box diagonal of the exact surface (a guaranteed bound on the chordal error); patches "
+             "sharing a side sample it alike and transitions have no T-junctions, so a closed input stays watertight. "
+             "E.g. 0.001.")(command)
+
+
+def tolerance_value(tolerance: float | None) -> float | None:
+    """The --tolerance value of a command (None: uniform --resolution); one-line errors for misuse.
+
+    T must be a positive finite number, and an explicit --resolution contradicts it
+    (its default does not).
+    """
+    if tolerance is None:
+        return None
+    if not (math.isfinite(tolerance) and tolerance > 0):
+        raise UsageFailure(f"--tolerance must be a positive number (a fraction of the bounding-box diagonal, e.g. "
+                           f"0.001), got {tolerance}")
+    context = click.get_current_context(silent=True)
+    if context is not None and context.get_parameter_source("resolution") not in (None, ParameterSource.DEFAULT):
+        raise UsageFailure("--tolerance and --resolution both set the tessellation's resolution: give one of them")
+    return float(tolerance)

@@ -8,7 +8,8 @@ from ..io.atomic import atomic_output
 from ..io.meshes.write import write_triangle_mesh
 from ..io.registry import MESH_WRITERS, PATCH_READERS, suffix_list
 from .common import Failure, Progress, friendly_errors, output_suffix
-from .convert import check_tessellation_size
+from .convert import check_tessellation_size, tessellate_within
+from .options import tolerance_option, tolerance_value
 
 
 @click.command()
@@ -17,14 +18,15 @@ from .convert import check_tessellation_size
               help=f"Triangle mesh to write; the suffix picks the format ({suffix_list(MESH_WRITERS)}).")
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="Samples per patch side: each patch becomes an N x N grid of welded vertices.")
+@tolerance_option
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
-def tessellate(patches_path, output, resolution, force, quiet):
+def tessellate(patches_path, output, resolution, tolerance, force, quiet):
     """Tessellate the patch file PATCHES (.json, .npz, .igs/.iges) into a triangle mesh.
 
-    With the same --resolution, the mesh is byte for byte the one `convert`
-    writes for the same surface: JSON and NPZ files store how patches share
+    With the same --resolution (or --tolerance), the mesh is byte for byte the
+    one `convert` writes for the same surface: JSON and NPZ files store how patches share
     corners and sides, and the welding uses exactly those ids. IGES files
     store no adjacency; shared corners and sides are then found from the
     patch geometry (points within 1e-9 of the bounding box), which for a
@@ -32,15 +34,20 @@ def tessellate(patches_path, output, resolution, force, quiet):
     """
     mesh_suffix = output_suffix(output, MESH_WRITERS, "--output")
     patch_suffix = output_suffix(patches_path, PATCH_READERS, "PATCHES")
+    tolerance = tolerance_value(tolerance)
     progress = Progress(quiet)
     progress.phase(f"reading {patches_path}")
     patch_set = load_tessellable(patches_path, patch_suffix)
-    check_tessellation_size(patch_set.n_patches, resolution, force)
+    if tolerance is None:
+        check_tessellation_size(patch_set.n_patches, resolution, force)
     if patch_set.adjacency is None:
         progress.phase("finding shared corners and sides from the geometry")
     adjacency = patch_set.welding()
-    progress.phase(f"tessellating {patch_set.n_patches} patches at {resolution} x {resolution}")
-    tess = tessellate_patches(patch_set.groups, adjacency, resolution, patch_set.weights)  # weights: rational (A2a)
+    if tolerance is not None:  # the same tessellation `convert --tolerance` makes of these patches
+        tess = tessellate_within(patch_set.groups, adjacency, tolerance, patch_set.weights, force, progress, quiet)
+    else:
+        progress.phase(f"tessellating {patch_set.n_patches} patches at {resolution} x {resolution}")
+        tess = tessellate_patches(patch_set.groups, adjacency, resolution, patch_set.weights)  # weights: rational (A2a)
     progress.phase(f"writing {output}")
     with atomic_output(output, inputs=[patches_path]) as mesh_tmp:
         write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix)

@@ -15,6 +15,7 @@ import numpy as np
 from ..mesh.errors import TopologyError
 from ..mesh.halfedges import HalfEdgeMesh
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX
+from .patch_blocks import PatchSource, patch_source
 from .stages import STAGE_BUILDERS, StageInputs
 from .stencil import flat_stencil, row_stencil
 from .stencils.blend import check_ratios, corner_ratios
@@ -99,12 +100,18 @@ class Surface:
     stages : list of ``stages.Stage``, the geometry steps in order
     refined_points : (Vr, d) float (homogeneous when rational), the points A2 and A3 read
     timings : dict, seconds spent on "topology", on building each stage ("build <name>")
-        and on its last application ("apply <name>")
+        and on its last application ("apply <name>"; the patches' once they are made)
+
+    ``lazy_patches=True`` makes the four patch arrays on first use instead of at
+    construction and ``update_points`` (a rational surface then checks its patch
+    weights there too): the streamed conversion reads the patches by blocks
+    (``patch_blocks``, ``patch_source``) and never makes them.
     """
 
     def __init__(self, face_sizes, face_vertices, points, options: SurfaceOptions | None = None, face_blend=None,
-                 vertex_blend=None, weights=None, vertex_normals=None, features=None):
+                 vertex_blend=None, weights=None, vertex_normals=None, features=None, lazy_patches: bool = False):
         self.options = o = (options or SurfaceOptions()).check(vertex_normals)
+        self.lazy_patches = bool(lazy_patches)
         points = np.asarray(points, dtype=np.float64)
         n_vertices, n_faces = points.shape[0], np.size(face_sizes)
         blend = np.full(n_faces, float(o.blend))
@@ -220,7 +227,7 @@ class Surface:
         return self._apply(points)
 
     def _apply(self, points: np.ndarray) -> "Surface":
-        """Run the stages on ``points``: refined points, then the patches."""
+        """Run the stages on ``points``: refined points, then (unless ``lazy_patches``) the patches."""
         # Every stage is affine (its rows sum to 1) and commutes with translations, so
         # the stages run on points centred on their bounding box and the centre is added
         # back: round-off then scales with the model's size, not its distance from the origin.
@@ -228,33 +235,66 @@ class Surface:
         x = points - origin
         if self.weights is not None:
             x = np.concatenate([x * self.weights[:, None], self.weights[:, None]], axis=1)
-        polynomial = self.weights is None
-        for stage in self.stages:
+        for stage in self.stages[:-1]:
             start = time.perf_counter()
-            # the last stage (the patches) reads the refined points; a polynomial surface's
-            # patches get the centre back in the same pass
-            last = polynomial and stage is self.stages[-1]
-            refined, x = x, (stage.apply(x, offset=origin) if last else stage.apply(x))
+            x = stage.apply(x)
             self.timings[f"apply {stage.name}"] = time.perf_counter() - start
-        if self.weights is None:
-            refined += origin
-        else:
-            refined[:, :-1] += origin * refined[:, -1:]
-        self.points, self.refined_points = points, refined
+        self.points, self._centred, self._origin = points, x, origin
+        self._refined = self._patches = None
+        if not self.lazy_patches:
+            self._patch_arrays()
+        return self
+
+    @property
+    def refined_points(self) -> np.ndarray:
+        """(Vr, d) float (homogeneous when rational): the refined points A2 and A3 read (made on first use)."""
+        if self._refined is None:
+            refined = self._centred.copy()
+            if self.weights is None:
+                refined += self._origin
+            else:
+                refined[:, :-1] += self._origin * refined[:, -1:]
+            self._refined = refined
+        return self._refined
+
+    def _patch_arrays(self) -> tuple:
+        """(biquadratic, bicubic, biquadratic_weights, bicubic_weights), made by the last stage on first use."""
+        if self._patches is not None:
+            return self._patches
+        stage, origin = self.stages[-1], self._origin
+        start = time.perf_counter()
+        # a polynomial surface's patches get the centre back in the pass that writes them
+        x = stage.apply(self._centred, offset=origin) if self.weights is None else stage.apply(self._centred)
+        self.timings[f"apply {stage.name}"] = time.perf_counter() - start
         n_quad, d = self.quad_frames.shape[0], x.shape[1]
         biquadratic, bicubic = x[: 9 * n_quad].reshape(n_quad, 3, 3, d), x[9 * n_quad :].reshape(-1, 4, 4, d)
         if self.weights is None:
-            self.biquadratic, self.bicubic = biquadratic, bicubic
-            self.biquadratic_weights = self.bicubic_weights = None
-            return self
-        self.biquadratic_weights, self.bicubic_weights = biquadratic[..., -1], bicubic[..., -1]
-        if not (np.all(self.biquadratic_weights > 0) and np.all(self.bicubic_weights > 0)):
+            self._patches = (biquadratic, bicubic, None, None)
+            return self._patches
+        weights = biquadratic[..., -1], bicubic[..., -1]
+        if not (np.all(weights[0] > 0) and np.all(weights[1] > 0)):
             raise ValueError("the vertex weights vary too much: some patch weight is not positive")
-        self.biquadratic = biquadratic[..., :-1] / biquadratic[..., -1:]
-        self.bicubic = bicubic[..., :-1] / bicubic[..., -1:]
-        self.biquadratic += origin
-        self.bicubic += origin
-        return self
+        biquadratic = biquadratic[..., :-1] / biquadratic[..., -1:]
+        bicubic = bicubic[..., :-1] / bicubic[..., -1:]
+        biquadratic += origin
+        bicubic += origin
+        self._patches = (biquadratic, bicubic) + weights
+        return self._patches
+
+    biquadratic = property(lambda self: self._patch_arrays()[0], doc="(Nq, 3, 3, d) float, the A2 patches")
+    bicubic = property(lambda self: self._patch_arrays()[1], doc="(Nc, 4, 4, d) float, the A3 patches")
+    biquadratic_weights = property(lambda self: self._patch_arrays()[2], doc="(Nq, 3, 3) float or None")
+    bicubic_weights = property(lambda self: self._patch_arrays()[3], doc="(Nc, 4, 4) float or None")
+
+    def patch_source(self, **options) -> PatchSource:
+        """The patch coefficients by blocks on demand, bit for bit those of ``biquadratic`` / ``bicubic``
+        (``patch_blocks.PatchSource``; ``cache_bytes``: the most blocks it keeps). Valid until ``update_points``."""
+        return patch_source(self.stages[-1], self._centred, self._origin, self.rational, **options)
+
+    def patch_blocks(self, size: int = 1 << 16):
+        """Yield ``patch_blocks.PatchBlock``s (kind, global ids, coefficients, weights) of up to ``size``
+        patches, biquadratic then bicubic, in the order of ``frames``: all patches without holding them all."""
+        return self.patch_source().blocks(size)
 
     def stencil(self, flat: bool = False):
         """The whole construction as one sparse matrix, for the current connectivity (and weights).

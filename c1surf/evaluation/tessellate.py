@@ -341,9 +341,9 @@ def _close_gaps(ids: np.ndarray, owner: np.ndarray):
     return rank[ids], owner[used], False
 
 
-def _grid_block(welding: _Welding, a: int, z: int, grid: np.ndarray) -> None:
-    """Fill ``grid[a:z]`` ((z-a, n, n) ids): corners, then edge samples in edge direction, then interiors."""
-    out = grid[a:z]
+def _grid_block(welding: _Welding, a: int, z: int, grid: np.ndarray, alone: bool = False) -> None:
+    """Fill ``grid[a:z]`` ((z-a, n, n) ids; ``alone``: ``grid`` is that block): corners, edge samples, interiors."""
+    out = grid if alone else grid[a:z]
     corners = welding.corners[a:z]
     out[:, 0, 0] = corners[:, 0]
     out[:, -1, 0] = corners[:, 1]

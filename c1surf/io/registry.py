@@ -46,18 +46,31 @@ class Format:
     description : str, what the file holds, in a few words
     holds : frozenset of str, optional per-vertex data the format keeps (mesh writers):
         "attributes" (texture coordinates and colours), "properties" (named scalars, e.g. curvature)
+    streamed : str, "module:function" of a mesh writer that takes the tessellation by blocks
+        (``write(path, tessellation, float32=False)``, ``evaluation.stream.StreamedTessellation``) and
+        writes the bytes the whole-mesh writer writes; "" if the format is written whole only
     """
 
     suffixes: tuple
     target: str
     description: str
     holds: frozenset = field(default_factory=frozenset)
+    streamed: str = ""
 
     @property
     def function(self):
         """The reader or writer (its module is imported on first use)."""
-        module, name = self.target.split(":")
-        return getattr(importlib.import_module(module), name)
+        return _resolve(self.target)
+
+    @property
+    def streamed_function(self):
+        """The writer by blocks (``streamed``), or None."""
+        return _resolve(self.streamed) if self.streamed else None
+
+
+def _resolve(target: str):
+    module, name = target.split(":")
+    return getattr(importlib.import_module(module), name)
 
 
 class FormatTable(Mapping):
@@ -83,6 +96,10 @@ class FormatTable(Mapping):
     def holding(self, data: str) -> tuple:
         """Suffixes of the formats that keep ``data`` ("attributes", "properties")."""
         return tuple(s for s, f in self._formats.items() if data in f.holds)
+
+    def streamed(self) -> tuple:
+        """Suffixes of the formats written by blocks (``Format.streamed``)."""
+        return tuple(s for s, f in self._formats.items() if f.streamed)
 
 
 class UnsupportedFormat(C1SurfFileError, ValueError):
@@ -132,7 +149,8 @@ MESH_READERS = FormatTable("mesh format", "reads", [
 
 MESH_WRITERS = FormatTable("mesh format", "writes", [
     Format((".obj",), _MESHES + "obj_out:write_obj", "Wavefront OBJ text: v, vt, vn, f", frozenset({"attributes"})),
-    Format((".ply",), _MESHES + "ply_out:write_ply", "binary PLY: positions, normals, any per-vertex properties", _BOTH),
+    Format((".ply",), _MESHES + "ply_out:write_ply", "binary PLY: positions, normals, any per-vertex properties", _BOTH,
+           streamed=_MESHES + "ply_out:write_ply_stream"),
     Format((".stl",), _MESHES + "write:write_stl", "binary STL (float32, through trimesh)"),
     Format((".glb",), _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)"),
     Format((".off",), _MESHES + "write:write_off", "OFF text (through trimesh)"),

@@ -19,6 +19,8 @@ def test_every_format_names_a_function_of_io(table):
         module, name = fmt.target.split(":")
         assert module.startswith("c1surf.io.") and fmt.description
         assert callable(fmt.function) and fmt.function.__name__ == name
+        if fmt.streamed:  # the writer by blocks of a mesh format
+            assert fmt.streamed.startswith("c1surf.io.") and callable(fmt.streamed_function)
 
 
 def test_suffix_of_is_the_one_check():

@@ -132,3 +132,25 @@ def test_collinear_corners_and_a_sliver_are_g1_and_finite(tmp_path):
     assert report.boundary_edges == 0 and report.max_normal_jump < 1e-12
     tess = tessellate_surface(surface, 8)
     assert np.isfinite(tess.points).all() and np.isfinite(tess.normals).all()
+
+
+def test_a_zero_area_face_whose_corners_all_have_valence_three_converts_g1_without_nan(tmp_path):
+    """A triangular prism whose top triangle has collinear corners (zero area, every corner of valence 3):
+    nothing to repair, so no note; the surface is closed and G1 and no output holds a NaN (normals and
+    curvature included)."""
+    from plyfile import PlyData
+
+    points = [(0, 0, 0), (2, 0, 0), (1, 1.5, 0), (0, 0, 1), (1, 0, 1), (2, 0, 1)]
+    faces = [[0, 2, 1], [3, 4, 5], [0, 1, 4, 3], [1, 2, 5, 4], [2, 0, 3, 5]]
+    path = obj(tmp_path / "flat_top.obj", points, faces)
+    out, patches = tmp_path / "out.ply", tmp_path / "out.json"
+    result = CliRunner().invoke(main, ["convert", str(path), "-o", str(out), "--patches", str(patches), "--curvature"])
+    assert result.exit_code == 0, result.output
+    assert "note" not in result.stderr
+    vertex = PlyData.read(str(out))["vertex"]
+    assert all(np.isfinite(vertex[p.name]).all() for p in vertex.properties)
+    surface, _ = surface_from_file(path)
+    report = check_surface(surface)
+    assert report.boundary_edges == 0 and report.max_normal_jump < 1e-12
+    check = CliRunner().invoke(main, ["check", str(patches)])
+    assert check.exit_code == 0 and "G1: yes" in check.output

@@ -83,10 +83,12 @@ def inspection(path, resolution: int, refinements) -> dict:
     outputs = None
     if topology is not None:
         outputs = output_sizes(topology, resolution)
+        # a binary PLY is written by blocks (not limited by memory); every other output is held whole first
+        outputs["in_memory_refusal"] = None
         try:
             check_tessellation_size(outputs["patches"], resolution, force=False)
-        except Failure as e:  # the memory guard of convert
-            refusal = e.message
+        except Failure as e:  # the memory guard of an in-memory conversion
+            outputs["in_memory_refusal"] = e.message
     return {
         "file": str(path),
         **statistics_dict(stats),
@@ -243,6 +245,8 @@ def text_lines(report: dict) -> list[str]:
         rows.append((f"output at -r {o['resolution']}", f"{o['vertices']} vertices, {o['triangles']} triangles, "
                                                          f"PLY about {_bytes(o['ply_bytes'])}, "
                                                          f"memory about {_bytes(o['memory_bytes'])}"))
+        if o["in_memory_refusal"]:
+            rows.append(("held in memory", f"refused (a plain binary .ply streams): {o['in_memory_refusal']}"))
     notes = [f"  note: {note}" for note in report["notes"]]
     return [report["file"]] + [f"  {name:<20}{value}" for name, value in rows] + notes
 

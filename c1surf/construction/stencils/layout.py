@@ -11,7 +11,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse import csr_matrix, vstack
 
-from ...parallel import for_each_range
+from ...parallel import for_each_range, ranges_of
 
 
 def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray, out: np.ndarray,
@@ -21,7 +21,8 @@ def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray
     Blocks of patches that stay in cache, on the thread pool: gather slot by slot
     (each into a contiguous row of the block), one (r x m) @ (m x block d) product,
     one strided copy into the output. mode="clip": no bounds check, no buffering
-    (the indices are valid by construction).
+    (the indices are valid by construction). The blocks are ``product_blocks``:
+    a block computed alone (``product_block``) gives the same bits.
 
     Parameters
     ----------
@@ -37,26 +38,74 @@ def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray
     """
     points = np.ascontiguousarray(points)
     m, k = slots.shape
-    d = points.shape[1]
-    step = max(1, (1 << 15) // m)
+    step = _step(m)
 
     def fill(first: int, last: int) -> None:
-        gathered = np.empty((m, min(step, last - first), d))
-        product = np.empty((weights.shape[0], gathered.shape[1] * d))
+        work = _ProductWork(m, weights.shape[0], min(step, last - first), points.shape[1])
         for start in range(first, last, step):
             stop = min(last, start + step)
-            g = gathered[:, : stop - start]
-            for j in range(m):
-                np.take(points, slots[j, start:stop], axis=0, out=g[j], mode="clip")
-            q = np.matmul(weights, g.reshape(m, -1), out=product[:, : (stop - start) * d])
-            block = q.reshape(weights.shape[0], -1, d).transpose(1, 0, 2)
-            if offset is None:
-                out[start:stop] = block
-            else:
-                np.add(block, offset, out=out[start:stop])
+            product_block(points, slots, weights, start, stop, out[start:stop], offset, work)
 
-    for_each_range(k, fill, minimum=max(1, (1 << 19) // m), uses_blas=True)
+    for_each_range(k, fill, minimum=_minimum(m), uses_blas=True)
     return out
+
+
+_BLOCK_POINTS = 1 << 15  # gathered points per product block: its work arrays stay in cache
+_THREAD_POINTS = 1 << 19  # fewer gathered points than this per thread are not worth a thread
+
+
+def _step(m: int) -> int:
+    """Items per product block when each reads m points."""
+    return max(1, _BLOCK_POINTS // m)
+
+
+def _minimum(m: int) -> int:
+    """Fewest items per thread (``parallel.for_each_range``)."""
+    return max(1, _THREAD_POINTS // m)
+
+
+def product_blocks(k: int, m: int) -> tuple[np.ndarray, bool]:
+    """The blocks of ``gathered_products`` on k items of m points: (starts (b + 1,) int64, BLAS held).
+
+    Block i covers items starts[i]:starts[i + 1]: every thread's range of
+    ``parallel.for_each_range`` cut into ``_step(m)`` items from its start.
+    BLAS held: the products run with BLAS on one thread (``parallel.run_tasks``
+    on more than one thread), as ``product_block`` must then run too to give the
+    same bits (a BLAS on several threads cuts the product differently).
+    """
+    threads = ranges_of(k, _minimum(m))
+    step = _step(m)
+    starts = [np.arange(threads[i], threads[i + 1], step) for i in range(len(threads) - 1)]
+    return np.concatenate(starts + [np.array([k])]).astype(np.int64), len(threads) > 2
+
+
+def product_block(points: np.ndarray, slots: np.ndarray, weights: np.ndarray, start: int, stop: int, out: np.ndarray,
+                  offset: np.ndarray | None = None, work: "_ProductWork | None" = None) -> np.ndarray:
+    """``out`` (stop - start, r, d) = the products of items start:stop, one block of ``gathered_products``.
+
+    points : (V, d) float, C-contiguous; slots : (m, k) int; weights : (r, m) float;
+    work : the block's work arrays (made here if None)
+    """
+    m, d = slots.shape[0], points.shape[1]
+    work = work or _ProductWork(m, weights.shape[0], stop - start, d)
+    g = work.gathered[:, : stop - start]
+    for j in range(m):
+        np.take(points, slots[j, start:stop], axis=0, out=g[j], mode="clip")
+    q = np.matmul(weights, g.reshape(m, -1), out=work.product[:, : (stop - start) * d])
+    block = q.reshape(weights.shape[0], -1, d).transpose(1, 0, 2)
+    if offset is None:
+        out[:] = block
+    else:
+        np.add(block, offset, out=out)
+    return out
+
+
+class _ProductWork:
+    """Work arrays of product blocks of up to ``items`` items: gathered (m, items, d), product (r, items d)."""
+
+    def __init__(self, m: int, r: int, items: int, d: int):
+        self.gathered = np.empty((m, items, d))
+        self.product = np.empty((r, items * d))
 
 
 def gathered_matrix(slots: np.ndarray, weights: np.ndarray, n_points: int) -> csr_matrix:
@@ -107,6 +156,7 @@ class PatchLayout:
         kept = self.n_rows if self.keep is None else int(self.keep.sum()) * coefficients
         self.shape = (kept, self.n_points)
         self._matrix = None
+        self._kept = None
 
     def apply(self, points: np.ndarray, out: np.ndarray | None = None, offset: np.ndarray | None = None) -> np.ndarray:
         """(rows, d) coefficients from refined ``points`` (n_points, d), written into ``out`` if given;
@@ -123,6 +173,17 @@ class PatchLayout:
         if self.keep is not None:
             out[:] = every.reshape(self.keep.size, -1)[self.keep].reshape(out.shape)
         return out
+
+    @property
+    def n_patches(self) -> int:
+        """Patches kept (rows / coefficients)."""
+        return self.shape[0] // self.coefficients
+
+    def kept_rows(self) -> np.ndarray:
+        """(kept,) int64: the index among all patches of every kept patch (``keep`` not None; made once)."""
+        if self._kept is None:
+            self._kept = np.flatnonzero(self.keep)
+        return self._kept
 
     def matrix(self) -> csr_matrix:
         """(rows, n_points) csr_matrix, built on the first call and kept."""

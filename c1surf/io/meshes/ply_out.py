@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import numpy as np
 
-__all__ = ["write_ply", "vertex_columns"]
+__all__ = ["write_ply", "write_ply_blocks", "write_ply_stream", "vertex_columns"]
 
 _BLOCK = 1 << 19  # rows per block: bounds the structured arrays to some MB
 _TYPE_NAMES = {"<f4": "float", "<f8": "double", "u1": "uchar"}
@@ -72,12 +72,56 @@ def write_ply(path, mesh, float32: bool = False) -> None:
     with open(path, "wb") as f:
         f.write(_header(columns, n, t, comments))
         for a in range(0, n, _BLOCK):
-            vertex = np.empty(min(n, a + _BLOCK) - a, dtype=[(name, dtype) for name, dtype, _ in columns])
-            for name, _, values in columns:
-                vertex[name] = values[a : a + _BLOCK]
-            f.write(vertex.tobytes())
+            f.write(_vertex_bytes([(name, dtype, values[a : a + _BLOCK]) for name, dtype, values in columns]))
         for a in range(0, t, _BLOCK):
-            face = np.empty(min(t, a + _BLOCK) - a, dtype=[("n", "u1"), ("i", "<i4", (3,))])
-            face["n"] = 3
-            face["i"] = triangles[a : a + _BLOCK]
-            f.write(face.tobytes())
+            f.write(_face_bytes(triangles[a : a + _BLOCK]))
+
+
+def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, triangle_blocks,
+                     float32: bool = False) -> None:
+    """Write a tessellation given by blocks as ``write_ply`` writes it whole: the same bytes.
+
+    Parameters
+    ----------
+    n_vertices, n_triangles : int, the counts the blocks will add up to (the header comes first)
+    vertex_blocks : iterable of (points (c, >= 3), normals (c, 3)) float, in vertex order
+    triangle_blocks : iterable of (t, 3) int, in order
+    float32 : positions and normals as ``float``
+    """
+    real = "<f4" if float32 else "<f8"
+    names = [(axis, real) for axis in ("x", "y", "z", "nx", "ny", "nz")]
+    written = [0, 0]
+    with open(path, "wb") as f:
+        f.write(_header([(name, dtype, None) for name, dtype in names], n_vertices, n_triangles, ("c1surf",)))
+        for points, normals in vertex_blocks:
+            values = [points[:, 0], points[:, 1], points[:, 2], normals[:, 0], normals[:, 1], normals[:, 2]]
+            f.write(_vertex_bytes([(name, dtype, v) for (name, dtype), v in zip(names, values)]))
+            written[0] += points.shape[0]
+        for triangles in triangle_blocks:
+            f.write(_face_bytes(triangles))
+            written[1] += triangles.shape[0]
+    if written != [n_vertices, n_triangles]:
+        raise ValueError(f"internal: the blocks gave {written[0]} vertices and {written[1]} triangles, "
+                         f"the header says {n_vertices} and {n_triangles}")
+
+
+def write_ply_stream(path, tessellation, float32: bool = False) -> None:
+    """Write a tessellation by blocks (``evaluation.stream.StreamedTessellation``): the bytes of ``write_ply``."""
+    write_ply_blocks(path, tessellation.n_vertices, tessellation.n_triangles, tessellation.vertex_blocks(),
+                     tessellation.triangle_blocks(), float32)
+
+
+def _vertex_bytes(columns) -> bytes:
+    """The records of one block of vertices: columns [(name, dtype, (c,) values)]."""
+    vertex = np.empty(len(columns[0][2]), dtype=[(name, dtype) for name, dtype, _ in columns])
+    for name, _, values in columns:
+        vertex[name] = values
+    return vertex.tobytes()
+
+
+def _face_bytes(triangles: np.ndarray) -> bytes:
+    """The records of one block of (t, 3) triangles: ``3 a b c`` as uchar and three int32."""
+    face = np.empty(triangles.shape[0], dtype=[("n", "u1"), ("i", "<i4", (3,))])
+    face["n"] = 3
+    face["i"] = triangles
+    return face.tobytes()

@@ -18,8 +18,8 @@ import numpy as np
 from ..registry import MESH_WRITERS, suffix_of
 from .surface_data import COLOUR_NAMES
 
-__all__ = ["TriangleMesh", "write_mesh", "write_triangle_mesh", "write_attribute_mesh", "write_stl", "write_glb",
-           "write_off"]
+__all__ = ["TriangleMesh", "write_mesh", "write_streamed_mesh", "write_triangle_mesh", "write_attribute_mesh",
+           "write_stl", "write_glb", "write_off"]
 
 @dataclass
 class TriangleMesh:
@@ -63,6 +63,20 @@ def write_mesh(path, mesh: TriangleMesh, suffix: str | None = None, float32: boo
     if mesh.properties and "properties" not in fmt.holds:
         raise ValueError(f"per-vertex properties need a {', '.join(MESH_WRITERS.holding('properties'))} output, not {suffix}")
     fmt.function(path, mesh, float32=float32)
+
+
+def write_streamed_mesh(path, tessellation, suffix: str | None = None, float32: bool = False) -> None:
+    """Write a tessellation given by blocks (``evaluation.stream.StreamedTessellation``), never held whole.
+
+    The bytes are those ``write_triangle_mesh`` writes for the same tessellation
+    with its normals. Raises ValueError for a format written whole only
+    (``MESH_WRITERS.streamed()`` lists the others).
+    """
+    suffix = suffix or suffix_of(path, MESH_WRITERS)
+    function = MESH_WRITERS[suffix].streamed_function
+    if function is None:
+        raise ValueError(f"{suffix} files are written whole, not by blocks ({', '.join(MESH_WRITERS.streamed())} are)")
+    function(path, tessellation, float32=float32)
 
 
 def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None,

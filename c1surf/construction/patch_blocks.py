@@ -1,0 +1,152 @@
+"""Patch coefficients by blocks, for callers that never hold all of them (the streamed conversion).
+
+The patches stage computes its coefficients in blocks of items
+(``stencils.layout.product_blocks``), and a block computed alone gives the
+same bits as inside the whole stage. ``PatchSource`` serves the coefficients of
+any patches, in any order, from those blocks: it computes a block when one of
+its patches is asked for and keeps the most recent blocks up to a byte budget.
+So ``Surface.patch_blocks`` and the streamed tessellation read exactly the
+numbers of ``Surface.biquadratic`` / ``Surface.bicubic`` without making them.
+"""
+from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..parallel import blas_on_one_thread
+from .stencils.layout import PatchLayout, product_block, product_blocks
+
+KINDS = ("biquadratic", "bicubic")
+DEFAULT_CACHE_BYTES = 64 << 20
+
+
+@dataclass(frozen=True)
+class PatchBlock:
+    """Coefficients of some patches of one kind.
+
+    kind : 0 (biquadratic) or 1 (bicubic)
+    ids : (c,) int64, global patch ids (biquadratic first, then bicubic: the order of ``Surface.frames``)
+    coefficients : (c, k, k, d) float, k = 3 or 4, as in ``Surface.biquadratic`` / ``Surface.bicubic``
+    weights : (c, k, k) float or None (polynomial surface)
+    """
+
+    kind: int
+    ids: np.ndarray
+    coefficients: np.ndarray
+    weights: np.ndarray | None
+
+
+class _Group:
+    """One group of a layout: its items' slots and weights, where its patches start, its product blocks."""
+
+    def __init__(self, slots, weights, first: int, coefficients: int):
+        self.slots, self.weights, self.first = slots, weights, first
+        self.per_item = weights.shape[0] // coefficients
+        self.stop = first + slots.shape[1] * self.per_item
+        self.starts, self.held = product_blocks(slots.shape[1], slots.shape[0])
+
+
+class PatchSource:
+    """The patch coefficients of a surface, computed by blocks on demand.
+
+    Parameters
+    ----------
+    layouts : (biquadratic, bicubic) ``stencils.layout.PatchLayout``, the parts of the patches stage
+    refined : (Vr, d) float, the refined points the stage reads (centred, homogeneous when rational)
+    origin : (d,) float, the centre taken off the input points (put back on every coefficient)
+    rational : bool, ``refined`` carries the homogeneous weight as its last column
+    cache_bytes : int or None, the most bytes of coefficient blocks kept at once (None: ``DEFAULT_CACHE_BYTES``)
+    """
+
+    def __init__(self, layouts, refined: np.ndarray, origin: np.ndarray, rational: bool,
+                 cache_bytes: int | None = None):
+        self.layouts = tuple(layouts)
+        self.refined = np.ascontiguousarray(refined)
+        self.origin, self.rational = origin, rational
+        self.cache_bytes = DEFAULT_CACHE_BYTES if cache_bytes is None else cache_bytes
+        self._cache: OrderedDict = OrderedDict()
+        self._cached = 0
+        self._groups = []
+        for layout in self.layouts:
+            groups, first = [], 0
+            for slots, weights in layout.groups:
+                groups.append(_Group(slots, weights, first, layout.coefficients))
+                first = groups[-1].stop
+            self._groups.append(groups)
+
+    @property
+    def dim(self) -> int:
+        """Columns of the coefficients (those of the input points)."""
+        return self.refined.shape[1] - (1 if self.rational else 0)
+
+    @property
+    def counts(self) -> tuple:
+        """(Nq, Nc): the patches of each kind."""
+        return tuple(layout.n_patches for layout in self.layouts)
+
+    def coefficients(self, kind: int, patches) -> tuple:
+        """(coefficients (c, k, k, d), weights (c, k, k) or None) of patches ``patches`` (c,) int of one kind.
+
+        ``patches`` are indices within the kind (0..Nq-1 or 0..Nc-1), any order, repeats allowed.
+        """
+        layout = self.layouts[kind]
+        patches = np.asarray(patches, dtype=np.int64).reshape(-1)
+        raw = patches if layout.keep is None else layout.kept_rows()[patches]
+        rows = np.empty((raw.size, layout.coefficients, self.refined.shape[1]))
+        for g, group in enumerate(self._groups[kind]):
+            mine = np.flatnonzero((raw >= group.first) & (raw < group.stop))
+            if mine.size == 0:
+                continue
+            item, corner = np.divmod(raw[mine] - group.first, group.per_item)
+            block = np.searchsorted(group.starts, item, side="right") - 1
+            for b in np.unique(block):
+                chosen = np.flatnonzero(block == b)
+                local = (item[chosen] - group.starts[b]) * group.per_item + corner[chosen]
+                rows[mine[chosen]] = self._block(kind, g, int(b))[local]
+        side = 3 if kind == 0 else 4
+        rows = rows.reshape(raw.size, side, side, self.refined.shape[1])
+        if not self.rational:
+            return rows, None
+        points = rows[..., :-1] / rows[..., -1:]  # as Surface._apply: divided, then the centre added back
+        points += self.origin
+        return points, rows[..., -1]
+
+    def blocks(self, size: int):
+        """Yield ``PatchBlock``s of up to ``size`` patches: every biquadratic patch in order, then every bicubic."""
+        offset = 0
+        for kind, count in enumerate(self.counts):
+            for a in range(0, count, size):
+                ids = np.arange(a, min(a + size, count))
+                coefficients, weights = self.coefficients(kind, ids)
+                yield PatchBlock(kind, ids + offset, coefficients, weights)
+            offset += count
+
+    def _block(self, kind: int, g: int, b: int) -> np.ndarray:
+        """(items * per item, coefficients, d) float: the rows of product block b of group g, computed or kept."""
+        key = (kind, g, b)
+        if key in self._cache:
+            self._cache.move_to_end(key)
+            return self._cache[key]
+        group = self._groups[kind][g]
+        start, stop = int(group.starts[b]), int(group.starts[b + 1])
+        d = self.refined.shape[1]
+        out = np.empty((stop - start, group.weights.shape[0], d))
+        with blas_on_one_thread(group.held):
+            product_block(self.refined, group.slots, group.weights, start, stop, out,
+                          None if self.rational else self.origin)
+        rows = out.reshape(-1, self.layouts[kind].coefficients, d)
+        self._cache[key] = rows
+        self._cached += rows.nbytes
+        while self._cached > self.cache_bytes and len(self._cache) > 1:
+            self._cached -= self._cache.popitem(last=False)[1].nbytes
+        return rows
+
+
+def patch_source(stage, refined: np.ndarray, origin: np.ndarray, rational: bool, **options) -> PatchSource:
+    """The ``PatchSource`` of a patches stage (``stages.StackedStage`` of two ``PatchLayout``s)."""
+    layouts = stage.parts
+    if len(layouts) != 2 or not all(isinstance(layout, PatchLayout) for layout in layouts):
+        raise ValueError("internal: the patches stage is not (biquadratic, bicubic) layouts")
+    return PatchSource(layouts, refined, origin, rational, **options)

@@ -1,0 +1,90 @@
+"""Surface.patch_blocks / patch_source: the patch coefficients by blocks, bit for bit the in-memory arrays."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from c1surf.construction.stencils import layout
+from c1surf.construction.surface import Surface, SurfaceOptions
+from c1surf.io.meshes.read import read_mesh
+
+ROOT = Path(__file__).resolve().parents[2]
+MESHES = ["cube", "dodecahedron", "twisted", "high_valence", "hexagon_all_six_valent"]
+
+
+def _surfaces(name: str, **kwargs):
+    m = read_mesh(ROOT / "sample_meshes" / f"{name}.obj")
+    eager = Surface(m.face_sizes, m.face_vertices, m.points, **kwargs)
+    lazy = Surface(m.face_sizes, m.face_vertices, m.points, lazy_patches=True, **kwargs)
+    return eager, lazy
+
+
+@pytest.mark.parametrize("tiny", [False, True], ids=["default blocks", "tiny blocks"])
+@pytest.mark.parametrize("name", MESHES)
+def test_any_patches_in_any_order_equal_the_arrays(monkeypatch, name, tiny):
+    if tiny:
+        monkeypatch.setattr(layout, "_BLOCK_POINTS", 40)
+        monkeypatch.setattr(layout, "_THREAD_POINTS", 200)
+    eager, lazy = _surfaces(name)
+    source = lazy.patch_source(cache_bytes=1 << 12 if tiny else None)
+    for kind, whole in enumerate((eager.biquadratic, eager.bicubic)):
+        order = np.random.default_rng(kind).permutation(len(whole))
+        order = np.concatenate([order, order[: len(order) // 3]])  # repeats, after the cache let them go
+        coefficients, weights = source.coefficients(kind, order)
+        assert weights is None and coefficients.dtype == np.float64
+        assert np.array_equal(coefficients, whole[order])
+
+
+@pytest.mark.parametrize("name", MESHES)
+def test_blocks_cover_every_patch_once_in_order(name):
+    eager, lazy = _surfaces(name)
+    blocks = list(lazy.patch_blocks(size=7))
+    ids = np.concatenate([b.ids for b in blocks])
+    assert np.array_equal(ids, np.arange(eager.n_patches))
+    for kind, whole in enumerate((eager.biquadratic, eager.bicubic)):
+        mine = [b.coefficients for b in blocks if b.kind == kind]
+        assert np.array_equal(np.concatenate(mine) if mine else whole[:0], whole)
+    assert lazy._patches is None  # the blocks made no whole array
+    assert np.array_equal(lazy.biquadratic, eager.biquadratic) and np.array_equal(lazy.bicubic, eager.bicubic)
+    assert np.array_equal(lazy.refined_points, eager.refined_points)
+
+
+def test_open_mesh_blocks_keep_only_the_kept_patches():
+    """An open mesh keeps only the bicubic patches at real corners (PatchLayout.keep)."""
+    path = ROOT.parent / "shared" / "meshes" / "pmp-library" / "hole_capsule.obj"
+    if not path.exists():
+        pytest.skip(f"{path} is not here")
+    m = read_mesh(path)
+    eager = Surface(m.face_sizes, m.face_vertices, m.points)
+    lazy = Surface(m.face_sizes, m.face_vertices, m.points, lazy_patches=True)
+    assert lazy.stages[-1].parts[1].keep is not None
+    source = lazy.patch_source(cache_bytes=1)
+    assert source.counts == (len(eager.biquadratic), len(eager.bicubic))
+    order = np.random.default_rng(0).permutation(len(eager.bicubic))
+    assert np.array_equal(source.coefficients(1, order)[0], eager.bicubic[order])
+
+
+def test_rational_blocks_give_points_and_weights():
+    m = read_mesh(ROOT / "sample_meshes" / "twisted.obj")
+    weights = 1.0 + 0.5 * np.sin(np.arange(len(m.points)))
+    eager = Surface(m.face_sizes, m.face_vertices, m.points, weights=weights)
+    lazy = Surface(m.face_sizes, m.face_vertices, m.points, weights=weights, lazy_patches=True)
+    for block in lazy.patch_blocks(size=50):
+        whole = (eager.biquadratic, eager.bicubic)[block.kind]
+        whole_weights = (eager.biquadratic_weights, eager.bicubic_weights)[block.kind]
+        local = block.ids - (0 if block.kind == 0 else len(eager.biquadratic))
+        assert np.array_equal(block.coefficients, whole[local]) and np.array_equal(block.weights, whole_weights[local])
+
+
+def test_update_points_follows_in_blocks_and_lazy_arrays():
+    eager, lazy = _surfaces("twisted", options=SurfaceOptions(blend=0.3))
+    moved = eager.points + 0.01 * np.cos(np.arange(eager.points.size)).reshape(eager.points.shape)
+    eager.update_points(moved)
+    lazy.update_points(moved)
+    assert lazy._patches is None
+    source = lazy.patch_source()
+    assert np.array_equal(source.coefficients(0, np.arange(len(eager.biquadratic)))[0], eager.biquadratic)
+    assert np.array_equal(lazy.bicubic, eager.bicubic)
+    assert "apply patches" in lazy.timings
