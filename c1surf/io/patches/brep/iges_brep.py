@@ -2,18 +2,18 @@
 
 A reader needs no sewing: the faces share their edges and vertices by
 reference, as ``topology.brep_topology`` found them from the patch adjacency
-(its patch-side edges joined into maximal ones by ``edge_runs``). The entities are those of IGES 5.3's boundary-representation solid
+(its patch-side edges joined into chains by ``edge_chains``, as in STEP). The entities are those of IGES 5.3's boundary-representation solid
 model (section 4, "BREP"), written after the surfaces (one type 128 per face, in
 the writer's order: merged pieces, then the uncovered patches), in this
 Directory order:
 
 - 126 rational B-spline curve, one per edge (form 0, status 00010000). The
-  edges are maximal (``edge_runs``): a run of k patch sides between the same
-  two faces, straight in both their parameter domains, is one edge whose
-  curve is the C1 quadratic B-spline of those sides (knots 0 0 0 1 .. k k k,
-  range [0, k]); any other edge is one side's Bezier polygon (degree 2 or 3,
-  knots ``0..0 1..1``, range [0, 1]). Weights of a rational surface, PROP3 = 1
-  where they are all equal; curves grouped by degree and spans;
+  edges are those of the STEP B-rep (``edge_chains``): the patch sides
+  between the same two faces where nothing else meets them, k of them one
+  edge over [0, k], whose curve (``iges_edges``) is the C1 quadratic B-spline
+  of those sides (knots 0 0 0 1 .. k k k) along a merged piece, one side's
+  Bezier polygon (degree 2 or 3, knots ``0..0 1..1``) otherwise. Weights of a
+  rational surface, PROP3 = 1 where they are all equal; grouped by layout;
 - 126, the pcurves (status 00010500: use flag 05, parameter space): an edge
   use's straight degree-1 curve in its face's (u, v) domain ([0, m] x [0, n]
   for a piece of knots 0 .. m, [0, 1]^2 for a patch), planar (normal 0 0 1),
@@ -56,7 +56,7 @@ from ....evaluation.measure import gauss_rule, patch_frames
 from ....evaluation.patch_set import PatchSet
 from ..iges_numbers import SLOT, SPACE, format_ints, format_reals
 from ..iges_records import ParameterWriter
-from .edge_runs import EdgeRuns, edge_runs
+from .iges_edges import IgesEdges, iges_edges
 from .topology import FACE_PIECE, BRepTopology, brep_topology
 
 __all__ = ["IgesBRep", "iges_brep", "edge_polygons", "LIST_BLOCK"]
@@ -74,7 +74,7 @@ _CURVE, _PCURVE, _VERTICES, _EDGES, _LOOP, _FACE, _SHELL, _SOLID = range(8)
 class IgesBRep:
     """The B-rep entities of one file, numbered after its ``first`` surfaces, ready for ``iges_writer.write_iges``.
 
-    topology : BRepTopology of the file: maximal edges (``edge_runs``), faces in the order of its surfaces
+    topology : BRepTopology of the file: edges are chains (``iges_edges``), faces in the order of its surfaces
     first : int, number of surfaces before the B-rep entities (entity k has the DE pointer 2 k + 1)
     etype, form, status, label : (N,) int64, per B-rep entity in Directory order (status and label
         index ``STATUS`` and ``LABELS``)
@@ -237,22 +237,21 @@ def _ragged(etype: int, row: np.ndarray, items: np.ndarray, n_rows: int):
     return values, starts
 
 
-def _curve_rows(points: np.ndarray, weights: np.ndarray | None, spans: int):
-    """Entity 126 parameters of clamped B-spline curves of ``spans`` uniform spans: ints (n, 7), reals (n, ...).
+def _curve_rows(points: np.ndarray, weights: np.ndarray | None, d: int, spans: int, multiplicity: int):
+    """Entity 126 parameters of clamped B-spline curves of ``spans`` unit spans: ints (n, 7), reals (n, ...).
 
-    points : (n, spans + d, 3) float; weights : (n, spans + d) float or None (unit weights, polynomial).
-    Knots ``0 .. 0 1 .. spans - 1 spans .. spans`` (d + 1 fold ends), range [0, spans], not flagged
-    planar (normal 0 0 0); PROP2 (closed) where the end points and their weights are equal, PROP3
-    (polynomial) where all weights are.
+    points : (n, c, 3) float; weights : (n, c) float or None (unit weights, polynomial). Degree d,
+    knots ``0`` and ``spans`` d + 1 times, 1 .. spans - 1 ``multiplicity`` times each; range [0, spans],
+    not flagged planar (normal 0 0 0); PROP2 (closed) where the end points and their weights are
+    equal, PROP3 (polynomial) where all weights are.
     """
     n, count = points.shape[:2]
-    d = count - spans
     w = np.ones(points.shape[:2]) if weights is None else weights
     closed = np.all(points[:, 0] == points[:, -1], axis=1) & (w[:, 0] == w[:, -1])
     polynomial = np.all(w == w[:, :1], axis=1)
     ints = np.zeros((n, 7), np.int64)
     ints[:, 0], ints[:, 1], ints[:, 2], ints[:, 4], ints[:, 5] = 126, count - 1, d, closed, polynomial
-    knots = np.r_[np.zeros(d + 1), np.arange(1.0, spans), np.full(d + 1, float(spans))]
+    knots = np.r_[np.zeros(d + 1), np.repeat(np.arange(1.0, spans), multiplicity), np.full(d + 1, float(spans))]
     floats = np.concatenate([np.broadcast_to(knots, (n, knots.size)), w, points.reshape(n, -1),
                              np.broadcast_to([0.0, float(spans), 0.0, 0.0, 0.0], (n, 5))], axis=1)
     return ints, floats
@@ -400,8 +399,8 @@ def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRe
     topology = brep_topology(patch_set) if topology is None else topology
     if topology.n_faces != first:
         raise ValueError(f"the B-rep has {topology.n_faces} faces but the file {first} surfaces")
-    runs = edge_runs(topology, edge_polygons(patch_set, topology))
-    topology = runs.topology  # maximal edges: runs of patch sides
+    runs = iges_edges(topology, edge_polygons(patch_set, topology))
+    topology = runs.topology  # edges: chains of patch sides (edge_chains), as in the STEP B-rep
     f, e, v = topology.n_faces, topology.n_edges, len(topology.vertex_points)
     component, n_comp = _components(topology)
     face_of_use = np.repeat(np.arange(f), np.diff(topology.loop_start))
@@ -421,13 +420,13 @@ def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRe
     return IgesBRep(topology, first, etype, form, status, label, subscript, closed, outward, tuple(parts))
 
 
-def _curve_parts(runs: EdgeRuns, at: _Numbers, segments: np.ndarray):
-    """Rows of the 126 edge curves (by degree and spans) and pcurves, and the curve entity of each edge ((E,) int64)."""
+def _curve_parts(runs: IgesEdges, at: _Numbers, segments: np.ndarray):
+    """Rows of the 126 edge curves (by layout) and pcurves, and the curve entity of each edge ((E,) int64)."""
     curve_of = np.empty(runs.topology.n_edges, np.int64)
     parts, first = [], at.curve
-    for edges, _, spans, points, weights in runs.curves:
+    for edges, degree, spans, multiplicity, points, weights in runs.curves:
         curve_of[edges] = first + np.arange(edges.size)
-        parts.append((first, lambda p=points, w=weights, k=spans: _curve_rows(p, w, k)))
+        parts.append((first, lambda p=points, w=weights, d=degree, k=spans, m=multiplicity: _curve_rows(p, w, d, k, m)))
         first += edges.size
     parts.append((at.pcurve, lambda: _pcurve_rows(segments)))
     return parts, curve_of
