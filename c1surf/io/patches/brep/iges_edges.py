@@ -13,11 +13,10 @@ each chain its curve for an IGES entity 126:
   neighbouring control points, to 1e-12 of the size; homogeneous coordinates
   for rational surfaces) is the clamped quadratic B-spline with knots
   ``0 0 0 1 ... k-1 k k k``: the first side's start, every side's middle
-  point and the last side's end, its own points and weights. On c1surf
-  surfaces every chain runs along a merged piece's side, which is C1, so this
-  is the curve written. Open CASCADE's IGES reader makes C0 B-splines
-  continuous by removing knots to a tolerance (``read.iges.bspline.continuity``),
-  which would move them; these it takes as they are;
+  point and the last side's end, its own points and weights: k + 2 control
+  points instead of the 2 k + 1 of the sides one after the other, and the
+  piece's own border curve. On c1surf surfaces every chain runs along a
+  merged piece's side, which is C1, so this is the curve written;
 - a single side keeps its Bezier polygon (knots ``0..0 1..1``);
 - any other chain is ``edge_chains.chain_curve``'s exact form, the sides one
   after the other with knots 0, 1, ..., k of multiplicity d.
