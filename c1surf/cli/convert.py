@@ -101,9 +101,10 @@ def tessellation_bytes(n_patches: int, resolution: int) -> float:
 # Bytes each output format takes, measured on twisted.obj (15,682 vertices, 31,360 triangles at
 # -r 8; 3,636 coefficient rows, 9 per biquadratic and 16 per bicubic patch), a little above:
 # per vertex and per triangle for meshes (PLY with float64 positions and normals, halved by
-# --float32), per coefficient row for patch files (STEP unmerged: merging only shrinks it).
+# --float32), per coefficient row for patch files (STEP and IGES unmerged: merging only shrinks them;
+# the IGES B-rep takes 273 bytes a row on twisted, 318 on spot).
 MESH_FILE_BYTES = {".ply": (48, 13), ".obj": (95, 50), ".stl": (0, 50), ".glb": (24, 12), ".off": (45, 20)}
-PATCH_FILE_BYTES = {".json": 80, ".npz": 45, ".igs": 120, ".iges": 120, ".step": 460, ".stp": 460}
+PATCH_FILE_BYTES = {".json": 80, ".npz": 45, ".igs": 330, ".iges": 330, ".step": 460, ".stp": 460}
 CURVATURE_BYTES = 19  # --curvature: kmax, K, H, quality as float, and a colour, per vertex
 
 
@@ -168,7 +169,8 @@ def check_tessellation_size(n_patches: int, resolution: int, force: bool) -> Non
 @click.option("--units", type=click.Choice(sorted(UNITS)), default=DEFAULT_UNITS, show_default=True,
               help="Length unit recorded in an IGES patch file (coordinates are written as they are).")
 @click.option("--no-group", is_flag=True,
-              help="IGES patch file: independent surfaces, without the group entity that makes CAD show one object.")
+              help="IGES patch file: independent surfaces only, without the B-rep (solid or shell sharing its edges) "
+                   "that makes CAD show one object: for readers without IGES B-rep support.")
 @click.option("--curvature", is_flag=True,
               help="PLY output: add per-vertex kmax (max |k|), K (Gaussian), H (mean), quality (= kmax) and red/green/blue "
                    "(kmax colour-mapped), evaluated exactly on the patches.")

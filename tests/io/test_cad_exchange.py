@@ -111,9 +111,10 @@ def test_iges_opens_in_open_cascade_and_agrees(tmp_path, name):
     mesh = SAMPLES / name if "/" not in name else shared_mesh(name)
     surface = surface_from_file(mesh)[0]  # what convert builds: the file's sharp-feature tags honoured
     reader, shape, roots = read_iges(convert(tmp_path, mesh))
-    assert roots == 1  # the group entity: CAD shows one object
+    assert roots == 1  # the solid (type 186): CAD shows one object
     model = reader.IGESModel()
-    assert model.NbEntities() == surface.n_patches + 1
+    types = [model.Entity(i).TypeNumber() for i in range(1, model.NbEntities() + 1)]
+    assert types.count(128) == surface.n_patches and types.count(186) == 1  # one surface per face, one B-rep solid
     assert model.GlobalSection().IGESVersion() == 11 and model.GlobalSection().UnitName().ToCString() == "MM"
     face_list = faces(shape)
     assert len(face_list) == surface.n_patches

@@ -1,20 +1,27 @@
-"""Patch files in IGES 5.3 (``.igs`` / ``.iges``): write a PatchSet, read Bezier patches and merged surfaces back.
+"""Patch files in IGES 5.3 (``.igs`` / ``.iges``): write a PatchSet as a B-rep, read Bezier patches and merged surfaces back.
 
 Writing goes through ``iges_writer.write_iges``: one rational B-spline surface
-entity (type 128, form 0) per patch, biquadratic first, then bicubic, clamped
-knots on [0, 1], the patch weights (PROP3 = 1 where they are all equal:
-polynomial), control points with the first (u) index fastest; merged pieces
-(``convert --merge``) come first and replace the patches they stand for. By
-default one group entity (type 402 form 7) collects them so CAD systems show
-one object.
+entity (type 128, form 0) per CAD face, merged pieces first (the default for
+IGES: they replace the patches they stand for), then the remaining patches,
+biquadratic before bicubic, clamped knots on [0, 1], the patch weights (PROP3
+= 1 where they are all equal: polynomial), control points with the first (u)
+index fastest. By default those surfaces are the faces of a B-rep built from
+c1surf's own patch adjacency (``brep.iges_brep``): one manifold solid (186)
+per closed component, an open shell (514 form 2) per open one, faces (510),
+loops (508), shared edges (504) and vertices (502), so a CAD system reads one
+valid solid without sewing. ``group=False`` (``convert --no-group``) writes
+the surfaces alone, independent; ``brep=False`` collects them in one group
+entity (402 form 7) instead (the layout before the B-rep).
 
 Reading accepts everything that writer writes: entities 128 that are single
 Bezier patches (polynomial or rational: unequal weights become
 ``PatchSet.weights``) and c1surf's merged B-spline surfaces (degree (2, 2),
 knots 0 0 0 1 ... m m m: ``PatchSet.merged``, their patches cut out again
-into the patch list), optionally collected by 402 groups. Anything else
-(trimmed surfaces, other B-splines, transformation matrices, other geometry)
-is refused with one line saying so. IGES carries no adjacency:
+into the patch list), in Directory order; 402 groups and the B-rep around the
+surfaces (its curves 126 are physically dependent) are passed over, its faces
+being whole surfaces. Anything else (trimmed surfaces, other B-splines,
+transformation matrices, free curves, other geometry) is refused with one
+line saying so. The reader takes no adjacency from the B-rep:
 ``PatchSet.welding()`` finds it from the geometry.
 """
 from __future__ import annotations
@@ -27,6 +34,7 @@ from ... import __version__
 from ...evaluation.merge import MergedPiece, piece_dicts
 from ...evaluation.patch_set import PatchSet, degree_runs
 from ..errors import MeshInputError
+from .brep.iges_brep import iges_brep
 from .iges_writer import UNITS, bezier_patches_to_surfaces, write_iges
 from .merged import is_piece_knots, piece_patches, uncovered_groups
 
@@ -34,32 +42,42 @@ DEFAULT_UNITS = "mm"
 
 
 def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNITS, group: bool = True,
-                         file_name: str | None = None, **_options) -> None:
-    """Write ``patch_set`` as IGES 5.3: its merged pieces, then the patches they do not stand for.
+                         file_name: str | None = None, brep: bool | None = None, **_options) -> None:
+    """Write ``patch_set`` as IGES 5.3: its merged pieces, then the patches they do not stand for, as a B-rep.
 
     Parameters
     ----------
     path : the file to write (may be a temporary name)
     patch_set : evaluation.patch_set.PatchSet (weights and merged pieces are written)
     units : a key of ``iges_writer.UNITS`` (coordinates are written unscaled; this labels them)
-    group : collect the surfaces in one group entity (402 form 7)
+    group : make CAD show one object: by default through the B-rep (a solid, an open shell, or a
+        402 group of several); ``group=False`` (``convert --no-group``) writes independent surfaces only
     file_name : the name recorded in the Global section (default: basename of ``path``)
+    brep : the surfaces as the faces of a B-rep built from the patch adjacency
+        (``brep.iges_brep``: 186 solids of the closed components, 514 shells, 510 faces, ...);
+        None: when ``group``. ``brep=False, group=True``: the surfaces in one 402 group (no B-rep)
     """
     surfaces = piece_dicts(patch_set.merged)
     for points, weights in zip(*uncovered_groups(patch_set)):
         surfaces.extend(bezier_patches_to_surfaces(points, weights))
+    layout = iges_brep(patch_set, len(surfaces), group) if (group if brep is None else brep) and surfaces else None
     write_iges(path, surfaces, units=units, group=group, file_name=file_name or os.path.basename(os.fspath(path)),
-               description=_description(patch_set))
+               description=_description(patch_set, layout), brep=layout)
 
 
-def _description(patch_set: PatchSet) -> str:
-    """The Start section's text: what was converted, the patch counts and the construction options."""
+def _description(patch_set: PatchSet, layout=None) -> str:
+    """The Start section's text: what was converted, the patch counts, the B-rep and the construction options."""
     input_path = (patch_set.header.get("input") or {}).get("path")
     source = os.path.basename(str(input_path)) if input_path else "a mesh"
     counts = {n: sum(len(g) for g in patch_set.groups if g.shape[1:3] == (n, n)) for n in (3, 4)}
     text = (f"c1surf {__version__}: G1 surface of {source}, {counts[3]} biquadratic and {counts[4]} bicubic Bezier "
             "patches as rational B-spline surfaces (type 128 form 0, "
             f"{'rational' if patch_set.weights is not None else 'polynomial'}), biquadratic first")
+    if layout is not None:
+        shells = layout.closed.size - layout.n_solids
+        text += (f"; the faces of {layout.n_solids} solid{'s' * (layout.n_solids != 1)} (type 186)"
+                 + (f" and {shells} open shell{'s' * (shells != 1)} (type 514)" if shells else "")
+                 + " sharing their edges and vertices")
     o = patch_set.header.get("options")
     if not o:
         return text + "."
@@ -70,7 +88,28 @@ def _description(patch_set: PatchSet) -> str:
 # reading
 
 
+class _Lines:
+    """The records of one section: ``numbers`` (k,) int, their line numbers in the file; ``text`` (k, 80) uint8."""
+
+    def __init__(self, numbers, text):
+        self.numbers = np.asarray(numbers, dtype=np.int64)
+        self.text = text.reshape(-1, 80)
+
+    def __len__(self) -> int:
+        return int(self.numbers.size)
+
+    def joined(self, start: int, stop: int, columns: int) -> str:
+        """Columns 1 .. ``columns`` of records ``start`` .. ``stop`` - 1, as one string."""
+        return self.text[start:stop, :columns].tobytes().decode("ascii")
+
+
 def _records(path) -> dict:
+    """{section letter: _Lines} of an IGES file (Start, Global, Directory, Parameter, Terminate).
+
+    Files of 80-column records with LF line ends (c1surf's, and most) are cut
+    as one byte matrix; any other layout (CR LF, short or blank lines) goes
+    line by line, with the same result.
+    """
     try:
         with open(path, "rb") as f:
             data = f.read()
@@ -78,10 +117,28 @@ def _records(path) -> dict:
         raise MeshInputError(str(path), "no such file") from None
     except IsADirectoryError:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
-    try:
-        text = data.decode("ascii")
-    except UnicodeDecodeError:
-        raise MeshInputError(str(path), "not an IGES file (not ASCII; compressed or binary IGES is not supported)") from None
+    raw = np.frombuffer(data, dtype=np.uint8)
+    if raw.size and raw.max() >= 128:
+        raise MeshInputError(str(path), "not an IGES file (not ASCII; compressed or binary IGES is not supported)")
+    rows = raw.reshape(-1, 81) if raw.size and raw.size % 81 == 0 else None
+    if rows is None or data.count(b"\n") != rows.shape[0] or np.any(rows[:, 80] != 10) \
+            or any(c in data for c in _LINE_BREAKS) or not np.all(_SECTION_LETTER[rows[:, 72]]):
+        return _records_by_line(path, data.decode("ascii"))  # the errors, blank lines and odd layouts too
+    letters = rows[:, 72]
+    sections = {c: _Lines(np.flatnonzero(letters == ord(c)) + 1, np.ascontiguousarray(rows[letters == ord(c), :80]))
+                for c in "SGDPT"}
+    if not len(sections["G"]) or not len(sections["T"]):
+        raise MeshInputError(str(path), "not an IGES file (no Global or Terminate section)")
+    return sections
+
+
+_LINE_BREAKS = (b"\r", b"\x0b", b"\x0c", b"\x1c", b"\x1d", b"\x1e")  # where str.splitlines cuts, besides LF
+_SECTION_LETTER = np.zeros(256, dtype=bool)
+_SECTION_LETTER[np.frombuffer(b"SGDPT", dtype=np.uint8)] = True
+
+
+def _records_by_line(path, text: str) -> dict:
+    """``_records`` of a file in any other line layout, line by line (blank lines skipped, short ones padded)."""
     sections: dict = {c: [] for c in "SGDPT"}
     for number, line in enumerate(text.splitlines(), 1):
         if not line.strip():
@@ -91,11 +148,12 @@ def _records(path) -> dict:
         sections[line[72]].append((number, line[:80].ljust(80)))
     if not sections["G"] or not sections["T"]:
         raise MeshInputError(str(path), "not an IGES file (no Global or Terminate section)")
-    return sections
+    return {c: _Lines([n for n, _ in v], np.frombuffer("".join(t for _, t in v).encode("ascii"), dtype=np.uint8))
+            for c, v in sections.items()}
 
 
-def _delimiters(global_lines) -> tuple[str, str]:
-    text = "".join(line[:72] for _, line in global_lines)
+def _delimiters(global_lines: _Lines) -> tuple[str, str]:
+    text = global_lines.joined(0, len(global_lines), 72)
     param, record = ",", ";"
     if text.startswith("1H"):
         param = text[2]
@@ -105,17 +163,32 @@ def _delimiters(global_lines) -> tuple[str, str]:
     return param, record
 
 
-def _parameters(path, pd_lines, start: int, count: int, param: str, record: str):
-    body = "".join(line[:64] for _, line in pd_lines[start - 1 : start - 1 + count])
+def _parameters(path, pd_lines: _Lines, start: int, count: int, param: str, record: str):
+    body = pd_lines.joined(start - 1, start - 1 + count, 64)
     end = body.find(record)
     if end < 0:
-        raise MeshInputError(str(path), "Parameter Data entry without a record delimiter", pd_lines[start - 1][0])
+        raise MeshInputError(str(path), "Parameter Data entry without a record delimiter",
+                             int(pd_lines.numbers[start - 1]) if 0 < start <= len(pd_lines) else None)
     return [t.strip() for t in body[:end].split(param)]
 
 
 def _int(field: str) -> int:
     field = field.strip()
     return int(field) if field else 0
+
+
+def _int_fields(fields: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Right-justified integer fields (k, w) uint8 of the Directory: (values (k,) int64, ok (k,) bool).
+
+    ``ok`` is False where a field is not blanks followed by digits (signs, inner
+    or trailing blanks); those are read one by one (``_int``).
+    """
+    digit = (fields >= 48) & (fields <= 57)
+    blank = fields == 32
+    leading = np.cumsum(digit, axis=1) == 0  # before the first digit
+    ok = np.all(digit | (blank & leading), axis=1)
+    values = (np.where(digit, fields - 48, 0).astype(np.int64) * 10 ** np.arange(fields.shape[1] - 1, -1, -1)).sum(axis=1)
+    return values, ok
 
 
 def _real(token: str) -> float:
@@ -165,24 +238,39 @@ def _single_span(knots: np.ndarray, degree: int) -> bool:
     return knots.size == 2 * degree + 2 and np.all(knots[: degree + 1] == knots[0]) and np.all(knots[degree + 1 :] == knots[-1])
 
 
+_BREP = (186, 514, 510, 508, 504, 502)  # solid, shell, face, loop, edge and vertex lists
+
+
 def _surfaces(path, sections):
     """(line, (knots_u, knots_v, weights (nu, nv), points (nu, nv, 3))) of each entity 128, in Directory order.
 
-    Groups (402), null entities and properties are passed over; any other
-    entity, and a surface with a transformation matrix, is refused.
+    Groups (402), null entities and properties are passed over, and so is the
+    B-rep c1surf writes around its surfaces (186, 514, 510, 508, 504, 502 and
+    the curves 126 they own, physically dependent): its faces are whole
+    surfaces. Any other entity (a free curve too), and a surface with a
+    transformation matrix, is refused.
     """
     param, record = _delimiters(sections["G"])
     de, pd = sections["D"], sections["P"]
     if len(de) % 2:
-        raise MeshInputError(str(path), "the Directory Entry section has an odd number of records", de[-1][0] if de else None)
-    for k in range(0, len(de), 2):
-        line_number, d1 = de[k]
-        d2 = de[k + 1][1]
+        raise MeshInputError(str(path), "the Directory Entry section has an odd number of records",
+                             int(de.numbers[-1]) if len(de) else None)
+    first, second = de.text[0::2], de.text[1::2]
+    fields = [first[:, 0:8], first[:, 8:16], first[:, 48:56], second[:, 24:32]]
+    parsed = [_int_fields(f) for f in fields]
+    well_formed = np.all([ok for _, ok in parsed], axis=0)
+    etype = parsed[0][0]
+    dependent_curve = (etype == 126) & np.all(first[:, 66:68] == np.frombuffer(b"01", dtype=np.uint8), axis=1)
+    passed_over = np.isin(etype, (402, 0, 406) + _BREP) | dependent_curve
+    # groups, null entities, properties, the B-rep of the surfaces and its curves: not even looked at
+    for k in np.flatnonzero(~(passed_over & well_formed)).tolist():
+        line_number = int(de.numbers[2 * k])
         try:
-            etype, pointer, matrix, count = (_int(x) for x in (d1[0:8], d1[8:16], d1[48:56], d2[24:32]))
+            etype, pointer, matrix, count = (int(v[k]) if ok[k] else _int(f[k].tobytes().decode("ascii"))
+                                             for (v, ok), f in zip(parsed, fields))
         except ValueError:
             raise MeshInputError(str(path), "malformed Directory Entry", line_number) from None
-        if etype in (402, 0, 406):  # groups, null entities and properties: nothing to draw
+        if etype in (402, 0, 406) or etype in _BREP or (etype == 126 and dependent_curve[k]):
             continue
         if etype != 128:
             raise MeshInputError(str(path), f"entity type {etype} is not supported: c1surf tessellate reads only "
@@ -197,7 +285,11 @@ def _surface_128(path, tokens: list, line: int):
     try:
         k1, k2, m1, m2 = (int(t) for t in tokens[1:5])
         n1, n2, nc = k1 + m1 + 2, k2 + m2 + 2, (k1 + 1) * (k2 + 1)
-        values = np.array([_real(t) for t in tokens[10 : 10 + n1 + n2 + 4 * nc]])
+        reals = tokens[10 : 10 + n1 + n2 + 4 * nc]
+        try:
+            values = np.array(reals, dtype=np.float64)  # plain decimal numbers, converted at C speed
+        except ValueError:  # D exponents, defaulted (empty) parameters
+            values = np.array([_real(t) for t in reals])
     except (ValueError, IndexError):
         raise MeshInputError(str(path), "malformed rational B-spline surface (type 128)", line) from None
     if values.size != n1 + n2 + 4 * nc or not np.all(np.isfinite(values)):

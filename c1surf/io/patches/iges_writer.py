@@ -3,8 +3,10 @@
 Each surface becomes one *Rational B-spline surface entity* (type 128, form 0);
 optionally all of them are collected by one *Unordered group without back
 pointers* (type 402, form 7; or form 15, ordered) so that a CAD system shows a
-single object.  Open CASCADE reads the files without a single load-check
-message; note that it converts file units to millimetres on import.
+single object, or they are the faces of a B-rep whose entities a caller
+builds (``brep``: ``io.patches.brep.iges_brep``) and this writer writes after
+them.  Open CASCADE reads the files without a single load-check message; note
+that it converts file units to millimetres on import.
 
 The file has the five fixed-format sections of IGES 5.3 (Start, Global,
 Directory Entry, Parameter Data, Terminate), 80-column records, LF line ends
@@ -20,7 +22,7 @@ Public API
 ----------
 ``write_iges(path, surfaces, *, units="mm", group=True, author="c1surf",
 description=None, organization="", file_name=None, product_id=None,
-timestamp=None, resolution=None)``
+timestamp=None, resolution=None, brep=None)``
 
 ``bezier_patches_to_surfaces(points_array, weights=None)``
 """
@@ -51,6 +53,7 @@ _CHUNK_TOKENS = 1 << 15  # tokens formatted per chunk (memory bound)
 
 _STATUS_INDEPENDENT = b"00000000"
 _STATUS_GROUP_MEMBER = b"00020000"  # logically dependent (member of a 402)
+_STATUS_DEPENDENT = b"00010000"  # physically dependent (the surface of a B-rep face)
 
 
 # ----------------------------------------------------------------------------
@@ -281,7 +284,7 @@ def _emit_surfaces(pdw: ParameterWriter, kinds: list[_Kind], kind_of: np.ndarray
                 chars[sel, :nt] = c
                 off[sel, :nt] = o
                 lens[sel, :nt] = ln
-        pdw.emit(ents, chars, off, lens, big=(g == 1 and tmax > _BIG_ENTITY))
+        pdw.emit(ents, chars, off, lens)
         start = end
 
 
@@ -391,6 +394,15 @@ def _extent(kinds: list[_Kind]) -> tuple[float, float]:
     return float(np.max(np.maximum(np.abs(lo), np.abs(hi)))), float(np.linalg.norm(hi - lo))
 
 
+def _extent_and_resolution(kinds: list[_Kind], resolution: float | None) -> tuple[float, float]:
+    """(largest |coordinate|, the Global section's resolution: given, else 1e-9 of the bounding-box diagonal)."""
+    max_coord, diag = _extent(kinds)
+    resolution = float((1e-9 * diag if diag > 0 else 1e-9) if resolution is None else resolution)
+    if not (np.isfinite(resolution) and resolution > 0):
+        raise ValueError("resolution must be positive")
+    return max_coord, resolution
+
+
 def _start_lines(description: str) -> list[str]:
     """The Start section's text, wrapped to 72 columns (paragraphs kept)."""
     lines: list[str] = []
@@ -406,28 +418,34 @@ def _default_description(bspline: np.ndarray, group_form: int) -> str:
             + (f", collected in one group (type 402 form {group_form})." if group_form else "."))
 
 
-def _directory(pdw: ParameterWriter, bspline: np.ndarray, group_form: int) -> bytes:
-    """Directory Entry records of the surfaces (``bspline`` (n,) bool: label BSPLINE, else BEZIER) and the group."""
+def _directory(pdw: ParameterWriter, bspline: np.ndarray, group_form: int, brep=None) -> bytes:
+    """Directory Entry records of the surfaces (``bspline`` (n,) bool: label BSPLINE, else BEZIER), the group
+    and the B-rep entities (``brep``: ``io.patches.brep.iges_brep.IgesBRep`` or None; its faces' surfaces are
+    physically dependent)."""
     n_surf = bspline.size
     n_ent = n_surf + (1 if group_form else 0)
     etype = np.full(n_ent, 128, dtype=np.int64)
     form = np.zeros(n_ent, dtype=np.int64)
-    status_idx = np.full(n_ent, 1 if group_form else 0, dtype=np.int64)
+    status_idx = np.full(n_ent, 2 if brep is not None else 1 if group_form else 0, dtype=np.int64)
     label_idx = np.zeros(n_ent, dtype=np.int64)
     label_idx[:n_surf][bspline] = 1
     subscript = np.arange(1, n_ent + 1, dtype=np.int64)
     if group_form:
         etype[-1], form[-1], status_idx[-1], label_idx[-1], subscript[-1] = 402, group_form, 0, 2, 0
-    return de_records(etype, pdw.pd_ptr, pdw.pd_cnt, form, [_STATUS_INDEPENDENT, _STATUS_GROUP_MEMBER], status_idx,
-                      [b"BEZIER", b"BSPLINE", b"C1SURF"], label_idx, subscript)
+    status, labels = [_STATUS_INDEPENDENT, _STATUS_GROUP_MEMBER, _STATUS_DEPENDENT], [b"BEZIER", b"BSPLINE", b"C1SURF"]
+    if brep is not None:
+        etype, form, subscript = np.r_[etype, brep.etype], np.r_[form, brep.form], np.r_[subscript, brep.subscript]
+        status_idx, label_idx = np.r_[status_idx, len(status) + brep.status], np.r_[label_idx, len(labels) + brep.label]
+        status, labels = status + list(brep.STATUS), labels + list(brep.LABELS)
+    return de_records(etype, pdw.pd_ptr, pdw.pd_cnt, form, status, status_idx, labels, label_idx, subscript)
 
 
 def _write_sections(fh, start_lines: list[str], global_lines: list[str], normalised: tuple, bspline: np.ndarray,
-                    group_form: int) -> None:
+                    group_form: int, brep=None) -> None:
     """Write the five sections to the seekable file ``fh``: Parameter Data first, then the Directory indexing it."""
     kinds, kind_of, row_of = normalised
     n_surf = bspline.size
-    n_ent = n_surf + (1 if group_form else 0)
+    n_ent = n_surf + (1 if group_form else 0) + (0 if brep is None else brep.n_entities)
     s_bytes = text_records(start_lines, "S")
     g_bytes = text_records(global_lines, "G")
     d_offset = len(s_bytes) + len(g_bytes)
@@ -440,10 +458,12 @@ def _write_sections(fh, start_lines: list[str], global_lines: list[str], normali
     if group_form:
         ints = np.concatenate([[402, n_surf], 2 * np.arange(n_surf, dtype=np.int64) + 1])  # members' DE pointers
         ic, io, il = format_ints(ints)
-        pdw.emit(np.array([n_surf]), ic[None, :, :], io[None, :], il[None, :], big=ints.size > _BIG_ENTITY)
+        pdw.emit(np.array([n_surf]), ic[None, :, :], io[None, :], il[None, :])
+    if brep is not None:
+        brep.emit(pdw)
     n_p = pdw.next_line - 1
     fh.seek(d_offset)
-    fh.write(_directory(pdw, bspline, group_form))
+    fh.write(_directory(pdw, bspline, group_form, brep))
     term = f"S{len(start_lines):07d}G{len(global_lines):07d}D{2 * n_ent:07d}P{n_p:07d}"
     fh.seek(p_offset + n_p * RECORD)
     fh.write(text_records([term], "T"))
@@ -463,6 +483,7 @@ def write_iges(
     product_id: str | None = None,
     timestamp: Any = None,
     resolution: float | None = None,
+    brep: Any = None,
 ) -> None:
     """Write ``surfaces`` to ``path`` as an IGES 5.3 file.
 
@@ -477,30 +498,28 @@ def write_iges(
     them; ``group="ordered"`` uses form 15 (ordered group without back
     pointers) instead.  Group members get status 00020000 (logically
     dependent).  ``group=False``: independent surfaces, status 00000000.
+    ``brep``: the ``brep.iges_brep.IgesBRep`` whose faces these surfaces are,
+    written after them (surfaces physically dependent, 00010000; no 402).
 
-    ``units``: key of `UNITS` (``mm``, ``m``, ``cm``, ``in``, ...).
-    ``file_name``: name recorded in the Global section (default: basename of
-    ``path``; pass the final name when writing to a temporary file).
-    ``product_id``: default = ``file_name`` without extension.
+    ``units``: key of `UNITS` (``mm``, ``m``, ``cm``, ``in``, ...).  ``file_name``:
+    name in the Global section (default: basename of ``path``; pass the final
+    name when writing to a temporary file).  ``product_id``: default =
+    ``file_name`` without extension.
     ``timestamp``: datetime (UTC) or seconds since the epoch; default
     ``$SOURCE_DATE_EPOCH`` or 0.  ``resolution``: default 1e-9 * bounding box
     diagonal (1e-9 if that is 0).
 
-    ``path`` must be a seekable regular file (the Parameter section is written
-    before the Directory section it is indexed from).
+    ``path``: a seekable regular file (Parameter Data is written before the Directory).
     """
     ukey = str(units).lower()
     if ukey not in UNITS:
         raise ValueError(f"unknown units {units!r}; use one of {sorted(UNITS)}")
     surfaces = list(surfaces)
     normalised = _normalise(surfaces)
-    group_form = _group_form(group, len(surfaces))
-    if 2 * (len(surfaces) + (1 if group_form else 0)) > 9_999_999:
+    group_form = 0 if brep is not None else _group_form(group, len(surfaces))
+    if 2 * (len(surfaces) + (1 if group_form else 0) + (0 if brep is None else brep.n_entities)) > 9_999_999:
         raise ValueError("too many entities for one IGES file")
-    max_coord, diag = _extent(normalised[0])
-    resolution = float((1e-9 * diag if diag > 0 else 1e-9) if resolution is None else resolution)
-    if not (np.isfinite(resolution) and resolution > 0):
-        raise ValueError("resolution must be positive")
+    max_coord, resolution = _extent_and_resolution(normalised[0], resolution)
     fname = os.path.basename(os.fspath(path)) if file_name is None else str(file_name)
     bspline = np.array([s.get("knots_u") is not None for s in surfaces], dtype=bool)
     description = _default_description(bspline, group_form) if description is None else description
@@ -508,4 +527,5 @@ def write_iges(
                              units=ukey, author=author, organization=organization, stamp=_timestamp_string(timestamp), resolution=resolution,
                              max_coord=max_coord)
     with open(path, "wb") as fh:
-        _write_sections(fh, _start_lines(description), pack_text_params(gparams, SG_COLS), normalised, bspline, group_form)
+        _write_sections(fh, _start_lines(description), pack_text_params(gparams, SG_COLS), normalised, bspline, group_form,
+                        brep)
