@@ -49,15 +49,13 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
-from ....evaluation.measure import gauss_rule, patch_frames
 from ....evaluation.patch_set import PatchSet
 from ..iges_numbers import SLOT, SPACE, format_ints, format_reals
 from ..iges_records import ParameterWriter
 from .iges_edges import IgesEdges, iges_edges
-from .topology import FACE_PIECE, BRepTopology, brep_topology
+from .solids import closed_components, face_components, signed_volumes
+from .topology import BRepTopology, brep_topology
 
 __all__ = ["IgesBRep", "iges_brep", "edge_polygons", "LIST_BLOCK"]
 
@@ -157,57 +155,6 @@ def edge_polygons(patch_set: PatchSet, topology: BRepTopology):
         out.append((np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]).astype(np.float64),
                     weights))
     return out
-
-
-def _patch_faces(patch_set: PatchSet, topology: BRepTopology) -> np.ndarray:
-    """(P,) int64: the face each patch lies in (a merged piece's patches lie in the piece's face)."""
-    biquadratic = [np.arange(first, first + len(g)) for first, g in
-                   zip(np.cumsum([0] + [len(g) for g in patch_set.groups]), patch_set.groups) if g.shape[1:3] == (3, 3)]
-    number = np.concatenate(biquadratic) if biquadratic else np.zeros(0, np.int64)
-    face = np.full(patch_set.n_patches, -1, dtype=np.int64)
-    for f in np.flatnonzero(topology.face_kind == FACE_PIECE).tolist():
-        face[number[np.asarray(patch_set.merged[topology.face_index[f]].patches).ravel()]] = f
-    single = np.flatnonzero(topology.face_kind != FACE_PIECE)
-    face[topology.face_index[single]] = single
-    return face
-
-
-def _signed_volumes(patch_set: PatchSet, component_of_patch: np.ndarray, n_components: int) -> np.ndarray:
-    """(C,) float: the volume each component's patches enclose, negative where their normals point in.
-
-    ``1/3 int (x - o) . (x_u x x_v)`` per patch by Gauss-Legendre quadrature with
-    ``ceil(3d / 2)`` points per direction: exact for polynomial patches, and more
-    than good enough for the sign of a rational surface's volume, which is all it decides.
-    """
-    nets = [np.asarray(g, np.float64)[..., :3] for g in patch_set.groups]
-    flat = np.concatenate([n.reshape(-1, 3) for n in nets])
-    origin = 0.5 * (flat.min(axis=0) + flat.max(axis=0))
-    volume = np.zeros(n_components)
-    first = 0
-    for k, g in enumerate(nets):
-        u, w = gauss_rule((3 * (g.shape[1] - 1) + 1) // 2)
-        for a in range(0, len(g), 1 << 14):  # chunks of patches: bounded memory
-            weights = None if patch_set.weights is None else np.asarray(patch_set.weights[k][a : a + (1 << 14)])
-            x, xu, xv = patch_frames(g[a : a + (1 << 14)], weights, u, u)
-            flux = np.einsum("pabi,pabi->pab", x - origin, np.cross(xu, xv))
-            per_patch = np.einsum("pab,a,b->p", flux, w, w) / 3.0
-            volume += np.bincount(component_of_patch[first + a : first + a + len(per_patch)], per_patch,
-                                  minlength=n_components)
-        first += len(g)
-    return volume
-
-
-def _components(topology: BRepTopology):
-    """Connected components of the faces (through shared edges): ((F,) int64 component per face, C)."""
-    f, e = topology.n_faces, topology.n_edges
-    face_of_use = np.repeat(np.arange(f), np.diff(topology.loop_start))
-    graph = coo_matrix((np.ones(face_of_use.size), (face_of_use, f + topology.loop_edge)), shape=(f + e, f + e))
-    count, label = connected_components(graph, directed=False)
-    # renumber by first face, so the shells follow the faces
-    _, first_face = np.unique(label[:f], return_index=True)
-    rank = np.empty(count, np.int64)
-    rank[label[np.sort(first_face)]] = np.arange(first_face.size)
-    return rank[label[:f]], int(first_face.size)
 
 
 # ----------------------------------------------------------------------------
@@ -402,10 +349,11 @@ def iges_brep(patch_set: PatchSet, first: int, group: bool = True, topology: BRe
     runs = iges_edges(topology, edge_polygons(patch_set, topology))
     topology = runs.topology  # edges: chains of patch sides (edge_chains), as in the STEP B-rep
     f, e, v = topology.n_faces, topology.n_edges, len(topology.vertex_points)
-    component, n_comp = _components(topology)
+    component = face_components(topology)
+    n_comp = int(component.max(initial=-1)) + 1
     face_of_use = np.repeat(np.arange(f), np.diff(topology.loop_start))
-    closed = np.bincount(component[face_of_use], topology.edge_uses[topology.loop_edge] != 2, minlength=n_comp) == 0
-    outward = _signed_volumes(patch_set, component[_patch_faces(patch_set, topology)], n_comp) >= 0
+    closed = closed_components(topology, component)
+    outward = signed_volumes(patch_set, topology, component) >= 0
     grouped = bool(group) and n_comp > 1
     segments, segment_of_use = _distinct_segments(topology.loop_uv)
     counts = [e, len(segments), _blocks(v), _blocks(e), f, f, n_comp, int(closed.sum()), int(grouped)]

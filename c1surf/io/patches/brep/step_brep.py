@@ -41,6 +41,7 @@ import numpy as np
 from ...errors import OutputError
 from ..merged import piece_patches
 from .edge_chains import EdgeChains, chain_curve, edge_chains
+from .solids import closed_components, face_components, signed_volumes
 from .topology import FACE_PIECE, BRepTopology, brep_topology, edge_curves
 
 RELATIVE_TOLERANCE = 1e-9  # of the bounding-box diagonal: the faces meet to round-off, ~1e-15 of it
@@ -186,10 +187,8 @@ def brep_shape(patch_set, topology: BRepTopology | None = None) -> BRepShape:
     _pcurves(occ, builder, chains, faces, edges, tolerance)
     _wires(occ, builder, chains, faces, edges)
     component = face_components(topology)
-    closed = np.ones(int(component.max(initial=-1)) + 1, dtype=bool)
-    f_of_use = np.repeat(np.arange(topology.n_faces), np.diff(topology.loop_start))
-    closed[component[f_of_use[topology.edge_uses[topology.loop_edge] != 2]]] = False
-    volume = np.bincount(component, weights=face_volumes(patch_set, topology), minlength=closed.size)
+    closed = closed_components(topology, component)
+    volume = signed_volumes(patch_set, topology, component)
     return BRepShape(_assemble(occ, builder, faces, component, closed, volume < 0), closed, component, tolerance)
 
 
@@ -315,63 +314,6 @@ def _wires(occ, builder, chains: EdgeChains, faces: list, edges: list) -> None:
         builder.Add(face, wire)
 
 
-def face_components(topology: BRepTopology) -> np.ndarray:
-    """(F,) int64: the connected component of each face (faces joined through the edges they share), numbered
-    in order of their first face."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    face_of = np.repeat(np.arange(topology.n_faces), np.diff(topology.loop_start))
-    incidence = coo_matrix((np.ones(face_of.size), (face_of, topology.loop_edge)),
-                           shape=(topology.n_faces, topology.n_edges)).tocsr()
-    _, labels = connected_components(incidence @ incidence.T, directed=False)
-    _, first, renumbered = np.unique(labels, return_index=True, return_inverse=True)
-    rank = np.empty(first.size, np.int64)
-    rank[np.argsort(first, kind="stable")] = np.arange(first.size)
-    return rank[renumbered.ravel()]
-
-
-def face_volumes(patch_set, topology: BRepTopology) -> np.ndarray:
-    """(F,) float: each face's share of the signed enclosed volume, 1/3 of the integral of (x - o) . (x_u x x_v).
-
-    Summed over a closed component it is the volume it bounds, negative when
-    its normals point inwards (which ``brep_shape`` then turns). Gauss rules of
-    ceil(3 d / 2) points per direction are exact for polynomial faces (the
-    density has degree 3 d - 1); rational ones are integrated to the rule's
-    accuracy, which decides the sign all the same.
-    """
-    from ....evaluation.measure import gauss_rule, patch_frames
-
-    corners = topology.vertex_points
-    origin = 0.5 * (corners.min(axis=0) + corners.max(axis=0)) if len(corners) else np.zeros(3)
-    first = np.cumsum([0] + [len(g) for g in patch_set.groups])
-    nets, net_weights, owner = {}, {}, {}  # by (du+1, dv+1): lists of arrays, and their faces
-    for f, (kind, index) in enumerate(zip(topology.face_kind.tolist(), topology.face_index.tolist())):
-        if kind == FACE_PIECE:
-            points, weights = piece_patches(patch_set.merged[index])
-        else:
-            k = int(np.searchsorted(first, index, side="right")) - 1
-            points = np.asarray(patch_set.groups[k][index - first[k]: index - first[k] + 1])[..., :3]
-            weights = None if not patch_set.weights else patch_set.weights[k][index - first[k]: index - first[k] + 1]
-        shape = points.shape[1:3]
-        nets.setdefault(shape, []).append(points)
-        net_weights.setdefault(shape, []).append(np.ones(points.shape[:3]) if weights is None else weights)
-        owner.setdefault(shape, []).append(np.full(len(points), f))
-    volume = np.zeros(topology.n_faces)
-    for shape in nets:
-        points, owners = np.concatenate(nets[shape]), np.concatenate(owner[shape])
-        weights = np.concatenate(net_weights[shape]) if patch_set.weights else None
-        u, wu = gauss_rule((3 * (shape[0] - 1) + 1) // 2)  # x . (x_u x x_v) has degree 3 d - 1 in u
-        v, wv = gauss_rule((3 * (shape[1] - 1) + 1) // 2)
-        for chunk in range(0, len(points), 4096):
-            part = slice(chunk, chunk + 4096)
-            x, xu, xv = patch_frames(points[part], None if weights is None else weights[part], u, v)
-            density = np.einsum("pabi,pabi->pab", x - origin, np.cross(xu, xv)) / 3.0
-            volume += np.bincount(owners[part], weights=np.einsum("pab,a,b->p", density, wu, wv),
-                                  minlength=topology.n_faces)
-    return volume
-
-
 def _assemble(occ, builder, faces: list, component: np.ndarray, closed: np.ndarray, inward: np.ndarray):
     """One shell per component (a solid where closed, turned where its normals point inwards); one compound of
     them when there are several."""
@@ -400,4 +342,4 @@ def _assemble(occ, builder, faces: list, component: np.ndarray, closed: np.ndarr
 
 
 __all__ = ["BRepShape", "brep_shape", "brep_tolerance", "occ_classes", "occ_poles", "occ_reals", "bezier_surface",
-           "bspline_surface", "face_components", "face_volumes", "RELATIVE_TOLERANCE"]
+           "bspline_surface", "RELATIVE_TOLERANCE"]
