@@ -148,11 +148,14 @@ MESH_READERS = FormatTable("mesh format", "reads", [
 ])
 
 MESH_WRITERS = FormatTable("mesh format", "writes", [
-    Format((".obj",), _MESHES + "obj_out:write_obj", "Wavefront OBJ text: v, vt, vn, f", frozenset({"attributes"})),
+    Format((".obj",), _MESHES + "obj_out:write_obj", "Wavefront OBJ text: v, vt, vn, f", frozenset({"attributes"}),
+           streamed=_MESHES + "obj_out:write_obj_stream"),
     Format((".ply",), _MESHES + "ply_out:write_ply", "binary PLY: positions, normals, any per-vertex properties", _BOTH,
            streamed=_MESHES + "ply_out:write_ply_stream"),
-    Format((".stl",), _MESHES + "write:write_stl", "binary STL (float32, through trimesh)"),
-    Format((".glb",), _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)"),
+    Format((".stl",), _MESHES + "write:write_stl", "binary STL (float32, through trimesh)",
+           streamed=_MESHES + "formats.stl_out:write_stl_stream"),
+    Format((".glb",), _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)",
+           streamed=_MESHES + "formats.glb_out:write_glb_stream"),
     Format((".off",), _MESHES + "write:write_off", "OFF text (through trimesh)"),
 ])
 

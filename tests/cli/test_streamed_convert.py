@@ -89,8 +89,10 @@ def test_corpus_meshes_stream_the_in_memory_bytes(monkeypatch, tmp_path, request
             _same_bytes(monkeypatch, tmp_path, _shared(name), suffix, "--blend", "0.3")
 
 
-def test_a_sample_without_normal_is_written_in_memory_with_the_same_bytes(monkeypatch, tmp_path):
-    """Blend 0: degenerate patch points (no normal) take their neighbours', which needs the whole mesh."""
+@pytest.mark.parametrize("suffix", MESH_WRITERS.streamed())
+def test_a_sample_without_normal_is_written_in_memory_with_the_same_bytes(monkeypatch, tmp_path, suffix):
+    """Blend 0: degenerate patch points (no normal) take their neighbours', which needs the whole mesh; STL
+    stores no vertex normals and streams anyway."""
     mesh = ROOT / "sample_meshes" / "cube.obj"
     m = read_mesh(mesh)
     surface = Surface(m.face_sizes, m.face_vertices, m.points, convert_module.SurfaceOptions(blend=0.0),
@@ -99,22 +101,13 @@ def test_a_sample_without_normal_is_written_in_memory_with_the_same_bytes(monkey
     with pytest.raises(UndefinedNormals):
         for _ in StreamedTessellation(surface.patch_source(), adjacency, 4).vertex_blocks():
             pass
-    _same_bytes(monkeypatch, tmp_path, mesh, ".ply", "--blend", "0", "-r", "4")
+    made = _spy_patch_arrays(monkeypatch)
+    _same_bytes(monkeypatch, tmp_path, mesh, suffix, "--blend", "0", "-r", "4")
+    assert sum(made) == (1 if suffix == ".stl" else 2)  # made by the in-memory conversion, and the streamed one's fallback
 
 
-def test_options_that_need_the_whole_surface_do_not_stream(monkeypatch):
-    monkeypatch.delenv("C1SURF_STREAM", raising=False)
-    assert convert_module.streams(".ply", [], False, False)
-    assert not convert_module.streams(".ply", ["p.json"], False, False)
-    assert not convert_module.streams(".ply", [], True, False)
-    assert not convert_module.streams(".ply", [], False, True)
-    assert not convert_module.streams(".glb", [], False, False)
-    monkeypatch.setenv("C1SURF_STREAM", "0")
-    assert not convert_module.streams(".ply", [], False, False)
-
-
-def test_a_streamed_conversion_builds_no_patch_arrays(monkeypatch, tmp_path):
-    """The surface the streamed path builds never makes its (Nq, 3, 3, d) / (Nc, 4, 4, d) arrays."""
+def _spy_patch_arrays(monkeypatch) -> list:
+    """A list that gets, each time a Surface makes its patch arrays, whether they were made then."""
     made = []
     original = Surface._patch_arrays
 
@@ -123,9 +116,29 @@ def test_a_streamed_conversion_builds_no_patch_arrays(monkeypatch, tmp_path):
         return original(self)
 
     monkeypatch.setattr(Surface, "_patch_arrays", spy)
-    _convert(monkeypatch, tmp_path, ROOT / "sample_meshes" / "twisted.obj", "t.ply", True)
+    return made
+
+
+def test_options_that_need_the_whole_surface_do_not_stream(monkeypatch):
+    monkeypatch.delenv("C1SURF_STREAM", raising=False)
+    assert convert_module.streams(".ply", [], False, False)
+    assert not convert_module.streams(".ply", ["p.json"], False, False)
+    assert not convert_module.streams(".ply", [], True, False)
+    assert not convert_module.streams(".ply", [], False, True)
+    assert not convert_module.streams(".off", [], False, False)  # written whole (through trimesh)
+    for suffix in (".obj", ".stl", ".glb"):
+        assert convert_module.streams(suffix, [], False, False)
+    monkeypatch.setenv("C1SURF_STREAM", "0")
+    assert not convert_module.streams(".ply", [], False, False)
+
+
+@pytest.mark.parametrize("suffix", MESH_WRITERS.streamed())
+def test_a_streamed_conversion_builds_no_patch_arrays(monkeypatch, tmp_path, suffix):
+    """The surface the streamed path builds never makes its (Nq, 3, 3, d) / (Nc, 4, 4, d) arrays."""
+    made = _spy_patch_arrays(monkeypatch)
+    _convert(monkeypatch, tmp_path, ROOT / "sample_meshes" / "twisted.obj", "t" + suffix, True)
     assert not made
-    _convert(monkeypatch, tmp_path, ROOT / "sample_meshes" / "twisted.obj", "t.ply", False)
+    _convert(monkeypatch, tmp_path, ROOT / "sample_meshes" / "twisted.obj", "t" + suffix, False)
     assert made
 
 
