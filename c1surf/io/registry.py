@@ -46,9 +46,10 @@ class Format:
     description : str, what the file holds, in a few words
     holds : frozenset of str, optional per-vertex data the format keeps (mesh writers):
         "attributes" (texture coordinates and colours), "properties" (named scalars, e.g. curvature)
-    streamed : str, "module:function" of a mesh writer that takes the tessellation by blocks
-        (``write(path, tessellation, float32=False)``, ``evaluation.stream.StreamedTessellation``) and
-        writes the bytes the whole-mesh writer writes; "" if the format is written whole only
+    streamed : str, "module:function" of a writer by blocks that writes the bytes of the whole-data writer:
+        a mesh writer taking the tessellation (``write(path, tessellation, float32=False)``,
+        ``evaluation.stream.StreamedTessellation``), a patch writer taking the patches
+        (``write(path, stream, **options)``, ``evaluation.patch_set.PatchStream``); "" if written whole only
     """
 
     suffixes: tuple
@@ -167,8 +168,10 @@ PATCH_READERS = FormatTable("patch format", "reads", [
 ])
 
 PATCH_WRITERS = FormatTable("patch format", "writes", [
-    Format((".json",), _PATCHES + "json_patches:write_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
-    Format((".npz",), _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays"),
+    Format((".json",), _PATCHES + "json_patches:write_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)",
+           streamed=_PATCHES + "json_patches:write_patch_stream_json"),
+    Format((".npz",), _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays",
+           streamed=_PATCHES + "npz:write_patch_stream_npz"),
     Format((".igs", ".iges"), _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)"),
     Format((".step", ".stp"), _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)"),
 ])
