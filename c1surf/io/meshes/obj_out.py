@@ -14,10 +14,15 @@ time (``number_text``):
 
 ``write_obj_stream`` writes a tessellation given by blocks with the bytes
 ``write_obj`` gives it whole: the decimals depend on the largest position and
-the largest normal, and every ``vn`` line comes after every ``v`` line, so it
-evaluates the vertex blocks three times (bounds, ``v``, ``vn``).
+the largest normal, so a first pass over the vertex blocks finds them; every
+``vn`` line comes after every ``v`` line, so the writing pass keeps the
+``vn`` lines in a temporary file until the ``v`` lines are written.
 """
 from __future__ import annotations
+
+import os
+import shutil
+import tempfile
 
 import numpy as np
 
@@ -104,6 +109,10 @@ def write_obj_stream(path, tessellation, float32: bool = False) -> None:
     """Write a tessellation by blocks (``evaluation.stream.StreamedTessellation``): the bytes of ``write_obj``
     for its points, normals and triangles.
 
+    Two passes over the vertex blocks: the largest position and normal (the decimals), then the text. The
+    ``vn`` lines of the second pass wait in an unnamed temporary file beside ``path`` (gone however the
+    process ends) and follow the ``v`` lines.
+
     Parameters
     ----------
     path : str or os.PathLike
@@ -116,12 +125,14 @@ def write_obj_stream(path, tessellation, float32: bool = False) -> None:
     for points, normals in tessellation.vertex_blocks():  # first pass: the decimals of v and of vn
         largest = np.maximum(largest, [_largest(points[:, :3]), _largest(normals)])
     decimals = [decimals_for(np.array([value]), digits) for value in largest]
-    with open(path, "wb") as f:
+    folder = os.path.dirname(os.path.abspath(path))
+    with open(path, "wb") as f, tempfile.TemporaryFile(dir=folder) as later:
         f.write(_HEADER)
-        for k, prefix in enumerate((b"v ", b"vn ")):  # positions, then normals: a pass each
-            for block in tessellation.vertex_blocks():
-                values = np.asarray(block[k][:, :3], dtype=np.float64)
-                f.write(text_lines(prefix, [format_fixed(values, decimals[k])]))
+        for points, normals in tessellation.vertex_blocks():
+            f.write(text_lines(b"v ", [format_fixed(np.asarray(points[:, :3], dtype=np.float64), decimals[0])]))
+            later.write(text_lines(b"vn ", [format_fixed(np.asarray(normals, dtype=np.float64), decimals[1])]))
+        later.seek(0)
+        shutil.copyfileobj(later, f, 1 << 24)
         for triangles in tessellation.triangle_blocks():
             index = format_fixed(triangles.astype(np.float64) + 1.0, 0)
             f.write(text_lines(b"f ", _corner_fields(index, False, True)))
