@@ -79,3 +79,35 @@ def test_rational_surfaces_and_other_formats_are_written_whole(tmp_path):
     _, lazy = _surfaces(SAMPLES / "cube.obj")
     with pytest.raises(ValueError, match="written whole"):
         write_patch_stream(tmp_path / "p.igs", surface_patch_stream(lazy))
+
+
+def test_the_integer_rows_by_blocks_are_the_patch_set_arrays():
+    eager, lazy = _surfaces(shared_mesh("pmp-library/hole_capsule.obj"))
+    whole, stream = surface_patch_set(eager), surface_patch_stream(lazy)
+    arrays = {"source_kind": whole.source_kind, "source": whole.source, "corners": whole.adjacency.corners,
+              "edges": whole.adjacency.edges, "reversed": whole.adjacency.reversed,
+              "neighbours": whole.adjacency.neighbours()}
+    p = stream.n_patches
+    for name, row, dtype in stream.INTEGERS:
+        blocks = [stream.integers(name, a, min(a + 7, p)) for a in range(0, p, 7)]
+        joined = np.concatenate(blocks)
+        assert joined.dtype == np.dtype(dtype) and joined.shape == (p, *row)
+        assert np.array_equal(joined, arrays[name]), name
+
+
+def test_neighbours_pair_the_two_sides_of_each_edge():
+    """``PatchAdjacency.neighbours`` (from ``partners``) against pairing by hand: edges of one or of more than two
+    sides have none."""
+    from c1surf.evaluation.adjacency import PatchAdjacency
+
+    rng = np.random.default_rng(5)
+    for _ in range(200):
+        p = int(rng.integers(0, 40))
+        edges = rng.integers(0, max(1, 2 * p), (p, 4))
+        adjacency = PatchAdjacency(np.zeros((p, 4), dtype=np.int64), edges.astype(np.int32), np.zeros((p, 4), bool))
+        expected = np.full((p, 4, 2), -1)
+        for e in np.unique(edges):
+            sides = np.argwhere(edges == e)
+            if len(sides) == 2:
+                expected[tuple(sides[0])], expected[tuple(sides[1])] = sides[1], sides[0]
+        assert np.array_equal(adjacency.neighbours(), expected)

@@ -119,14 +119,14 @@ def write_patch_stream_json(path, stream, **_options) -> None:
     brace, then the entries of each block (``patch_entries``, dumped as ``json.dumps`` dumps them in a list).
     """
     head = json.dumps(stream.header, separators=_SEPARATORS)
-    adjacency = _adjacency_rows(stream.adjacency)
     with open(path, "w", encoding="utf-8") as f:
         f.write(head[:-1] + ("," if stream.header else "") + '"patches":[')
         separator, offset = "", 0
         for kind, count in enumerate(stream.counts):
             for a, points in stream.blocks(kind, _STREAM_BLOCK):
                 lo, hi = offset + a, offset + a + len(points)
-                entries = patch_entries(points, stream.source_dicts(lo, hi), [rows[lo:hi] for rows in adjacency])
+                adjacency = [stream.integers(name, lo, hi) for name in ("corners", "edges", "reversed", "neighbours")]
+                entries = patch_entries(points, stream.source_dicts(lo, hi), adjacency)
                 f.write(separator + json.dumps(entries, separators=_SEPARATORS)[1:-1])
                 separator = ","
             offset += count

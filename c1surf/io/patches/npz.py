@@ -122,21 +122,14 @@ class _Blocks:
 
 
 def _stream_members(stream, size: int):
-    """(name, array or _Blocks) of the NPZ members of a ``PatchStream``, coefficients by blocks of ``size``."""
+    """(name, array or _Blocks) of the NPZ members of a ``PatchStream``: every array by blocks of ``size`` patches."""
     yield "header", _header_member(stream.header)
     for kind, (name, k) in enumerate((("biquadratic", 3), ("bicubic", 4))):
         yield name, _Blocks((stream.counts[kind], k, k, 3), np.float64, (c for _, c in stream.blocks(kind, size)))
-    yield from _bookkeeping_members(stream.source_kind, stream.source_ids, stream.adjacency)
-
-
-def _merged_members(pieces):
-    """(name, array) of the merged pieces: their (m, n) spans, then each array of all pieces flattened in turn."""
-    yield "merged_spans", np.array([piece.patches.shape for piece in pieces], dtype=np.int64).reshape(-1, 2)
-    yield "merged_points", np.concatenate([piece.points[..., :3].reshape(-1, 3) for piece in pieces])
-    if pieces[0].weights is not None:
-        yield "merged_weights", np.concatenate([piece.weights.ravel() for piece in pieces])
-    for name in ("knots_u", "knots_v", "patches", "rotation"):
-        yield f"merged_{name}", np.concatenate([np.ravel(getattr(piece, name)) for piece in pieces])
+    p = stream.n_patches
+    for name, row, dtype in stream.INTEGERS:
+        rows = (stream.integers(name, a, min(a + size, p)) for a in range(0, p, size))
+        yield name, _Blocks((p, *row), dtype, rows)
 
 
 def write_patch_set_npz(path, patch_set: PatchSet, **_options) -> None:
