@@ -38,9 +38,9 @@ STREAMED_BYTES_PER_SAMPLE = 2400
 # The streamed writers that hold the positions of the vertices on patch sides and corners (float64 x, y, z:
 # at -r 2 every vertex): STL's records need each triangle's corners (``triangle_point_blocks``).
 HELD_POINTS, POINT_BYTES = (".stl",), 24
-# Bytes per vertex a streamed writer keeps on the disk beside its output while writing: OBJ's vn lines
-# (``obj_out.write_obj_stream``; half with --float32).
-STREAM_SCRATCH_BYTES = {".obj": 48}
+# Bytes per vertex a streamed writer keeps on the disk beside its output while writing: the vertex blocks
+# of OBJ and GLB, evaluated once and read back (``evaluation.stream.SpooledTessellation``: 6 float64).
+STREAM_SCRATCH_BYTES = {".obj": 48, ".glb": 48}
 
 
 def available_memory() -> int:
@@ -277,7 +277,7 @@ def write_streamed(input_path, output, mesh_suffix: str, surface: Surface, resol
     tess = StreamedTessellation(surface.patch_source(), adjacency, resolution)
     patch_paths, patch_suffixes = [path for path, _ in patch_targets], [suffix for _, suffix in patch_targets]
     sizes = output_bytes(mesh_suffix, tess, float32, False, patch_suffixes, surface)
-    scratch = STREAM_SCRATCH_BYTES.get(mesh_suffix, 0) // (2 if float32 else 1) * tess.n_vertices
+    scratch = STREAM_SCRATCH_BYTES.get(mesh_suffix, 0) * tess.n_vertices
     check_disk_space([output, *patch_paths], [(mesh_suffix, sizes[0][1] + scratch), *sizes[1:]], force)
     progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution} into {output}")
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:

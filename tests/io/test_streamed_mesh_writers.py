@@ -22,7 +22,7 @@ class BlockTessellation:
 
     def __init__(self, points, normals, triangles, seed: int = 0, largest: int = 7):
         self.points, self.normals, self.triangles = points, normals, triangles
-        self.n_vertices, self.n_triangles = len(points), len(triangles)
+        self.n_vertices, self.n_triangles, self.dim = len(points), len(triangles), points.shape[1]
         rng = np.random.default_rng(seed)
         self._cuts = [np.unique(np.concatenate([[0], np.cumsum(rng.integers(1, largest + 1, n)), [n]]).clip(0, n))
                       for n in (self.n_vertices, self.n_triangles)]

@@ -14,17 +14,17 @@ time (``number_text``):
 
 ``write_obj_stream`` writes a tessellation given by blocks with the bytes
 ``write_obj`` gives it whole: the decimals depend on the largest position and
-the largest normal, so a first pass over the vertex blocks finds them; every
-``vn`` line comes after every ``v`` line, so the writing pass keeps the
-``vn`` lines in a temporary file until the ``v`` lines are written.
+the largest normal, so a first pass over the vertex blocks finds them, and
+every ``vn`` line comes after every ``v`` line: the blocks are evaluated once
+and read back from a temporary file for the ``v`` and the ``vn`` lines.
 """
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 
 import numpy as np
+
+from ...evaluation.stream.spool import SpooledTessellation
 
 from .number_text import (FLOAT32_DIGITS, FLOAT64_DIGITS, constant_field, decimals_for, format_fixed, join_columns,
                           printf_field, text_lines)
@@ -109,30 +109,29 @@ def write_obj_stream(path, tessellation, float32: bool = False) -> None:
     """Write a tessellation by blocks (``evaluation.stream.StreamedTessellation``): the bytes of ``write_obj``
     for its points, normals and triangles.
 
-    Two passes over the vertex blocks: the largest position and normal (the decimals), then the text. The
-    ``vn`` lines of the second pass wait in an unnamed temporary file beside ``path`` (gone however the
-    process ends) and follow the ``v`` lines.
+    The vertex blocks are evaluated once, for the largest position and normal (the decimals), and kept in
+    a temporary file beside ``path`` (``evaluation.stream.SpooledTessellation``) for the ``v`` and then the
+    ``vn`` lines.
 
     Parameters
     ----------
     path : str or os.PathLike
-    tessellation : has ``vertex_blocks()``, yielding (points (c, >= 3), normals (c, 3)) float in vertex order
-        (the same numbers on every call), and ``triangle_blocks()``, yielding (t, 3) int 0-based in order
+    tessellation : has ``n_vertices``, ``n_triangles``, ``dim``, ``vertex_blocks()`` yielding (points (c, dim),
+        normals (c, 3)) float in vertex order and ``triangle_blocks()`` yielding (t, 3) int 0-based in order
     float32 : write float32 precision (fewer digits, smaller file)
     """
     digits = FLOAT32_DIGITS if float32 else FLOAT64_DIGITS
-    largest = np.zeros(2)
-    for points, normals in tessellation.vertex_blocks():  # first pass: the decimals of v and of vn
-        largest = np.maximum(largest, [_largest(points[:, :3]), _largest(normals)])
-    decimals = [decimals_for(np.array([value]), digits) for value in largest]
-    folder = os.path.dirname(os.path.abspath(path))
-    with open(path, "wb") as f, tempfile.TemporaryFile(dir=folder) as later:
-        f.write(_HEADER)
-        for points, normals in tessellation.vertex_blocks():
-            f.write(text_lines(b"v ", [format_fixed(np.asarray(points[:, :3], dtype=np.float64), decimals[0])]))
-            later.write(text_lines(b"vn ", [format_fixed(np.asarray(normals, dtype=np.float64), decimals[1])]))
-        later.seek(0)
-        shutil.copyfileobj(later, f, 1 << 24)
-        for triangles in tessellation.triangle_blocks():
-            index = format_fixed(triangles.astype(np.float64) + 1.0, 0)
-            f.write(text_lines(b"f ", _corner_fields(index, False, True)))
+    with SpooledTessellation(tessellation, os.path.dirname(os.path.abspath(path))) as spooled:
+        largest = np.zeros(2)
+        for points, normals in spooled.vertex_blocks():  # evaluated: the decimals of v and of vn
+            largest = np.maximum(largest, [_largest(points[:, :3]), _largest(normals)])
+        decimals = [decimals_for(np.array([value]), digits) for value in largest]
+        with open(path, "wb") as f:
+            f.write(_HEADER)
+            for k, prefix in enumerate((b"v ", b"vn ")):  # positions, then normals: read back
+                for block in spooled.vertex_blocks():
+                    values = np.asarray(block[k][:, :3], dtype=np.float64)
+                    f.write(text_lines(prefix, [format_fixed(values, decimals[k])]))
+            for triangles in spooled.triangle_blocks():
+                index = format_fixed(triangles.astype(np.float64) + 1.0, 0)
+                f.write(text_lines(b"f ", _corner_fields(index, False, True)))

@@ -6,16 +6,20 @@ and a binary chunk holding three buffer views: the triangles as uint32, the
 positions as float32 and the normals, made unit again in float64
 (``trimesh.util.unitize``), as float32. The JSON comes first and names each
 view's minimum and maximum, so a first pass over the vertex blocks collects
-them; the second writes the views (their lengths are known, so positions and
-normals go to their own offsets in one pass). trimesh stores one view for
+them (and keeps the blocks in a temporary file, ``SpooledTessellation``); the
+second reads them back and writes the views (their lengths are known, so
+positions and normals go to their own offsets in one pass). trimesh stores one view for
 equal bytes: normals whose float32 bytes equal the positions' share their
 view, as here.
 """
 from __future__ import annotations
 
 import json
+import os
 
 import numpy as np
+
+from ....evaluation.stream.spool import SpooledTessellation
 
 __all__ = ["write_glb_stream"]
 
@@ -80,37 +84,38 @@ def _document(bounds: _Bounds, n_vertices: int, n_indices: int) -> tuple:
 def write_glb_stream(path, tessellation, float32: bool = False) -> None:
     """Write a tessellation by blocks (``evaluation.stream.StreamedTessellation``) as the GLB trimesh writes.
 
-    Two passes over the vertex blocks (bounds, then bytes) and two over the triangle blocks.
+    Two passes over the vertex blocks (bounds, then bytes; evaluated once) and two over the triangle blocks.
 
     Parameters
     ----------
     path : str or os.PathLike, a regular file (written at two offsets)
-    tessellation : has ``n_vertices``, ``n_triangles``, ``vertex_blocks()`` yielding (points (c, >= 3), normals
-        (c, 3)) float in vertex order, ``triangle_blocks()`` yielding (t, 3) int in order
+    tessellation : has ``n_vertices``, ``n_triangles``, ``dim``, ``vertex_blocks()`` yielding (points (c, dim),
+        normals (c, 3)) float in vertex order, ``triangle_blocks()`` yielding (t, 3) int in order
     float32 : ignored: glTF stores float32 by definition (as ``write_glb``)
     """
     n, t = tessellation.n_vertices, tessellation.n_triangles
     if n == 0 or t == 0:
         raise ValueError("an empty mesh has no GLB by blocks")
-    bounds = _Bounds()
-    for points, normals in tessellation.vertex_blocks():
-        bounds.add_vertices(*_vertex_arrays(points, normals))
-    for triangles in tessellation.triangle_blocks():
-        bounds.add_triangles(triangles.astype(np.uint32))
-    content, length = _document(bounds, n, 3 * t)
-    header = np.array([_GLTF, 2, len(content) + length + 28, len(content), _JSON], dtype="<u4").tobytes()
-    with open(path, "wb") as f:
-        f.write(header + content + np.array([length, _BIN], dtype="<u4").tobytes())
-        start = f.tell()
-        for triangles in tessellation.triangle_blocks():
-            f.write(triangles.astype(np.uint32).tobytes())
-        at = [start + 12 * t, start + 12 * t + 12 * n]  # where the next positions and normals go
-        for points, normals in tessellation.vertex_blocks():
-            positions, unit = _vertex_arrays(points, normals)
-            for k, values in enumerate((positions, unit) if not bounds.same else (positions,)):
-                f.seek(at[k])
-                f.write(values.tobytes())
-                at[k] += values.nbytes
-        f.seek(0, 2)
-        if f.tell() != 28 + len(content) + length:
-            raise ValueError(f"internal: the GLB holds {f.tell()} bytes, its header says {28 + len(content) + length}")
+    with SpooledTessellation(tessellation, os.path.dirname(os.path.abspath(path))) as spooled:
+        bounds = _Bounds()
+        for points, normals in spooled.vertex_blocks():  # evaluated once, kept for the second pass
+            bounds.add_vertices(*_vertex_arrays(points, normals))
+        for triangles in spooled.triangle_blocks():
+            bounds.add_triangles(triangles.astype(np.uint32))
+        content, length = _document(bounds, n, 3 * t)
+        header = np.array([_GLTF, 2, len(content) + length + 28, len(content), _JSON], dtype="<u4").tobytes()
+        with open(path, "wb") as f:
+            f.write(header + content + np.array([length, _BIN], dtype="<u4").tobytes())
+            start = f.tell()
+            for triangles in spooled.triangle_blocks():
+                f.write(triangles.astype(np.uint32).tobytes())
+            at = [start + 12 * t, start + 12 * t + 12 * n]  # where the next positions and normals go
+            for points, normals in spooled.vertex_blocks():
+                positions, unit = _vertex_arrays(points, normals)
+                for k, values in enumerate((positions, unit) if not bounds.same else (positions,)):
+                    f.seek(at[k])
+                    f.write(values.tobytes())
+                    at[k] += values.nbytes
+            f.seek(0, 2)
+            if f.tell() != 28 + len(content) + length:
+                raise ValueError(f"internal: the GLB holds {f.tell()} bytes, its header says {28 + len(content) + length}")
