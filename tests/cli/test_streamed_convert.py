@@ -192,3 +192,16 @@ def test_a_streamed_output_is_refused_on_memory_per_patch_and_on_disk(monkeypatc
     result = runner.invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "o.ply"), "-q", "-r", "3"])
     assert result.exit_code == 1 and "MiB but only" in result.output
     assert not list(tmp_path.iterdir())  # nothing written, no temporary file left
+
+
+def test_a_rational_surface_is_written_in_memory_with_its_weights(monkeypatch, tmp_path):
+    """Vertex weights (A2a) make rational patches: streams() says yes, the surface says no (written whole)."""
+    lines = (ROOT / "sample_meshes" / "cube.obj").read_text().splitlines()
+    first = next(k for k, line in enumerate(lines) if line.startswith("v "))
+    lines[first] += " 2.0"
+    mesh = tmp_path / "weighted.obj"
+    mesh.write_text("\n".join(lines) + "\n")
+    made = _spy_patch_arrays(monkeypatch)
+    _same_bytes(monkeypatch, tmp_path, mesh, ".obj", "-r", "3", patches=PATCH_WRITERS.streamed())
+    assert sum(made) == 2  # both conversions made the patch arrays
+    assert b'"weights"' in (tmp_path / "streamed-patches.json").read_bytes()
