@@ -83,6 +83,16 @@ def _members(patch_set: PatchSet):
         yield from _merged_members(patch_set.merged)
 
 
+def _merged_members(pieces):
+    """(name, array) of the merged pieces: their (m, n) spans, then each array of all pieces flattened in turn."""
+    yield "merged_spans", np.array([piece.patches.shape for piece in pieces], dtype=np.int64).reshape(-1, 2)
+    yield "merged_points", np.concatenate([piece.points[..., :3].reshape(-1, 3) for piece in pieces])
+    if pieces[0].weights is not None:
+        yield "merged_weights", np.concatenate([piece.weights.ravel() for piece in pieces])
+    for name in ("knots_u", "knots_v", "patches", "rotation"):
+        yield f"merged_{name}", np.concatenate([np.ravel(getattr(piece, name)) for piece in pieces])
+
+
 def _header_member(header: dict) -> np.ndarray:
     return np.array(json.dumps(header, separators=(",", ":")))
 
