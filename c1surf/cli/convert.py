@@ -10,12 +10,13 @@ import click
 from ..mesh.errors import TopologyError
 from ..construction.surface import Surface, SurfaceOptions
 from ..evaluation.merge import merge_biquadratic
+from ..evaluation.patch_set import surface_patch_stream
 from ..evaluation.stream import StreamedTessellation, UndefinedNormals
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.write import write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
-from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
-from ..io.patches.formats import write_surface_patches
+from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list, suffix_of
+from ..io.patches.formats import write_patch_stream, write_surface_patches
 from ..io.patches.iges import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import prepare_surface_input, surface_data
@@ -34,6 +35,12 @@ WRITER_HEADROOM = 1.1
 # ((S d) x (N^2 d) and 2 (S x N^2) float64 for S = 9 and 16 control points, d = 3: 2,200 bytes per
 # sample) and one block of at least one patch: counted from the array shapes, as 2,400 bytes per sample.
 STREAMED_BYTES_PER_SAMPLE = 2400
+# The streamed writers that hold the positions of the vertices on patch sides and corners (float64 x, y, z:
+# at -r 2 every vertex): STL's records need each triangle's corners (``triangle_point_blocks``).
+HELD_POINTS, POINT_BYTES = (".stl",), 24
+# Bytes per vertex a streamed writer keeps on the disk beside its output while writing: the vertex blocks
+# of OBJ and GLB, evaluated once and read back (``evaluation.stream.SpooledTessellation``: 6 float64).
+STREAM_SCRATCH_BYTES = {".obj": 48, ".glb": 48}
 
 
 def available_memory() -> int:
@@ -199,13 +206,14 @@ def convert(input_path, output, patches_paths, resolution, tolerance, units, no_
     mesh_suffix, patch_suffixes = output_formats(output, patches_paths, curvature, shape["attributes"])
     tolerance = tolerance_value(tolerance)
     progress = Progress(quiet)
-    # a plain binary PLY at a uniform resolution is tessellated and written by blocks (--tolerance plans
-    # per-patch resolutions over the whole surface first, so it keeps the in-memory path)
-    stream = tolerance is None and streams(mesh_suffix, patches_paths, curvature, shape["attributes"])
+    # a uniform resolution is tessellated and written by blocks (--tolerance plans per-patch resolutions
+    # over the whole surface first, so it keeps the in-memory path)
+    stream = tolerance is None and streams(mesh_suffix, patches_paths, curvature, shape["attributes"], merge)
     surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet, weld_tolerance(weld, no_weld),
                                    lazy_patches=stream)
     if stream and surface.lazy_patches:  # polynomial: tessellated and written by blocks
-        write_streamed(input_path, output, mesh_suffix, surface, resolution, float32, force, progress)
+        write_streamed(input_path, output, mesh_suffix, surface, resolution, float32, force, progress,
+                       list(zip(patches_paths, patch_suffixes)))
         progress.done()
         return
     # the same welding `c1surf tessellate` reads from the patch file: identical meshes
@@ -230,31 +238,47 @@ def convert(input_path, output, patches_paths, resolution, tolerance, units, no_
     progress.done()
 
 
-def streams(mesh_suffix: str, patches_paths, curvature: bool, attributes: bool) -> bool:
-    """Whether ``convert`` writes its mesh by blocks: a format written so (``MESH_WRITERS.streamed()``), and no
-    option that needs the whole surface (patch files, ``--curvature``, ``--attributes``; rational surfaces are
-    told apart after reading). ``C1SURF_STREAM=0`` turns it off."""
+def streams(mesh_suffix: str, patches_paths, curvature: bool, attributes: bool, merge: bool | None = None) -> bool:
+    """Whether ``convert`` writes its mesh and patch files by blocks: formats written so (``MESH_WRITERS.streamed()``,
+    ``PATCH_WRITERS.streamed()``), and no option that needs the whole surface (``--curvature``, ``--attributes``,
+    ``--merge`` with patch files; rational surfaces are told apart after reading). ``C1SURF_STREAM=0`` turns it off."""
     if os.environ.get("C1SURF_STREAM", "1").strip() == "0":
         return False
-    return mesh_suffix in MESH_WRITERS.streamed() and not (patches_paths or curvature or attributes)
+    patch_suffixes = [suffix_of(path, PATCH_WRITERS) for path in patches_paths]
+    if any(suffix not in PATCH_WRITERS.streamed() for suffix in patch_suffixes) or (patch_suffixes and merge):
+        return False
+    return mesh_suffix in MESH_WRITERS.streamed() and not (curvature or attributes)
+
+
+def check_streamed_memory(needed: int, what: str, resolution: int, force: bool) -> None:
+    """Refuse a streamed conversion whose ``needed`` bytes (``what`` they hold) would not fit in memory."""
+    available = available_memory()
+    if needed > 0.8 * available and not force:
+        raise Failure(f"tessellating at --resolution {resolution} would need about {needed / 2**30:.1f} GiB {what} "
+                      f"but about {available / 2**30:.1f} GiB is available: lower --resolution, or pass --force "
+                      "to try anyway")
 
 
 def write_streamed(input_path, output, mesh_suffix: str, surface: Surface, resolution: int, float32: bool,
-                   force: bool, progress: Progress) -> None:
-    """Tessellate and write ``output`` by blocks (``evaluation.stream``), never holding the patches or the mesh.
+                   force: bool, progress: Progress, patch_targets=()) -> None:
+    """Tessellate and write ``output`` by blocks (``evaluation.stream``), never holding the patches or the mesh;
+    then each (path, suffix) of ``patch_targets`` by blocks of patches (``evaluation.patch_set.PatchStream``).
 
-    Memory is not the limit then, only the disk (``check_disk_space``). A sample without a normal
+    Memory is not the limit then, only the disk (``check_disk_space``), but for the sample matrices of one
+    patch and, for STL, the positions on patch sides and corners. A sample without a normal
     (``UndefinedNormals``: a degenerate patch point takes its neighbours' normal) needs the whole
     tessellation: that file is written again in memory, with the same bytes the in-memory path writes.
     """
-    needed, available = STREAMED_BYTES_PER_SAMPLE * resolution * resolution, available_memory()
-    if needed > 0.8 * available and not force:
-        raise Failure(f"tessellating at --resolution {resolution} would need about {needed / 2**30:.1f} GiB for one "
-                      f"patch but about {available / 2**30:.1f} GiB is available: lower --resolution, or pass --force "
-                      "to try anyway")
+    check_streamed_memory(STREAMED_BYTES_PER_SAMPLE * resolution * resolution, "for one patch", resolution, force)
     adjacency = patch_adjacency(surface.refined, surface.frames)
+    if mesh_suffix in HELD_POINTS:
+        held = adjacency.n_corners + adjacency.n_edges * (resolution - 2)  # the vertex ids below the interiors
+        check_streamed_memory(POINT_BYTES * held, "for the positions on patch sides", resolution, force)
     tess = StreamedTessellation(surface.patch_source(), adjacency, resolution)
-    check_disk_space([output], output_bytes(mesh_suffix, tess, float32, False, [], surface), force)
+    patch_paths, patch_suffixes = [path for path, _ in patch_targets], [suffix for _, suffix in patch_targets]
+    sizes = output_bytes(mesh_suffix, tess, float32, False, patch_suffixes, surface)
+    scratch = STREAM_SCRATCH_BYTES.get(mesh_suffix, 0) * tess.n_vertices
+    check_disk_space([output, *patch_paths], [(mesh_suffix, sizes[0][1] + scratch), *sizes[1:]], force)
     progress.phase(f"tessellating {surface.n_patches} patches at {resolution} x {resolution} into {output}")
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:
         try:
@@ -263,6 +287,15 @@ def write_streamed(input_path, output, mesh_suffix: str, surface: Surface, resol
             check_tessellation_size(surface.n_patches, resolution, force)
             whole = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution)
             write_mesh(mesh_tmp, mesh_suffix, whole, {}, None, float32)
+            del whole
+        del tess
+        if patch_targets:
+            stream = surface_patch_stream(surface, str(input_path), adjacency)
+            with contextlib.ExitStack() as patch_files:  # all files appear together, or none
+                for path, suffix in patch_targets:
+                    progress.phase(f"writing {path}")
+                    patch_tmp = patch_files.enter_context(atomic_output(path, inputs=[input_path]))
+                    write_patch_stream(patch_tmp, stream, suffix, file_name=os.path.basename(path))
 
 
 CAD_SUFFIXES = (".igs", ".iges", ".step", ".stp")  # the patch formats merged by default: CAD opens few large faces

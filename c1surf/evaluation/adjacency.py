@@ -76,18 +76,25 @@ class PatchAdjacency:
 
         An edge used by more than two sides (not a surface) gets no neighbours.
         """
-        p = self.n_patches
-        out = np.full((p, 4, 2), -1, dtype=np.int64)
-        if p == 0:
+        return neighbour_rows(self.partners())
+
+    def partners(self) -> np.ndarray:
+        """(4 P,) int (int32 below 2^31 sides, else int64): the flat side (patch * 4 + side) across each flat
+        side, -1 on a boundary or on an edge of more than two sides; ``neighbour_rows`` turns it into
+        ``neighbours()``, a block at a time if need be."""
+        flat = self.edges.reshape(-1)
+        sides = flat.size
+        out = np.full(sides, -1, dtype=np.int32 if sides < 2**31 else np.int64)
+        if sides == 0:
             return out
-        flat = self.edges.ravel()
-        order = np.argsort(flat, kind="stable")
-        count = np.bincount(flat, minlength=self.n_edges)
-        start = np.concatenate([[0], np.cumsum(count)])[:-1]
-        pair = np.flatnonzero(count == 2)
-        a, b = order[start[pair]], order[start[pair] + 1]
-        out.reshape(-1, 2)[a] = np.stack(np.divmod(b, 4), axis=1)
-        out.reshape(-1, 2)[b] = np.stack(np.divmod(a, 4), axis=1)
+        position = np.arange(sides, dtype=out.dtype)
+        first = np.empty(self.n_edges, dtype=out.dtype)
+        first[flat[::-1]] = position[::-1]  # the lowest position of each edge wins
+        last = np.empty(self.n_edges, dtype=out.dtype)
+        last[flat] = position  # the highest
+        pair = np.flatnonzero(np.bincount(flat, minlength=self.n_edges) == 2)
+        out[first[pair]] = last[pair]
+        out[last[pair]] = first[pair]
         return out
 
     def validate(self, n_patches: int | None = None) -> None:
@@ -114,6 +121,14 @@ class PatchAdjacency:
 
     __hash__ = None
 
+
+
+def neighbour_rows(partners: np.ndarray) -> np.ndarray:
+    """(c, 4, 2) int64 (patch, side) rows of ``PatchAdjacency.neighbours()`` from (4 c,) of its ``partners()``."""
+    partners = np.asarray(partners, dtype=np.int64)
+    out = np.stack([partners >> 2, partners & 3], axis=1)
+    out[partners < 0] = -1
+    return out.reshape(-1, 4, 2)
 
 def _first_appearance(labels: np.ndarray) -> np.ndarray:
     """Renumber arbitrary integer labels 0, 1, 2, ... in order of first appearance (row-major)."""
@@ -409,5 +424,5 @@ def adjacency_from_geometry(patch_groups, tolerance: float = 1e-9, weights=None)
     return _canonical(matching.corners, matching.edges, matching.forward)
 
 
-__all__ = ["PatchAdjacency", "patch_adjacency", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
+__all__ = ["PatchAdjacency", "neighbour_rows", "patch_adjacency", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
            "SIDE_CORNERS", "side_offsets", "side_polygons", "corner_points", "cluster_points"]

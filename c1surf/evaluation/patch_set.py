@@ -6,6 +6,10 @@ sides, ``evaluation.adjacency``) and the header (format, versions, options, inpu
 ``surface_patch_set`` makes one from a ``Surface``; the JSON and NPZ writers
 write it, their readers give it back, and ``c1surf tessellate`` turns it into
 the same mesh ``convert`` writes. See docs/patch-format.md.
+
+``PatchStream`` is the same content for a writer by blocks (the streamed
+conversion): the integers (adjacency, sources, header) whole, the
+coefficients by blocks from the surface's ``patch_source``, never all held.
 """
 from __future__ import annotations
 
@@ -15,7 +19,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .. import __version__
-from .adjacency import PatchAdjacency, adjacency_from_geometry, patch_adjacency
+from .adjacency import PatchAdjacency, adjacency_from_geometry, neighbour_rows, patch_adjacency
 
 FORMAT_NAME = "c1surf-patches"
 FORMAT_VERSION = 1
@@ -77,10 +81,12 @@ class PatchSet:
         """JSON form of the sources: {"face": f} | {"vertex": v} | {"edge": [a, b]}."""
         if self.source_kind is None:
             return [None] * self.n_patches
-        out = []
-        for kind, (a, b) in zip(self.source_kind.tolist(), self.source.tolist()):
-            out.append({"edge": [a, b]} if kind == "edge" else {kind: a})
-        return out
+        return source_dicts(self.source_kind, self.source)
+
+
+def source_dicts(source_kind: np.ndarray, source: np.ndarray) -> list:
+    """{"face": f} | {"vertex": v} | {"edge": [a, b]} of (P,) str kinds and (P, 2) int sources."""
+    return [{"edge": [a, b]} if kind == "edge" else {kind: a} for kind, (a, b) in zip(source_kind.tolist(), source.tolist())]
 
 
 def degree_runs(patches: list) -> list:
@@ -98,12 +104,23 @@ def degree_runs(patches: list) -> list:
 
 def surface_sources(surface):
     """(source_kind (P,) str array, source (P, 2) int64) of a Surface's patches."""
+    kind, source = surface_source_ids(surface)
+    return source_names(kind), source
+
+
+def surface_source_ids(surface):
+    """(kind (P,) int, an index into SOURCE_KINDS; source (P, 2) int64) of a Surface's patches."""
     kind, index, edge = surface.patch_sources()
-    names = np.array(SOURCE_KINDS)[np.asarray(kind, dtype=np.int64)]
+    kind = np.asarray(kind)
     source = np.stack([np.asarray(index, dtype=np.int64), np.full(len(index), -1, dtype=np.int64)], axis=1)
-    is_edge = names == "edge"
+    is_edge = kind == SOURCE_KINDS.index("edge")
     source[is_edge] = np.asarray(edge, dtype=np.int64)[is_edge]
-    return names, source
+    return kind, source
+
+
+def source_names(kind: np.ndarray) -> np.ndarray:
+    """(P,) str ("face", "edge", "vertex", dtype <U6) of (P,) int indices into SOURCE_KINDS."""
+    return np.array(SOURCE_KINDS)[np.asarray(kind, dtype=np.int64)]
 
 
 def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -> dict:
@@ -114,9 +131,9 @@ def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -
         "c1surf_version": __version__,
         "options": dataclasses.asdict(surface.options),  # every SurfaceOptions field, by name
         "input": {"path": input_path, "vertices": int(surface.n_input_vertices), "faces": int(surface.n_input_faces)},
-        "counts": {
-            "biquadratic": int(len(surface.biquadratic)),
-            "bicubic": int(len(surface.bicubic)),
+        "counts": {  # the frames' counts: the patch arrays are not made for them (a streamed conversion)
+            "biquadratic": int(surface.quad_frames.shape[0]),
+            "bicubic": int(surface.cubic_frames.shape[0]),
             "corners": adjacency.n_corners,
             "edges": adjacency.n_edges,
         },
@@ -135,4 +152,74 @@ def surface_patch_set(surface, input_path: str | None = None, adjacency: PatchAd
     return PatchSet(groups, adjacency, kind, source, surface_header(surface, input_path, adjacency), weights)
 
 
-__all__ = ["PatchSet", "surface_patch_set", "degree_runs", "FORMAT_NAME", "FORMAT_VERSION", "KIND_BY_DEGREE", "SOURCE_KINDS"]
+@dataclass
+class PatchStream:
+    """A polynomial surface's patch file content by blocks of patches (``surface_patch_stream``).
+
+    patches : ``construction.patch_blocks.PatchSource``, the coefficients of any patches, bit for bit the arrays
+    adjacency : PatchAdjacency, as ``PatchSet.adjacency``
+    source_kind : (P,) int, indices into SOURCE_KINDS; source_ids : (P, 2) int64, as ``PatchSet.source``
+    header : dict, as ``PatchSet.header``
+    """
+
+    patches: object
+    adjacency: PatchAdjacency
+    source_kind: np.ndarray
+    source_ids: np.ndarray
+    header: dict
+    _partners: np.ndarray | None = None
+
+    # the integer arrays of a patch file: (name, shape of a row, dtype), as PatchSet writers store them
+    INTEGERS = (("source_kind", (), "<U6"), ("source", (2,), "<i8"), ("corners", (4,), "<i8"), ("edges", (4,), "<i8"),
+                ("reversed", (4,), "|b1"), ("neighbours", (4, 2), "<i8"))
+
+    @property
+    def counts(self) -> tuple:
+        """(Nq, Nc): biquadratic patches, then bicubic, in file order."""
+        return tuple(self.patches.counts)
+
+    @property
+    def n_patches(self) -> int:
+        return int(sum(self.counts))
+
+    def blocks(self, kind: int, size: int):
+        """Yield (first, coefficients (c, k, k, 3) float): patches first..first+c-1 of ``kind`` (0 biquadratic,
+        1 bicubic; ids within the kind), in order, up to ``size`` at a time; x, y, z only."""
+        for a in range(0, self.counts[kind], size):
+            ids = np.arange(a, min(a + size, self.counts[kind]))
+            yield a, np.ascontiguousarray(self.patches.coefficients(kind, ids)[0][..., :3])
+
+    def integers(self, name: str, a: int, z: int) -> np.ndarray:
+        """Rows a..z-1 (global patch ids) of the integer array ``name`` of ``INTEGERS``, of its shape and dtype:
+        the rows of ``PatchSet.source_kind``, ``source``, the adjacency's corners, edges, reversed, neighbours()."""
+        if name == "source_kind":
+            return source_names(self.source_kind[a:z])
+        if name == "source":
+            return self.source_ids[a:z]
+        if name == "neighbours":
+            if self._partners is None:
+                self._partners = self.adjacency.partners()  # (4 P,) int32: a quarter of neighbours()
+            return neighbour_rows(self._partners[4 * a : 4 * z])
+        return getattr(self.adjacency, name)[a:z].astype(bool if name == "reversed" else np.int64)
+
+    def source_dicts(self, a: int, z: int) -> list:
+        """JSON form of the sources of patches a..z-1 (global ids), as ``PatchSet.source_dicts``."""
+        return source_dicts(self.integers("source_kind", a, z), self.source_ids[a:z])
+
+
+def surface_patch_stream(surface, input_path: str | None = None, adjacency: PatchAdjacency | None = None) -> PatchStream:
+    """The PatchStream of a polynomial ``construction.surface.Surface`` (its patch arrays are not made).
+
+    Writers by blocks write from it the bytes they write from ``surface_patch_set`` (the same header,
+    sources, adjacency and coefficients). Raises ValueError for a rational surface (weights are written whole).
+    """
+    if surface.rational:
+        raise ValueError("a rational surface's patches are written whole")
+    if adjacency is None:
+        adjacency = patch_adjacency(surface.refined, surface.frames)
+    kind, source = surface_source_ids(surface)
+    return PatchStream(surface.patch_source(), adjacency, kind, source, surface_header(surface, input_path, adjacency))
+
+
+__all__ = ["PatchSet", "PatchStream", "surface_patch_set", "surface_patch_stream", "degree_runs", "FORMAT_NAME",
+           "FORMAT_VERSION", "KIND_BY_DEGREE", "SOURCE_KINDS"]

@@ -46,9 +46,10 @@ class Format:
     description : str, what the file holds, in a few words
     holds : frozenset of str, optional per-vertex data the format keeps (mesh writers):
         "attributes" (texture coordinates and colours), "properties" (named scalars, e.g. curvature)
-    streamed : str, "module:function" of a mesh writer that takes the tessellation by blocks
-        (``write(path, tessellation, float32=False)``, ``evaluation.stream.StreamedTessellation``) and
-        writes the bytes the whole-mesh writer writes; "" if the format is written whole only
+    streamed : str, "module:function" of a writer by blocks that writes the bytes of the whole-data writer:
+        a mesh writer taking the tessellation (``write(path, tessellation, float32=False)``,
+        ``evaluation.stream.StreamedTessellation``), a patch writer taking the patches
+        (``write(path, stream, **options)``, ``evaluation.patch_set.PatchStream``); "" if written whole only
     """
 
     suffixes: tuple
@@ -148,11 +149,14 @@ MESH_READERS = FormatTable("mesh format", "reads", [
 ])
 
 MESH_WRITERS = FormatTable("mesh format", "writes", [
-    Format((".obj",), _MESHES + "obj_out:write_obj", "Wavefront OBJ text: v, vt, vn, f", frozenset({"attributes"})),
+    Format((".obj",), _MESHES + "obj_out:write_obj", "Wavefront OBJ text: v, vt, vn, f", frozenset({"attributes"}),
+           streamed=_MESHES + "obj_out:write_obj_stream"),
     Format((".ply",), _MESHES + "ply_out:write_ply", "binary PLY: positions, normals, any per-vertex properties", _BOTH,
            streamed=_MESHES + "ply_out:write_ply_stream"),
-    Format((".stl",), _MESHES + "write:write_stl", "binary STL (float32, through trimesh)"),
-    Format((".glb",), _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)"),
+    Format((".stl",), _MESHES + "write:write_stl", "binary STL (float32, through trimesh)",
+           streamed=_MESHES + "formats.stl_out:write_stl_stream"),
+    Format((".glb",), _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)",
+           streamed=_MESHES + "formats.glb_out:write_glb_stream"),
     Format((".off",), _MESHES + "write:write_off", "OFF text (through trimesh)"),
 ])
 
@@ -164,8 +168,10 @@ PATCH_READERS = FormatTable("patch format", "reads", [
 ])
 
 PATCH_WRITERS = FormatTable("patch format", "writes", [
-    Format((".json",), _PATCHES + "json_patches:write_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)"),
-    Format((".npz",), _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays"),
+    Format((".json",), _PATCHES + "json_patches:write_patch_set_json", "c1surf patch file as JSON (docs/patch-format.md)",
+           streamed=_PATCHES + "json_patches:write_patch_stream_json"),
+    Format((".npz",), _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays",
+           streamed=_PATCHES + "npz:write_patch_stream_npz"),
     Format((".igs", ".iges"), _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)"),
     Format((".step", ".stp"), _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)"),
 ])

@@ -382,14 +382,14 @@ def test_too_few_refinements_are_refused_as_convert_refuses_them(tmp_path):
 
 
 def test_an_output_too_big_for_memory_is_refused_as_convert_refuses_it(tmp_path):
-    """As an in-memory conversion refuses it; a binary PLY is streamed (tests/cli/test_streamed_convert.py), so
-    the mesh itself is not refused: only outputs held in memory are."""
+    """As an in-memory conversion refuses it (an .off output); .ply, .obj, .stl and .glb are streamed
+    (tests/cli/test_streamed_convert.py), so the mesh itself is not refused: only outputs held in memory are."""
     path = SAMPLES / "cube.obj"
     report = inspect_json(path, "-r", 100000)
     available = lambda line: re.sub(r"about [\d.]+ GiB is available", "about ... GiB is available", line)  # noqa: E731
     refusal = report["output"]["in_memory_refusal"]
-    assert available(refusal) == available(convert_error(path, tmp_path, "-r", "100000", output="out.obj"))
+    assert available(refusal) == available(convert_error(path, tmp_path, "-r", "100000", output="out.off"))
     assert "--force" in refusal and report["refused"] is None
     text = CliRunner().invoke(main, ["inspect", str(path), "-r", "100000"])
-    assert "held in memory" in text.stdout and "a plain binary .ply streams" in text.stdout
+    assert "held in memory" in text.stdout and "plain .obj, .ply, .stl, .glb outputs stream" in text.stdout
     assert report["output"]["triangles"] == 2 * 96 * 99999 ** 2 and report["patches"]["total"] == 96

@@ -79,7 +79,10 @@ def test_sigkill_never_damages_the_target(tmp_path):
     assert out.read_bytes() == b"earlier output"
 
 
-def test_write_failure_leaves_no_output(tmp_path, monkeypatch):
+@pytest.mark.parametrize("stream, writer", [("0", "write_triangle_mesh"), ("1", "write_streamed_mesh"),
+                                            ("1", "write_patch_stream")])
+def test_write_failure_leaves_no_output(tmp_path, monkeypatch, stream, writer):
+    """In memory, and streamed (the mesh, or the patch file after the mesh was written)."""
     import c1surf.cli.convert as convert_module
 
     def failing_writer(path, *args, **kwargs):
@@ -87,7 +90,8 @@ def test_write_failure_leaves_no_output(tmp_path, monkeypatch):
             f.write(b"half a mesh")
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(convert_module, "write_triangle_mesh", failing_writer)
+    monkeypatch.setenv("C1SURF_STREAM", stream)
+    monkeypatch.setattr(convert_module, writer, failing_writer)
     out = tmp_path / "cube.ply"
     patches = tmp_path / "cube.json"
     result = CliRunner().invoke(main, ["convert", str(SAMPLES / "cube.obj"), "-o", str(out), "--patches", str(patches)])

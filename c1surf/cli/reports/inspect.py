@@ -22,6 +22,7 @@ from ...evaluation.adjacency import patch_adjacency
 from ...io.errors import MeshInputError
 from ...io.meshes.mesh_file import collapse_repeated_corners
 from ...io.meshes.read import read_mesh
+from ...io.registry import MESH_WRITERS
 from ...mesh.errors import TopologyError
 from ...mesh.repair import prepare_topology
 from ...mesh.statistics import degenerate_faces, histogram, mesh_statistics
@@ -83,7 +84,7 @@ def inspection(path, resolution: int, refinements) -> dict:
     outputs = None
     if topology is not None:
         outputs = output_sizes(topology, resolution)
-        # a binary PLY is written by blocks (not limited by memory); every other output is held whole first
+        # the formats of MESH_WRITERS.streamed() are written by blocks (not limited by memory); the others are held whole first
         outputs["in_memory_refusal"] = None
         try:
             check_tessellation_size(outputs["patches"], resolution, force=False)
@@ -246,7 +247,8 @@ def text_lines(report: dict) -> list[str]:
                                                          f"PLY about {_bytes(o['ply_bytes'])}, "
                                                          f"memory about {_bytes(o['memory_bytes'])}"))
         if o["in_memory_refusal"]:
-            rows.append(("held in memory", f"refused (a plain binary .ply streams): {o['in_memory_refusal']}"))
+            streamed = ", ".join(MESH_WRITERS.streamed())
+            rows.append(("held in memory", f"refused (plain {streamed} outputs stream): {o['in_memory_refusal']}"))
     notes = [f"  note: {note}" for note in report["notes"]]
     return [report["file"]] + [f"  {name:<20}{value}" for name, value in rows] + notes
 

@@ -71,44 +71,96 @@ class StreamedTessellation:
             self._bases = [_Bases.of(d, self.n, self.dim) for d in (2, 3)]
         return self._bases
 
-    def vertex_blocks(self):
+    def vertex_blocks(self, check: bool = True):
         """Yield (points (c, dim), normals (c, 3)) float for vertex ids 0, 1, ... in order.
 
-        Raises UndefinedNormals at a block with a sample without a normal.
+        Raises UndefinedNormals at a block with a sample without a normal (``check``; without it
+        such normals come as NaN: for a writer that reads the points only).
         """
+        yield from self._shared_blocks(check)
+        for _, _, points, normals in self._interior_blocks(check):
+            yield points, normals
+
+    def _shared_blocks(self, check: bool):
+        """The vertex blocks of the corners, then of the edge samples (ids below ``welding.patch_base``)."""
         w, dim, samples = self.welding, self.dim, tessellate._BLOCK_SAMPLES  # the in-memory blocks, whatever they are
+        checked = self._checked if check else (lambda points, normals: (points, normals))
         for a in range(0, w.n_corners, samples):
             z = min(a + samples, w.n_corners)
-            yield self._checked(*self._owned(w.corner_owner[a:z], 1, self._corner))
+            yield checked(*self._owned(w.corner_owner[a:z], 1, self._corner))
         inner = w.inner
         step = max(1, samples // max(inner, 1))
         for a in range(0, w.n_edges, step):
             z = min(a + step, w.n_edges)
             points, normals = self._owned(w.edge_owner[a:z], inner, self._side)
-            yield self._checked(points.reshape(-1, dim), normals)
-        m = inner * inner
+            yield checked(points.reshape(-1, dim), normals)
+
+    def _interior_blocks(self, check: bool):
+        """Yield (lo, hi, points (c, dim), normals (c, 3)): the interior samples of patches lo..hi-1 (global
+        ids), in the blocks of ``tessellate._evaluate_welded``; nothing when the patches have no interior."""
+        w, dim = self.welding, self.dim
+        m = w.inner * w.inner
         if not m:
             return
+        step = max(1, tessellate._BLOCK_SAMPLES // m)
         for k in range(2):
             for a in range(self.starts[k], self.starts[k + 1], w.patch_block):
                 z = min(a + w.patch_block, self.starts[k + 1])
-                step = max(1, samples // m)
                 for lo in range(a, z, step):
                     hi = min(lo + step, z)
                     flat = self.source.coefficients(k, np.arange(lo, hi) - self.starts[k])[0].reshape(hi - lo, -1)
                     points, normals = np.empty((hi - lo, m * dim)), np.empty(((hi - lo) * m, 3))
                     with blas_on_one_thread(self._hold):
                         _interior_block(flat, self.bases[k], points, normals)
-                    yield self._checked(points.reshape(-1, dim), normals)
+                    points = points.reshape(-1, dim)
+                    yield (lo, hi, *(self._checked(points, normals) if check else (points, normals)))
+
+    def triangle_point_blocks(self):
+        """Yield (t, 3, 3) float: the positions (x, y, z) of the corners of triangles, in triangle order,
+        bit for bit ``points[triangles, :3]`` of ``tessellate_patches`` (for STL, which stores no indices).
+
+        Holds the positions of the vertices on patch corners and sides ((``welding.patch_base``, 3)
+        float: at resolution 2 every vertex), evaluated first in their own blocks; the interiors come
+        block by block with their patches. Normals are not checked (only points are given).
+        """
+        w = self.welding
+        shared = np.empty((w.patch_base, 3))
+        at = 0
+        for points, _ in self._shared_blocks(check=False):
+            shared[at : at + points.shape[0]] = points[:, :3]
+            at += points.shape[0]
+        if w.inner > 0:
+            for lo, hi, points, _ in self._interior_blocks(check=False):
+                yield self._corner_points(lo, hi, shared, points)
+            return
+        for a in range(0, w.n_patches, w.patch_block):  # no interiors: corners only
+            yield self._corner_points(a, min(a + w.patch_block, w.n_patches), shared, None)
+
+    def _corner_points(self, lo: int, hi: int, shared: np.ndarray, interior) -> np.ndarray:
+        """(t, 3, 3) positions of the triangles of patches lo..hi-1: ``shared`` rows, or rows of ``interior``
+        ((hi - lo) (n-2)^2, dim), the interior samples of these patches."""
+        ids = self._triangles_of(lo, hi).reshape(-1)
+        out = np.empty((ids.size, 3))
+        if interior is None:
+            np.take(shared, ids, axis=0, out=out)
+        else:
+            first = self.welding.patch_base + lo * self.welding.inner ** 2
+            inside = ids >= first
+            out[~inside] = shared[ids[~inside]]
+            out[inside] = interior[ids[inside] - first, :3]
+        return out.reshape(-1, 3, 3)
+
+    def _triangles_of(self, a: int, z: int) -> np.ndarray:
+        """(t, 3) int: the triangles of patches a..z-1, numbered as ``tessellate_patches`` numbers them."""
+        grid = np.empty((z - a, self.n, self.n), dtype=self.dtype)
+        _grid_block(self.welding, a, z, grid, alone=True)
+        return np.take(grid.reshape(z - a, -1), self.local, axis=1).reshape(-1, 3)
 
     def triangle_blocks(self):
         """Yield (t, 3) int triangles (``dtype``), patch by patch in order, as ``tessellate_patches`` numbers them."""
         w = self.welding
         for a in range(0, w.n_patches, w.patch_block):
-            z = min(a + w.patch_block, w.n_patches)
-            grid = np.empty((z - a, self.n, self.n), dtype=self.dtype)
-            _grid_block(w, a, z, grid, alone=True)
-            yield np.take(grid.reshape(z - a, -1), self.local, axis=1).reshape(-1, 3)
+            yield self._triangles_of(a, min(a + w.patch_block, w.n_patches))
 
     # -- corners and edges, from the patches that own them ------------------------------------------
 

@@ -11,15 +11,25 @@ time (``number_text``):
   without ``float32``, the spelling c1surf has always given it: the shortest
   text that reads back to the same double (``repr``), normals with 9
   significant digits. Colours (0..1) always have 6 significant digits.
+
+``write_obj_stream`` writes a tessellation given by blocks with the bytes
+``write_obj`` gives it whole: the decimals depend on the largest position and
+the largest normal, so a first pass over the vertex blocks finds them, and
+every ``vn`` line comes after every ``v`` line: the blocks are evaluated once
+and read back from a temporary file for the ``v`` and the ``vn`` lines.
 """
 from __future__ import annotations
 
+import os
+
 import numpy as np
+
+from ...evaluation.stream.spool import SpooledTessellation
 
 from .number_text import (FLOAT32_DIGITS, FLOAT64_DIGITS, constant_field, decimals_for, format_fixed, join_columns,
                           printf_field, text_lines)
 
-__all__ = ["write_obj"]
+__all__ = ["write_obj", "write_obj_stream"]
 
 _BLOCK = 1 << 17  # lines per block: bounds the byte matrices to some MB
 _HEADER = b"# c1surf\n"
@@ -87,3 +97,41 @@ def write_obj(path, mesh, float32: bool = False) -> None:
         for a in range(0, triangles.shape[0], _BLOCK):
             index = format_fixed(triangles[a : a + _BLOCK].astype(np.float64) + 1.0, 0)
             f.write(text_lines(b"f ", _corner_fields(index, mesh.uv is not None, mesh.normals is not None)))
+
+
+def _largest(values: np.ndarray) -> float:
+    """The largest finite magnitude of ``values`` (0 when there is none), as ``decimals_for`` takes it."""
+    finite = np.abs(values[np.isfinite(values)])
+    return float(finite.max()) if finite.size else 0.0
+
+
+def write_obj_stream(path, tessellation, float32: bool = False) -> None:
+    """Write a tessellation by blocks (``evaluation.stream.StreamedTessellation``): the bytes of ``write_obj``
+    for its points, normals and triangles.
+
+    The vertex blocks are evaluated once, for the largest position and normal (the decimals), and kept in
+    a temporary file beside ``path`` (``evaluation.stream.SpooledTessellation``) for the ``v`` and then the
+    ``vn`` lines.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    tessellation : has ``n_vertices``, ``n_triangles``, ``dim``, ``vertex_blocks()`` yielding (points (c, dim),
+        normals (c, 3)) float in vertex order and ``triangle_blocks()`` yielding (t, 3) int 0-based in order
+    float32 : write float32 precision (fewer digits, smaller file)
+    """
+    digits = FLOAT32_DIGITS if float32 else FLOAT64_DIGITS
+    with SpooledTessellation(tessellation, os.path.dirname(os.path.abspath(path))) as spooled:
+        largest = np.zeros(2)
+        for points, normals in spooled.vertex_blocks():  # evaluated: the decimals of v and of vn
+            largest = np.maximum(largest, [_largest(points[:, :3]), _largest(normals)])
+        decimals = [decimals_for(np.array([value]), digits) for value in largest]
+        with open(path, "wb") as f:
+            f.write(_HEADER)
+            for k, prefix in enumerate((b"v ", b"vn ")):  # positions, then normals: read back
+                for block in spooled.vertex_blocks():
+                    values = np.asarray(block[k][:, :3], dtype=np.float64)
+                    f.write(text_lines(prefix, [format_fixed(values, decimals[k])]))
+            for triangles in spooled.triangle_blocks():
+                index = format_fixed(triangles.astype(np.float64) + 1.0, 0)
+                f.write(text_lines(b"f ", _corner_fields(index, False, True)))

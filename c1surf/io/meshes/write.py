@@ -8,6 +8,9 @@ are c1surf's own vectorized writers (``obj_out``, ``ply_out``; float64 by
 default, float32 on request), STL, GLB and OFF go through trimesh (STL and GLB
 store float32 by definition). ``write_triangle_mesh`` and
 ``write_attribute_mesh`` are the shapes the commands hand over.
+``write_streamed_mesh`` writes a tessellation given by blocks with the bytes
+of these writers (``ply_out``, ``obj_out``, ``formats.stl_out``,
+``formats.glb_out``: the last two copy trimesh's layout).
 """
 from __future__ import annotations
 

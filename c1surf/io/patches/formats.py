@@ -1,4 +1,5 @@
-"""Patch files by suffix (``io.registry.PATCH_READERS`` / ``PATCH_WRITERS``): read any, write a PatchSet or a Surface."""
+"""Patch files by suffix (``io.registry.PATCH_READERS`` / ``PATCH_WRITERS``): read any, write a PatchSet, a
+Surface, or a PatchStream (by blocks, the formats of ``PATCH_WRITERS.streamed()``)."""
 from __future__ import annotations
 
 import dataclasses
@@ -6,7 +7,7 @@ import dataclasses
 from ...evaluation.patch_set import PatchSet, surface_patch_set
 from .. import registry
 
-__all__ = ["load_patch_set", "write_patch_set", "write_surface_patches"]
+__all__ = ["load_patch_set", "write_patch_set", "write_patch_stream", "write_surface_patches"]
 
 
 def load_patch_set(path) -> PatchSet:
@@ -22,6 +23,19 @@ def write_patch_set(path, patch_set: PatchSet, suffix: str | None = None, **opti
     """
     suffix = suffix or registry.suffix_of(path, registry.PATCH_WRITERS)
     registry.PATCH_WRITERS[suffix].function(path, patch_set, **options)
+
+
+def write_patch_stream(path, stream, suffix: str | None = None, **options) -> None:
+    """Write an ``evaluation.patch_set.PatchStream`` by blocks: the bytes ``write_patch_set`` writes for its surface.
+
+    Raises ValueError for a format written whole only (``PATCH_WRITERS.streamed()`` lists the others).
+    """
+    suffix = suffix or registry.suffix_of(path, registry.PATCH_WRITERS)
+    function = registry.PATCH_WRITERS[suffix].streamed_function
+    if function is None:
+        raise ValueError(f"{suffix} files are written whole, not by blocks "
+                         f"({', '.join(registry.PATCH_WRITERS.streamed())} are)")
+    function(path, stream, **options)
 
 
 def write_surface_patches(path, surface, suffix: str | None = None, input_path: str | None = None, adjacency=None,

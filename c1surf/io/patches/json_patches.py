@@ -15,6 +15,8 @@ Shape (see docs/patch-format.md)::
                  "patches": m x n, "rotation": m x n}, ...]}      (convert --merge only)
 
 Floats are written with ``repr`` precision, so reading gives the same bits.
+``write_patch_stream_json`` writes the same bytes from a ``PatchStream``
+(the streamed conversion), by blocks of patches.
 """
 from __future__ import annotations
 
@@ -27,6 +29,8 @@ from ..errors import MeshInputError
 from .checks import check_header, checked_adjacency, checked_piece, checked_weights
 
 _PIECE_KEYS = ("points", "knots_u", "knots_v", "patches", "rotation")  # and "weights" when rational
+_SEPARATORS = (",", ":")  # compact, one line
+_STREAM_BLOCK = 1 << 12  # patches per block of a streamed file: some MB of Python lists and text
 
 
 def surface_patch_document(surface, input_path: str | None = None, adjacency=None) -> dict:
@@ -36,29 +40,50 @@ def surface_patch_document(surface, input_path: str | None = None, adjacency=Non
 
 def patch_set_document(patch_set: PatchSet) -> dict:
     """The JSON document (a dict) of a ``PatchSet``: its header, then one entry per patch."""
-    patches = []
-    for group in patch_set.groups:
-        du, dv = group.shape[1] - 1, group.shape[2] - 1
-        kind = KIND_BY_DEGREE.get(du) if du == dv else None
-        for points in group[..., :3].tolist():
-            patches.append({"kind": kind or f"bezier{du}x{dv}", "degree": [du, dv], "points": points})
-    if patch_set.weights is not None:  # rational patches (A2a): "weights" of shape (du+1, dv+1)
-        flat_weights = [w for group in patch_set.weights for w in np.asarray(group).tolist()]
-        for patch, w in zip(patches, flat_weights):
-            patch["weights"] = w
-    for patch, source in zip(patches, patch_set.source_dicts()):
-        if source is not None:
-            patch["source"] = source
-    adjacency = patch_set.adjacency
-    if adjacency is not None:
-        neighbours = adjacency.neighbours().tolist()
-        for patch, c, e, r, n in zip(patches, adjacency.corners.tolist(), adjacency.edges.tolist(),
-                                     adjacency.reversed.tolist(), neighbours):
-            patch["corners"], patch["edges"], patch["reversed"], patch["neighbours"] = c, e, r, n
+    sources = patch_set.source_dicts()
+    adjacency = _adjacency_rows(patch_set.adjacency)
+    patches, start = [], 0
+    for k, group in enumerate(patch_set.groups):
+        stop = start + len(group)
+        weights = None if patch_set.weights is None else np.asarray(patch_set.weights[k])
+        patches += patch_entries(group, sources[start:stop], None if adjacency is None else [a[start:stop] for a in adjacency],
+                                 weights)
+        start = stop
     doc = {**patch_set.header, "patches": patches}
     if patch_set.merged:  # convert --merge: B-spline pieces standing for rectangles of patches
         doc["merged"] = [merged_piece_document(piece) for piece in patch_set.merged]
     return doc
+
+
+def _adjacency_rows(adjacency) -> list | None:
+    """[corners (P, 4), edges (P, 4), reversed (P, 4), neighbours (P, 4, 2)] of a PatchAdjacency, or None."""
+    return None if adjacency is None else [adjacency.corners, adjacency.edges, adjacency.reversed, adjacency.neighbours()]
+
+
+def patch_entries(points: np.ndarray, sources: list | None = None, adjacency: list | None = None,
+                  weights: np.ndarray | None = None) -> list:
+    """The "patches" entries of c patches of one degree, keys in file order.
+
+    Parameters
+    ----------
+    points : (c, du+1, dv+1, >= 3) float (x, y, z are written)
+    sources : c dicts ({"face": f}, ...) or None each, or None
+    adjacency : [corners (c, 4), edges (c, 4), reversed (c, 4), neighbours (c, 4, 2)] arrays, or None
+    weights : (c, du+1, dv+1) float (rational patches), or None
+    """
+    du, dv = points.shape[1] - 1, points.shape[2] - 1
+    kind = (KIND_BY_DEGREE.get(du) if du == dv else None) or f"bezier{du}x{dv}"
+    patches = [{"kind": kind, "degree": [du, dv], "points": p} for p in points[..., :3].tolist()]
+    if weights is not None:  # rational patches (A2a): "weights" of shape (du+1, dv+1)
+        for patch, w in zip(patches, weights.tolist()):
+            patch["weights"] = w
+    for patch, source in zip(patches, sources or []):
+        if source is not None:
+            patch["source"] = source
+    if adjacency is not None:
+        for patch, c, e, r, n in zip(patches, *(np.asarray(a).tolist() for a in adjacency)):
+            patch["corners"], patch["edges"], patch["reversed"], patch["neighbours"] = c, e, r, n
+    return patches
 
 
 def merged_piece_document(piece) -> dict:
@@ -80,10 +105,32 @@ def write_patch_set_json(path, patch_set: PatchSet, **_options) -> None:
     Weights (rational patches) and merged pieces are kept; the options of other
     formats (IGES units, ...) do not apply.
     """
-    text = json.dumps(patch_set_document(patch_set), separators=(",", ":"))  # dumps: the C encoder, unlike dump
+    text = json.dumps(patch_set_document(patch_set), separators=_SEPARATORS)  # dumps: the C encoder, unlike dump
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
         f.write("\n")
+
+
+def write_patch_stream_json(path, stream, **_options) -> None:
+    """Write a ``evaluation.patch_set.PatchStream`` by blocks of patches: the bytes ``write_patch_set_json``
+    writes for the surface's ``PatchSet`` (no weights, no merged pieces), never holding all entries.
+
+    The document is the header's keys, then ``"patches"``: its text is the header's without the closing
+    brace, then the entries of each block (``patch_entries``, dumped as ``json.dumps`` dumps them in a list).
+    """
+    head = json.dumps(stream.header, separators=_SEPARATORS)
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(head[:-1] + ("," if stream.header else "") + '"patches":[')
+        separator, offset = "", 0
+        for kind, count in enumerate(stream.counts):
+            for a, points in stream.blocks(kind, _STREAM_BLOCK):
+                lo, hi = offset + a, offset + a + len(points)
+                adjacency = [stream.integers(name, lo, hi) for name in ("corners", "edges", "reversed", "neighbours")]
+                entries = patch_entries(points, stream.source_dicts(lo, hi), adjacency)
+                f.write(separator + json.dumps(entries, separators=_SEPARATORS)[1:-1])
+                separator = ","
+            offset += count
+        f.write("]}\n")
 
 
 def read_patch_set_json(path) -> PatchSet:

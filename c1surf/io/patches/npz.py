@@ -19,7 +19,9 @@ Members (see docs/patch-format.md; P patches, biquadratic first, then bicubic)::
 
 Uncompressed and without pickles: ``numpy.load(path)`` reads it (lazily,
 member by member), and the zip entries carry a fixed date, so the same
-surface always gives the same bytes.
+surface always gives the same bytes. ``write_patch_stream_npz`` writes those
+bytes from a ``PatchStream`` (the streamed conversion): the coefficient
+members by blocks of patches, the integers whole.
 """
 from __future__ import annotations
 
@@ -37,6 +39,7 @@ from ..errors import MeshInputError
 from .checks import check_header, checked_adjacency, checked_piece, checked_weights
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
+_STREAM_BLOCK = 1 << 15  # patches per block of a streamed file (bicubic: 12 MB)
 
 
 def _patch_groups(groups: list):
@@ -68,18 +71,10 @@ def _members(patch_set: PatchSet):
     One member at a time: a large surface never holds all of them as copies at once.
     """
     quad, cubic = _patch_groups(patch_set.groups)
-    yield "header", np.array(json.dumps(patch_set.header, separators=(",", ":")))
+    yield "header", _header_member(patch_set.header)
     yield "biquadratic", _joined(quad, (0, 3, 3, 3))
     yield "bicubic", _joined(cubic, (0, 4, 4, 3))
-    if patch_set.source_kind is not None:
-        yield "source_kind", np.asarray(patch_set.source_kind, dtype="<U6")
-        yield "source", np.asarray(patch_set.source, dtype=np.int64)
-    if patch_set.adjacency is not None:
-        a = patch_set.adjacency
-        yield "corners", a.corners.astype(np.int64, copy=False)
-        yield "edges", a.edges.astype(np.int64, copy=False)
-        yield "reversed", a.reversed.astype(bool, copy=False)
-        yield "neighbours", a.neighbours()
+    yield from _bookkeeping_members(patch_set.source_kind, patch_set.source, patch_set.adjacency)
     if patch_set.weights is not None:
         quad_w, cubic_w = _patch_groups(patch_set.weights)
         yield "biquadratic_weights", _joined(quad_w, (0, 3, 3))
@@ -98,18 +93,81 @@ def _merged_members(pieces):
         yield f"merged_{name}", np.concatenate([np.ravel(getattr(piece, name)) for piece in pieces])
 
 
+def _header_member(header: dict) -> np.ndarray:
+    return np.array(json.dumps(header, separators=(",", ":")))
+
+
+def _bookkeeping_members(source_kind, source, adjacency):
+    """(name, array) of the sources and the adjacency (integers), those present."""
+    if source_kind is not None:
+        yield "source_kind", np.asarray(source_kind, dtype="<U6")
+        yield "source", np.asarray(source, dtype=np.int64)
+    if adjacency is not None:
+        yield "corners", adjacency.corners.astype(np.int64, copy=False)
+        yield "edges", adjacency.edges.astype(np.int64, copy=False)
+        yield "reversed", adjacency.reversed.astype(bool, copy=False)
+        yield "neighbours", adjacency.neighbours()
+
+
+class _Blocks:
+    """A member written by blocks: the .npy header of ``shape`` and ``dtype``, then each block's bytes in order.
+
+    shape : tuple of int; dtype : numpy dtype; blocks : iterable of C-contiguous arrays of ``dtype``, rows of
+    ``shape`` adding up to shape[0]
+    """
+
+    def __init__(self, shape: tuple, dtype, blocks):
+        self.shape, self.dtype, self.blocks = tuple(int(n) for n in shape), np.dtype(dtype), blocks
+
+    def write(self, f) -> None:
+        """The bytes ``np.lib.format.write_array`` writes for the whole array (a header of format 1.0)."""
+        descr = np.lib.format.dtype_to_descr(self.dtype)
+        np.lib.format.write_array_header_1_0(f, {"descr": descr, "fortran_order": False, "shape": self.shape})
+        rows = 0
+        for block in self.blocks:
+            f.write(np.ascontiguousarray(block, dtype=self.dtype).tobytes())
+            rows += block.shape[0]
+        if rows != self.shape[0]:
+            raise ValueError(f"internal: the blocks gave {rows} rows, the header says {self.shape[0]}")
+
+
+def _stream_members(stream, size: int):
+    """(name, array or _Blocks) of the NPZ members of a ``PatchStream``: every array by blocks of ``size`` patches."""
+    yield "header", _header_member(stream.header)
+    for kind, (name, k) in enumerate((("biquadratic", 3), ("bicubic", 4))):
+        yield name, _Blocks((stream.counts[kind], k, k, 3), np.float64, (c for _, c in stream.blocks(kind, size)))
+    p = stream.n_patches
+    for name, row, dtype in stream.INTEGERS:
+        rows = (stream.integers(name, a, min(a + size, p)) for a in range(0, p, size))
+        yield name, _Blocks((p, *row), dtype, rows)
+
+
 def write_patch_set_npz(path, patch_set: PatchSet, **_options) -> None:
     """Write a PatchSet as an uncompressed, byte-reproducible ``.npz`` (weights and merged pieces included).
 
     The options of other formats (IGES units, ...) do not apply.
     """
+    _write_members(path, _members(patch_set))
+
+
+def write_patch_stream_npz(path, stream, **_options) -> None:
+    """Write a ``evaluation.patch_set.PatchStream``: the bytes ``write_patch_set_npz`` writes for the surface's
+    ``PatchSet`` (no weights, no merged pieces), the coefficients by blocks, never all held."""
+    _write_members(path, _stream_members(stream, _STREAM_BLOCK))
+
+
+def _write_members(path, members) -> None:
+    """Write (name, array or ``_Blocks``) members into a zip of stored ``name.npy`` entries with a fixed date."""
     with zipfile.ZipFile(path, "w", compression=zipfile.ZIP_STORED, allowZip64=True) as zf:
-        for name, array in _members(patch_set):
+        for name, array in members:
             info = zipfile.ZipInfo(name + ".npy", date_time=_DATE)
             info.compress_type = zipfile.ZIP_STORED
             info.external_attr = 0o644 << 16
             with zf.open(info, "w", force_zip64=True) as f:
-                np.lib.format.write_array(f, np.ascontiguousarray(array), allow_pickle=False)
+                if isinstance(array, _Blocks):
+                    array.write(f)
+                else:
+                    np.lib.format.write_array(f, np.ascontiguousarray(array), allow_pickle=False)
             del array
 
 
@@ -245,4 +303,4 @@ def _merged(path, data: dict, n_biquadratic: int) -> list:
         raise MeshInputError(str(path), f"malformed merged pieces ({e})") from None
 
 
-__all__ = ["write_patch_set_npz", "read_patch_set_npz"]
+__all__ = ["write_patch_set_npz", "write_patch_stream_npz", "read_patch_set_npz"]
