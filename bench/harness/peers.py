@@ -92,7 +92,7 @@ class Trimesh(Peer):
     def read(self, path):
         import trimesh
 
-        mesh = trimesh.load(str(path), process=False, force="mesh")
+        mesh = trimesh.load(str(path), process=False, force="mesh", maintain_order=True)  # no splits at UV seams
         return np.asarray(mesh.vertices), np.asarray(mesh.faces)
 
     def subdivide(self, mesh, levels):

@@ -46,10 +46,13 @@ def _environment() -> dict:
     return dict(os.environ, PYTHONPATH=root + os.pathsep + os.environ.get("PYTHONPATH", ""))
 
 
-def run_process(argv: list, timeout: float, cwd=None) -> dict:
+def run_process(argv: list, timeout: float, cwd=None, cap: int | None = None) -> dict:
     """Run ``argv``; {"ok", "seconds" (wall, start to exit), "cpu_seconds" (user + system), "peak_mb" (its maximum
-    resident set), "stderr", "error"}; CPU time tells how much of the wall time other processes took."""
-    cap = memory_cap_bytes()
+    resident set), "stderr", "error"}; CPU time tells how much of the wall time other processes took.
+
+    ``cap``: its address-space limit in bytes (default ``memory_cap_bytes()``).
+    """
+    cap = cap or memory_cap_bytes()
 
     def limit_memory():
         resource.setrlimit(resource.RLIMIT_AS, (cap, cap))
@@ -86,9 +89,9 @@ def c1surf_argv(*args) -> list:
     return [sys.executable, "-m", "c1surf.cli.main", *map(str, args)]
 
 
-def run_c1surf(args: list, timeout: float) -> dict:
+def run_c1surf(args: list, timeout: float, cap: int | None = None) -> dict:
     """``c1surf ARGS`` as a user runs it, in a process of its own (``run_process``)."""
-    return run_process(c1surf_argv(*args), timeout, cwd=SETTINGS["root"])
+    return run_process(c1surf_argv(*args), timeout, cwd=SETTINGS["root"], cap=cap)
 
 
 @lru_cache(maxsize=None)

@@ -95,6 +95,14 @@ def fidelity_table(results) -> str:
                      "coarser tessellation: mean / max / volume"], rows)
 
 
+def _uniform(match, triangles=None) -> str:
+    """"-r N: T triangles (ratio to the tolerance output)" of a uniform match, or "not reached"."""
+    if not match:
+        return "not reached"
+    ratio = f" ({match['triangles'] / triangles:.2f}x)" if triangles else ""
+    return f"-r {match['resolution']}: {match['triangles']:,}{ratio}"
+
+
 def tolerance_table(results) -> str:
     tol = results.get("tolerance", {})
     if "skipped" in tol:
@@ -102,16 +110,18 @@ def tolerance_table(results) -> str:
     rows = []
     for m in tol.get("meshes", []):
         if not m.get("ok"):
-            rows.append([m["input"], "", "failed: " + m.get("error", "")[:80]] + [""] * 6)
+            rows.append([m["input"], "", "failed: " + m.get("error", "")[:80]] + [""] * 5)
             continue
         for t in m["tolerances"]:
-            u = t.get("uniform")
-            rows.append([m["input"], f"{t['tolerance']:g}", f"{t.get('triangles', 'failed'):,}" if "triangles" in t else t["error"],
-                         _g(t.get("measured")), _g(t.get("reported")), u and u["resolution"] or "not reached",
-                         u and f"{u['triangles']:,}" or "", u and f"{u['triangles'] / t['triangles']:.2f}" or "",
+            if "triangles" not in t:
+                rows.append([m["input"], f"{t['tolerance']:g}", "failed: " + t["error"][:80]] + [""] * 5)
+                continue
+            rows.append([m["input"], f"{t['tolerance']:g}", f"{t['triangles']:,}", _g(t["measured"]), _g(t["reported"]),
+                         _uniform(t["uniform"], t["triangles"]), _uniform(t["uniform_within_t"], t["triangles"]),
                          f"-r {m['reference_resolution']} (~{m['reference_error_estimate']:.1g})"])
-    return markdown(["input", "T", "triangles", "measured error", "c1surf's own measure", "uniform -r with that error",
-                     "its triangles", "uniform / tolerance", "reference (its error)"], rows)
+    return markdown(["input", "T", "triangles", "measured error", "c1surf's own measure",
+                     "uniform with that measured error (x tolerance's triangles)", "uniform within T", "reference (its error)"],
+                    rows)
 
 
 def plot(results, path: Path) -> None:

@@ -64,11 +64,11 @@ def work_tolerance(job):
             note = NOTE.search(result["stderr"])
             runs.append({"tolerance": t, "triangles": int(len(triangles)), "measured": error_of(points, triangles),
                          "reported": float(note.group(1)) if note else None, "seconds": result["seconds"]})
-        goal = min((r["measured"] for r in runs if "measured" in r), default=0.0)
+        goal = min([r["measured"] for r in runs if "measured" in r] + list(job["tolerances"]))
         sweep = _uniform_sweep(job, scratch, error_of, goal, max(2, fine // 2))
-    for r in runs:
-        match = next((s for s in sweep if "measured" in r and s["error"] <= r["measured"]), None)
-        r["uniform"] = match  # None: no uniform resolution up to the sweep's end was as fine
+    for r in runs:  # None: no uniform resolution up to the sweep's end was as fine
+        r["uniform"] = next((s for s in sweep if "measured" in r and s["error"] <= r["measured"]), None)
+        r["uniform_within_t"] = next((s for s in sweep if s["error"] <= r["tolerance"]), None)
     last = sweep[-1]
     reference_error = last["error"] * ((last["resolution"] - 1) / (fine - 1)) ** 2
     return {"reference_resolution": fine, "reference_error_estimate": reference_error, "sweep": sweep,
