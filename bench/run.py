@@ -150,6 +150,20 @@ def measure_peer(item: dict, tool: str, args, count: int) -> dict:
     return {**summary, "peak_mb": summary["peak_mb_after"]["convert"], "process": process}
 
 
+def guarded(measure, *args) -> dict:
+    """``measure(*args)``, or a failed entry saying why: one broken measurement never stops the run."""
+    try:
+        return measure(*args)
+    except Exception as e:  # noqa: BLE001 - recorded in results.json and shown in the tables
+        log(f"bench: FAILED: {type(e).__name__}: {e}")
+        return {"ok": False, "error": f"harness: {type(e).__name__}: {e}", "peak_mb": 0.0}
+
+
+def save_partial(args, runs) -> None:
+    """The speed runs so far, in case the run is stopped (the complete file replaces it at the end)."""
+    Path(args.out).with_suffix(".partial.json").write_text(json.dumps(runs, indent=1) + "\n")
+
+
 def measure_speed(inputs, tools, args, repeats: int) -> list[dict]:
     runs = []
     for item in inputs:
@@ -157,9 +171,12 @@ def measure_speed(inputs, tools, args, repeats: int) -> list[dict]:
             if tool != "c1surf" and item["faces"] > args.max_peer_faces:
                 continue
             count = repeats_for(item["faces"], 2, repeats)
-            entry = measure_c1surf(item, args, count) if tool == "c1surf" else measure_peer(item, tool, args, count)
+            measure = measure_c1surf if tool == "c1surf" else lambda *a: measure_peer(a[0], tool, *a[1:])
+            entry = guarded(measure, item, args, count)
+            entry.setdefault("process", {"ok": False, "error": entry.get("error")})
             entry.update(input=item["name"], tool=tool, faces=item["faces"])
             runs.append(entry)
+            save_partial(args, runs)
             p = entry["process"]
             memory = f"{entry['seconds']['convert']:.3f} s" if entry["ok"] else entry.get("skipped", "failed")
             log(f"bench: {item['name']:>20} {tool:>13} whole "
@@ -268,12 +285,13 @@ def run(args) -> dict:
     if "c1surf" in tools:
         results["startup"] = repeated(lambda: run_c1surf(["--version"], args.timeout), repeats)
     results["runs"] = measure_speed(inputs, tools, args, repeats)
-    Path(args.out).write_text(json.dumps(results, indent=1) + "\n")  # partial results, in case the run is stopped
     if "c1surf" in tools:
-        results["default_resolution"] = measure_default_resolution(inputs, args, repeats)
-        results.update(measure_limits(args, repeats))
-        results["tolerance"] = measure_tolerance(inputs, args)
-    results["fidelity"] = measure_fidelity(inputs, tools, args)
+        results["default_resolution"] = guarded(measure_default_resolution, inputs, args, repeats)
+        limits = guarded(measure_limits, args, repeats)
+        results.update(limits if "limit" in limits else {"throughput": limits, "limit": limits})
+        results["tolerance"] = guarded(measure_tolerance, inputs, args)
+    fidelity = guarded(measure_fidelity, inputs, tools, args)
+    results["fidelity"] = fidelity if isinstance(fidelity, list) else [{**fidelity, "input": "-", "tool": "-", "label": "-"}]
     results["elapsed_seconds"] = time.perf_counter() - started
     results["machine"]["load_average_at_end"] = os.getloadavg()
     results["comparisons"] = comparisons(results)
@@ -339,6 +357,7 @@ def main(argv=None) -> int:
         args.scratch = scratch
         results = run(args)
     Path(args.out).write_text(json.dumps(results, indent=1) + "\n")
+    Path(args.out).with_suffix(".partial.json").unlink(missing_ok=True)
     if args.plot:
         tables.plot(results, Path(args.plot))
     print_report(results)

@@ -52,7 +52,7 @@ def run_process(argv: list, timeout: float, cwd=None, cap: int | None = None) ->
 
     ``cap``: its address-space limit in bytes (default ``memory_cap_bytes()``).
     """
-    cap = cap or memory_cap_bytes()
+    cap = int(cap or memory_cap_bytes())
 
     def limit_memory():
         resource.setrlimit(resource.RLIMIT_AS, (cap, cap))

@@ -54,8 +54,8 @@ class Targets:
         self.against_libigl()
         default = self.results.get("default_resolution")
         self.peak_below("a 100,000-triangle mesh at the default resolution (-r 8): peak below 2.5 GB",
-                        default if default and default["input"] == DEFAULT_RESOLUTION_INPUT else None, 2500,
-                        why=f"{DEFAULT_RESOLUTION_INPUT} was not run" + (f" (this run: {default['input']})" if default else ""))
+                        default if default and default.get("input") == DEFAULT_RESOLUTION_INPUT else None, 2500,
+                        why=f"{DEFAULT_RESOLUTION_INPUT} was not run" + (f" (this run: {default.get('input')})" if default else ""))
         largest = run_of(self.results, LARGEST, "c1surf")
         self.peak_below("a 4,000,000-quad torus at -r 2: whole-process peak below 8 GB", largest and largest["process"], 8000,
                         why=f"{LARGEST} was not run (--quick or --max-faces)")

@@ -24,7 +24,7 @@ def _cell(entry, seconds, peak) -> str:
     if entry is None:
         return ""
     if not entry.get("ok"):
-        return entry.get("skipped") or "failed: " + entry.get("error", "")[:60]
+        return entry.get("skipped") or f"failed at {entry.get('peak_mb', 0):.0f} MB: " + entry.get("error", "")[:60]
     return f"{seconds(entry):.3g} ({peak(entry):.0f})"
 
 
