@@ -262,8 +262,11 @@ def versions() -> dict:
             out[tool] = version(dist)
         except Exception:
             pass
-    head = subprocess.run(["git", "-C", str(SETTINGS["root"]), "rev-parse", "--short", "HEAD"], capture_output=True, text=True)
-    out["c1surf"] = head.stdout.strip() or "unknown"
+    def git(*words):
+        return subprocess.run(["git", "-C", str(SETTINGS["root"]), *words], capture_output=True, text=True).stdout.strip()
+
+    out["c1surf"] = git("rev-parse", "--short", "HEAD") or "unknown"  # the checkout measured
+    out["c1surf_code"] = git("log", "-1", "--format=%h", "--", "c1surf") or "unknown"  # its last change under c1surf/
     return out
 
 

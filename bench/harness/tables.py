@@ -147,9 +147,15 @@ def plot(results, path: Path) -> None:
         ax.set_xlabel("input faces")
         ax.set_title(title, fontsize=10)
         ax.grid(True, which="both", alpha=0.3)
+        for r in results["runs"]:  # conversions that did not finish, at the top of the whole-process panel
+            if ax is axes[0] and r["tool"] == "c1surf" and not r.get("process", {}).get("ok", True):
+                ax.annotate(f"{r['faces']:,} faces: failed", (r["faces"], ax.get_ylim()[1]), xytext=(0, -12),
+                            textcoords="offset points", ha="right", fontsize=7, color="C0")
+                ax.plot([r["faces"]], [ax.get_ylim()[1]], "x", color="C0")
     axes[0].set_ylabel("time per input face (microseconds)")
-    axes[1].legend(fontsize=7)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="lower center", ncol=5, fontsize=7)
     fig.suptitle("Two levels of subdivision (c1surf -r 2: the same output vertex count)")
-    fig.tight_layout()
+    fig.tight_layout(rect=(0, 0.08, 1, 1))
     fig.savefig(path, dpi=110)
     plt.close(fig)
