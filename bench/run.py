@@ -1,41 +1,44 @@
 #!/usr/bin/env python
 """c1surf against the subdivision libraries a user would pick instead (``make bench``).
 
-    python bench/run.py            # full run (well under 30 minutes on a 2-core machine)
-    python bench/run.py --quick    # smoke run: small inputs, one repeat
+    python bench/run.py            # full run (about 30 minutes on a 2-core machine)
+    python bench/run.py --quick    # smoke run: small inputs, one repeat, under a minute
 
-Inputs are generated here: quad tori and their triangulations from 1,000 to
-1,000,000 faces, plus the two real meshes of ../shared/meshes when present
-(sword-quad-dominant.obj, spot_quadrangulated.obj). For every input:
+What it measures, every measurement in a process of its own (peak memory: the
+process's maximum resident set from ``os.wait4``, interpreter and imports
+included for every tool alike; times: medians over ``--repeats`` processes, one
+process for the largest outputs):
 
-- c1surf, phase by phase: read (OBJ), topology, refinement operators, patch
-  stencils, geometry (the sparse products), tessellation at resolution 2 (the
-  vertex count of two Catmull-Clark levels: one vertex per refined face), write
-  (binary PLY and the ``.npz`` patch file), and ``update_points`` on the built
-  surface. "convert" is topology + refinement + patches + geometry +
-  tessellation: in memory, read and write excluded, like the peers;
-- the peers that are installed (``pip install -e '.[bench]'``): pymeshlab
-  Catmull-Clark (2 levels), pyOpenSubdiv Catmull-Clark (2 levels), libigl Loop
-  and trimesh Loop (2 levels, on the triangulated input), timed around the
-  subdivision call only.
+1. whole process, the way a user runs it: ``c1surf convert in.obj -o out.ply -r 2``
+   (``python -m c1surf.cli.main`` from the repository this script lives in, or
+   ``--c1surf-root``), against each peer's whole job: read the OBJ with its own
+   reader, subdivide 2 levels (pymeshlab and pyOpenSubdiv Catmull-Clark on the
+   polygons, libigl and trimesh Loop on the triangles), write a binary PLY.
+   -r 2 gives one vertex per refined face: the vertex count of two subdivision
+   levels (2,880,000 for the 180,000-quad torus and for Loop x2 on its
+   360,000-triangle split);
+2. in memory: c1surf's build + N=2 tessellation through its Python API, phase by
+   phase, and ``update_points``; the peers' subdivision call alone;
+3. a 100,000-triangle torus at the default resolution (-r 8);
+4. quad tori up to 4,000,000 faces (c1surf only above 400,000; its in-memory
+   worker only up to ``--max-memory-faces``);
+5. the tessellation throughput at N=8 against the numpy limit (positions only);
+6. fidelity: distances from the input's vertices to each tool's surface and the
+   enclosed volume (spot, sword, small tori);
+7. ``--tolerance`` (when this c1surf has it): triangles against the uniform
+   resolution of the same measured chordal error, on the sample meshes and spot.
 
-Every measurement runs in its own process (``--worker``); its peak memory is
-that process's maximum resident set (``os.wait4``), so interpreter and
-imports count for every tool alike. Times are medians over ``--repeats``
-processes. The script also measures the numpy limit (dense Bezier evaluation
-of bicubic patches on an 8 x 8 grid) and c1surf's tessellation throughput at
-the same grid, writes bench/results.json and bench/results.png (time per
-input face against faces, log-log), and prints a table and the targets.
+It writes bench/results.json and bench/results.png and prints the tables and
+issue 15's targets (met, not met, or not measured and why). Generated inputs
+are cached in ``--inputs``.
 """
 from __future__ import annotations
 
 import argparse
+import importlib
 import json
 import os
 import platform
-import resource
-import signal
-import statistics
 import subprocess
 import sys
 import tempfile
@@ -44,661 +47,323 @@ from pathlib import Path
 
 import numpy as np
 
+from harness import tables
+from harness.meshes import cached_torus_obj, ply_counts, read_polygon_obj
+from harness.peers import PEERS
+from harness.processes import SETTINGS, convert_help, median_of, repeated, run_c1surf, run_worker
+from harness.report import DEFAULT_RESOLUTION_INPUT, comparisons, targets
+
 HERE = Path(__file__).resolve().parent
-ROOT = HERE.parent
-SHARED = Path(os.environ.get("C1SURF_SHARED_MESHES", ROOT.parent / "shared" / "meshes"))
-REAL_MESHES = {
-    "sword": SHARED / "odedstein-meshes" / "sword-quad-dominant.obj",
-    "spot": SHARED / "spot" / "spot_quadrangulated.obj",
-}
-# (nu, nv) of the quad tori; the triangulated tori split every quad of (nu, nv // 2)
-# so both kinds span 1,000 .. 1,000,000 faces.
-FULL_TORI = [(50, 20), (125, 80), (500, 200), (600, 300), (1250, 800)]
-QUICK_TORI = [(50, 20), (125, 80)]
-TARGET_TORUS = (600, 300)  # the issue's 180,000-quad torus
-PEERS = ("pymeshlab", "pyopensubdiv", "igl", "trimesh")
-TOOLS = ("c1surf",) + PEERS
-PEER_LABELS = {
-    "pymeshlab": "pymeshlab Catmull-Clark",
-    "pyopensubdiv": "pyOpenSubdiv Catmull-Clark",
-    "igl": "libigl Loop",
-    "trimesh": "trimesh Loop",
-}
-
-
-# ---------------------------------------------------------------------------------------
-# inputs
-
-
-def torus(nu: int, nv: int, triangles: bool = False, major: float = 1.0, minor: float = 0.35):
-    """(points (V, 3), face_sizes (F,), face_vertices) of a closed quad (or triangle) torus."""
-    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
-    u, v = 2 * np.pi * i / nu, 2 * np.pi * j / nv
-    ring = major + minor * np.cos(v)
-    points = np.stack([ring * np.cos(u), ring * np.sin(u), minor * np.sin(v)], axis=-1).reshape(-1, 3)
-
-    def vid(a, b):
-        return (a % nu) * nv + (b % nv)
-
-    quads = np.stack([vid(i, j), vid(i + 1, j), vid(i + 1, j + 1), vid(i, j + 1)], axis=-1).reshape(-1, 4)
-    if triangles:
-        faces = np.stack([quads[:, [0, 1, 2]], quads[:, [0, 2, 3]]], axis=1).reshape(-1, 3)
-        return points, np.full(len(faces), 3), faces.ravel()
-    return points, np.full(len(quads), 4), quads.ravel()
-
-
-def write_polygon_obj(path: Path, points: np.ndarray, face_sizes: np.ndarray, face_vertices: np.ndarray) -> None:
-    """A polygon OBJ written with a handful of vectorized string operations."""
-    with open(path, "w") as f:
-        f.write("# generated by c1surf bench/run.py\n")
-        f.write(("v %.9f %.9f %.9f\n" * len(points)) % tuple(points.ravel()))
-        offsets = np.concatenate([[0], np.cumsum(face_sizes)])
-        for n in np.unique(face_sizes):
-            rows = np.flatnonzero(face_sizes == n)
-            block = face_vertices[offsets[rows][:, None] + np.arange(n)] + 1
-            f.write((("f" + " %d" * n + "\n") * len(rows)) % tuple(block.ravel()))
-
-
-def make_inputs(directory: Path, tori, real: bool, max_faces: int):
-    """Write the inputs as OBJ files; returns a list of input descriptions."""
-    inputs = []
-    shapes = []
-    for nu, nv in tori:
-        shapes += [("quad torus", False, (nu, nv)), ("triangle torus", True, (nu, max(3, nv // 2)))]
-        if (nu, nv) == TARGET_TORUS:  # its triangulated version, for libigl and trimesh Loop
-            shapes.append(("triangle torus", True, (nu, nv)))
-    for kind, tri, shape in shapes:
-        points, sizes, verts = torus(*shape, triangles=tri)
-        if len(sizes) > max_faces:
-            continue
-        name = f"torus-{'tri' if tri else 'quad'}-{len(sizes)}"
-        path = directory / f"{name}.obj"
-        if not path.exists():
-            write_polygon_obj(path, points, sizes, verts)
-        inputs.append({"name": name, "kind": kind, "path": str(path), "faces": int(len(sizes)),
-                       "vertices": int(len(points)), "grid": list(shape),
-                       "target": (not tri and shape == TARGET_TORUS)})
-    if real:
-        for name, path in REAL_MESHES.items():
-            if path.exists():
-                from c1surf.io.meshes.read import read_mesh
-
-                mesh = read_mesh(path)
-                inputs.append({"name": name, "kind": "real mesh", "path": str(path), "faces": mesh.n_faces,
-                               "vertices": mesh.n_vertices, "target": False})
-    return inputs
-
-
-# ---------------------------------------------------------------------------------------
-# workers (each runs in its own process)
-
-
-def _maxrss_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
-
-
-def _load(path):
-    from c1surf.io.meshes.read import read_mesh
-
-    return read_mesh(path)
-
-
-def _triangulated(mesh):
-    """(points, (T, 3) int64 triangles): fan triangulation of a polygon mesh."""
-    sizes, verts = mesh.face_sizes, mesh.face_vertices
-    offsets = np.concatenate([[0], np.cumsum(sizes)])
-    tris = []
-    for n in np.unique(sizes):
-        rows = np.flatnonzero(sizes == n)
-        block = verts[offsets[rows][:, None] + np.arange(n)]
-        for k in range(1, n - 1):
-            tris.append(block[:, [0, k, k + 1]])
-    return np.ascontiguousarray(mesh.points, dtype=np.float64), np.ascontiguousarray(np.concatenate(tris), dtype=np.int64)
-
-
-PATCH_STAGES = ("patches",)  # the A2/A3 layouts; every other stage is a refinement operator
-
-
-def _phases(surface, build: float) -> dict:
-    """Split the time of one Surface construction into phases, from its stage list.
-
-    ``Surface.timings`` holds the seconds spent on the topology (half-edges,
-    refinement connectivity, neighbourhoods, frames), on building each stage
-    and on applying it. Building the patch stages (A2/A3 layouts) is
-    "patches", building the others (refinement operators: placement, Doo-Sabin
-    steps, perturbation; the second step is kept factored and costs nothing to
-    set up) "refinement", applying all of them "geometry" (the sparse products
-    and gathers); the rest of ``build`` (checks, blend ratios) counts as topology.
-    """
-    spent = {"refinement": 0.0, "patches": 0.0, "geometry": 0.0}
-    for stage in surface.stages:
-        spent["patches" if stage.name in PATCH_STAGES else "refinement"] += surface.timings[f"build {stage.name}"]
-        spent["geometry"] += surface.timings[f"apply {stage.name}"]
-    spent["topology"] = build - sum(spent.values())
-    return spent
-
-
-def work_c1surf(job):
-    from c1surf.cli import runtime
-
-    runtime.tune_allocator()
-    from c1surf.construction.surface import Surface
-    from c1surf.evaluation.adjacency import patch_adjacency
-    from c1surf.evaluation.tessellate import tessellate_patches
-    from c1surf.io.meshes.write import write_triangle_mesh
-    from c1surf.io.patches.formats import write_surface_patches
-
-    seconds, peak = {}, {}
-    start = time.perf_counter()
-    mesh = _load(job["path"])
-    seconds["read"] = time.perf_counter() - start
-    peak["read"] = _maxrss_mb()
-    start = time.perf_counter()
-    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points)
-    build = time.perf_counter() - start
-    seconds.update(_phases(surface, build))
-    seconds["build"] = build
-    peak["build"] = _maxrss_mb()
-    resolution = job.get("resolution", 2)
-    start = time.perf_counter()
-    adjacency = patch_adjacency(surface.refined, surface.frames)
-    tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution)
-    seconds["tessellation"] = time.perf_counter() - start
-    peak["tessellation"] = _maxrss_mb()
-    seconds["convert"] = build + seconds["tessellation"]
-    output = {"vertices": int(tess.points.shape[0]), "triangles": int(tess.triangles.shape[0]),
-              "patches": int(surface.n_patches)}
-    with tempfile.TemporaryDirectory(dir=job.get("scratch")) as scratch:
-        target = Path(scratch) / "out.ply"
-        start = time.perf_counter()
-        write_triangle_mesh(str(target), tess.points, tess.triangles, tess.normals)
-        seconds["write"] = time.perf_counter() - start
-        output["ply_bytes"] = target.stat().st_size
-        peak["write"] = _maxrss_mb()
-        del tess
-        target = Path(scratch) / "patches.npz"
-        start = time.perf_counter()
-        write_surface_patches(str(target), surface, ".npz", input_path=job["path"], adjacency=adjacency)
-        seconds["write_patches"] = time.perf_counter() - start
-        output["npz_bytes"] = target.stat().st_size
-        peak["write_patches"] = _maxrss_mb()
-    # same connectivity, new geometry: the sparse products only
-    rng = np.random.default_rng(1)
-    times = []
-    for _ in range(job.get("update_repeats", 5)):
-        moved = mesh.points * (1.0 + 0.01 * rng.standard_normal((mesh.n_vertices, 1)))
-        start = time.perf_counter()
-        surface.update_points(moved)
-        times.append(time.perf_counter() - start)
-    seconds["update_points"] = statistics.median(times)
-    peak["update_points"] = _maxrss_mb()
-    return {"seconds": seconds, "peak_mb_after": peak, "output": output}
-
-
-def work_throughput(job):
-    """c1surf tessellation at resolution N (default 8): samples per second."""
-    from c1surf.cli import runtime
-
-    runtime.tune_allocator()
-    from c1surf.evaluation.adjacency import patch_adjacency
-    from c1surf.construction.surface import Surface
-    from c1surf.evaluation.tessellate import tessellate_patches
-
-    points, sizes, verts = torus(*job["grid"])
-    surface = Surface(sizes, verts, points)
-    n = job.get("resolution", 8)
-    start = time.perf_counter()
-    adjacency = patch_adjacency(surface.refined, surface.frames)
-    adjacency_seconds = time.perf_counter() - start
-    times = []
-    for _ in range(job.get("repeats", 3)):
-        start = time.perf_counter()
-        tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, n)
-        times.append(time.perf_counter() - start)
-        vertices = int(tess.points.shape[0])
-        del tess
-    samples = surface.n_patches * n * n
-    best, median = min(times), statistics.median(times)
-    return {"patches": int(surface.n_patches), "resolution": n, "samples": samples, "welded_vertices": vertices,
-            "seconds": median, "best_seconds": best, "adjacency_seconds": adjacency_seconds,
-            "samples_per_second": samples / median, "best_samples_per_second": samples / best}
-
-
-def work_limit(job):
-    """The numpy limit: bicubic patches on an 8 x 8 grid as one dense product (positions only)."""
-    from scipy.special import comb
-
-    from c1surf.cli import runtime
-
-    runtime.tune_allocator()  # the same allocator setting as the c1surf workers
-    patches, n = job["patches"], 8
-    rng = np.random.default_rng(0)
-    # coefficients stored coefficient-major (16, 3 P): the layout that makes one GEMM of it
-    coefficients = rng.standard_normal((16, 3 * patches))
-    t = np.linspace(0.0, 1.0, n)
-    i = np.arange(4)
-    b = comb(3, i) * t[:, None] ** i * (1 - t[:, None]) ** (3 - i)
-    basis = np.einsum("ai,bj->abij", b, b).reshape(n * n, 16)
-    times = []
-    for _ in range(job.get("repeats", 3) + 1):
-        start = time.perf_counter()
-        samples = basis @ coefficients  # fresh output, like any evaluation
-        times.append(time.perf_counter() - start)
-        del samples
-    times = times[1:]
-    median, best = statistics.median(times), min(times)
-    return {"patches": patches, "resolution": n, "samples": patches * n * n, "seconds": median, "best_seconds": best,
-            "samples_per_second": patches * n * n / median, "best_samples_per_second": patches * n * n / best}
-
-
-def work_peer(job):
-    tool = job["tool"]
-    mesh = _load(job["path"])
-    output = {}
-    if tool == "pymeshlab":
-        import pymeshlab
-
-        ms = pymeshlab.MeshSet()
-        ms.load_new_mesh(job["path"])  # polygons kept as faux-edge triangle fans, as MeshLab does
-        start = time.perf_counter()
-        ms.meshing_surface_subdivision_catmull_clark(iterations=2)
-        seconds = time.perf_counter() - start
-        m = ms.current_mesh()
-        output = {"vertices": int(m.vertex_number()), "triangles": int(m.face_number())}
-    elif tool == "pyopensubdiv":
-        from pyOpenSubdiv.pysubdivision import pysubdivide
-
-        vertices = mesh.points.tolist()
-        offsets = np.concatenate([[0], np.cumsum(mesh.face_sizes)])
-        faces = [mesh.face_vertices[a:b].tolist() for a, b in zip(offsets[:-1], offsets[1:])]
-        face_verts = mesh.face_vertices.tolist()
-        sizes = mesh.face_sizes.tolist()
-        start = time.perf_counter()
-        result = pysubdivide(2, vertices, faces, face_verts, sizes)
-        seconds = time.perf_counter() - start
-        output = {"vertices": len(result["vertices"]), "triangles": 2 * len(result["faces"])}
-    elif tool == "igl":
-        import igl
-
-        points, triangles = _triangulated(mesh)
-        start = time.perf_counter()
-        new_points, new_triangles = igl.loop(points, triangles, 2)
-        seconds = time.perf_counter() - start
-        output = {"vertices": int(new_points.shape[0]), "triangles": int(new_triangles.shape[0])}
-    elif tool == "trimesh":
-        import trimesh.remesh
-
-        points, triangles = _triangulated(mesh)
-        start = time.perf_counter()
-        new_points, new_triangles = trimesh.remesh.subdivide_loop(points, triangles, iterations=2)
-        seconds = time.perf_counter() - start
-        output = {"vertices": int(new_points.shape[0]), "triangles": int(new_triangles.shape[0])}
-    else:
-        raise ValueError(f"unknown tool {tool}")
-    return {"seconds": {"convert": seconds}, "peak_mb_after": {"convert": _maxrss_mb()}, "output": output}
-
-
-WORKERS = {"c1surf": work_c1surf, "throughput": work_throughput, "limit": work_limit}
-
-
-def worker_main(job_json: str, result_path: str) -> None:
-    job = json.loads(job_json)
-    if job.get("timeout"):
-        signal.alarm(int(job["timeout"]))  # the default action ends the process
-    function = WORKERS.get(job["tool"], work_peer)
-    result = function(job)
-    result["peak_mb"] = _maxrss_mb()
-    Path(result_path).write_text(json.dumps(result))
-
-
-# ---------------------------------------------------------------------------------------
-# driver
-
-
-def memory_limit_bytes() -> int:
-    """A per-worker address-space cap below the machine's memory, so a too-large run fails cleanly."""
-    try:
-        with open("/proc/meminfo") as f:
-            for line in f:
-                if line.startswith("MemTotal:"):
-                    return int(int(line.split()[1]) * 1024 * 0.7)  # room for the rest of the machine
-    except OSError:
-        pass
-    return 16 << 30
-
-
-def run_worker(job: dict, timeout: float) -> dict:
-    """Run one job in a fresh process; its result plus wall time and the process's peak memory."""
-    job = dict(job, timeout=timeout)
-    limit = memory_limit_bytes()
-    with tempfile.NamedTemporaryFile(suffix=".json", delete=False) as f:
-        result_path = f.name
-    env = dict(os.environ, PYTHONPATH=str(ROOT) + os.pathsep + os.environ.get("PYTHONPATH", ""))
-
-    def limit_memory():
-        resource.setrlimit(resource.RLIMIT_AS, (limit, limit))
-
-    try:
-        process = subprocess.Popen([sys.executable, str(Path(__file__).resolve()), "--worker", json.dumps(job), result_path],
-                                   stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, env=env, preexec_fn=limit_memory)
-        stderr = process.stderr.read().decode(errors="replace")
-        _, status, usage = os.wait4(process.pid, 0)
-        process.returncode = os.waitstatus_to_exitcode(status)
-        text = Path(result_path).read_text() if os.path.getsize(result_path) else ""
-    finally:
-        os.unlink(result_path)
-    peak = usage.ru_maxrss / 1024.0
-    if process.returncode != 0 or not text:
-        last = [line for line in stderr.strip().splitlines() if line.strip()]
-        if process.returncode == -signal.SIGALRM:
-            why = f"timed out after {timeout:.0f} s"
-        elif process.returncode == -signal.SIGKILL:
-            why = "killed (out of memory?)"
-        else:
-            why = last[-1] if last else f"exit status {process.returncode}"
-        return {"ok": False, "error": why, "peak_mb": peak}
-    result = json.loads(text)
-    result.update(ok=True, peak_mb=peak)
-    return result
-
-
-def median_of(results: list[dict]) -> dict:
-    """Median seconds (per phase) and peak memory over repeated runs; first error if all failed."""
-    good = [r for r in results if r["ok"]]
-    if not good:
-        return {"ok": False, "error": results[0]["error"], "peak_mb": max(r["peak_mb"] for r in results), "repeats": len(results)}
-    seconds = {k: statistics.median(r["seconds"][k] for r in good) for k in good[0]["seconds"]}
-    peaks = {k: statistics.median(r["peak_mb_after"][k] for r in good) for k in good[0]["peak_mb_after"]}
-    return {"ok": True, "seconds": seconds, "all_convert_seconds": [r["seconds"]["convert"] for r in good],
-            "peak_mb": statistics.median(r["peak_mb"] for r in good), "peak_mb_after": peaks,
-            "output": good[0]["output"], "repeats": len(good), "failures": len(results) - len(good)}
-
-
-def installed_peers(wanted) -> list[str]:
-    modules = {"pymeshlab": "pymeshlab", "pyopensubdiv": "pyOpenSubdiv.pysubdivision", "igl": "igl", "trimesh": "trimesh.remesh"}
-    found = []
-    for tool in wanted:
-        if tool == "c1surf":
-            continue
-        probe = subprocess.run([sys.executable, "-c", f"import {modules[tool]}"], capture_output=True)
-        if probe.returncode == 0:
-            found.append(tool)
-        else:
-            print(f"bench: {tool} is not installed (pip install -e '.[bench]'); skipped", file=sys.stderr)
-    return found
-
-
-def versions(tools) -> dict:
-    out = {"python": platform.python_version(), "numpy": np.__version__}
-    try:
-        from importlib.metadata import version
-
-        for tool, dist in (("c1surf", "c1surf"), ("scipy", "scipy"), ("pymeshlab", "pymeshlab"), ("igl", "libigl"),
-                           ("trimesh", "trimesh"), ("pyopensubdiv", "pyOpenSubdiv")):
-            try:
-                out[tool] = version(dist)
-            except Exception:
-                pass
-    except ImportError:
-        pass
-    return out
-
-
-def machine() -> dict:
-    info = {"cores": os.cpu_count(), "platform": platform.platform()}
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    info["cpu"] = line.split(":", 1)[1].strip()
-                    break
-        with open("/proc/meminfo") as f:
-            info["memory_gb"] = round(int(f.readline().split()[1]) / 2**20, 1)
-    except OSError:
-        pass
-    try:
-        info["load_average_at_start"] = os.getloadavg()
-    except OSError:
-        pass
-    return info
+SHARED = Path(os.environ.get("C1SURF_SHARED_MESHES", HERE.parent.parent / "shared" / "meshes"))
+REAL_MESHES = {"sword": SHARED / "odedstein-meshes" / "sword-quad-dominant.obj",
+               "spot": SHARED / "spot" / "spot_quadrangulated.obj"}
+SAMPLE_MESHES = HERE.parent / "sample_meshes"
+# (nu, nv, triangles): quad tori of nu x nv faces, triangle tori of 2 nu nv
+FULL_TORI = [(50, 20, False), (125, 80, False), (500, 200, False), (600, 300, False), (1250, 800, False),
+             (2500, 1600, False), (50, 10, True), (125, 40, True), (500, 100, True), (600, 150, True), (600, 300, True)]
+QUICK_TORI = [(50, 20, False), (50, 10, True)]
+FIDELITY_INPUTS = ("spot", "sword", "torus-quad-1000", "torus-tri-1000")
+QUICK_FIDELITY_INPUTS = ("torus-quad-1000",)
+TOLERANCES = (1e-3, 3e-4)
+FIDELITY_LEVELS = 3  # subdivision levels of the peers' surfaces
+# what a worker process runs, imported there only (a peer's process imports numpy and the peer, not scipy)
+WORKERS = {"c1surf": "workers:work_c1surf", "throughput": "workers:work_throughput", "limit": "workers:work_limit",
+           "fidelity": "fidelity:work_fidelity", "tolerance": "tolerance:work_tolerance"}
 
 
 def log(message: str) -> None:
     print(message, file=sys.stderr, flush=True)
 
 
-def run(args) -> dict:
-    tori = QUICK_TORI if args.quick else FULL_TORI
-    repeats = args.repeats or (1 if args.quick else 3)
-    scratch = Path(args.inputs) if args.inputs else Path(tempfile.gettempdir()) / "c1surf-bench-inputs"
-    scratch.mkdir(parents=True, exist_ok=True)
-    inputs = make_inputs(scratch, tori, real=not args.no_real, max_faces=args.max_faces)
-    peers = installed_peers([t for t in args.tools if t != "c1surf"])
-    tools = (["c1surf"] if "c1surf" in args.tools else []) + peers
-    results = {"format": "c1surf-bench", "version": 1, "quick": bool(args.quick), "repeats": repeats,
-               "machine": machine(), "versions": versions(tools), "inputs": inputs, "runs": []}
-    started = time.perf_counter()
+# ---------------------------------------------------------------------------------------------------------
+# inputs
+
+
+def make_inputs(directory: Path, args) -> list[dict]:
+    """The generated tori (cached OBJ files) and the real meshes that are present."""
+    inputs = []
+    for nu, nv, tri in QUICK_TORI if args.quick else FULL_TORI:
+        faces = nu * nv * (2 if tri else 1)
+        if faces > args.max_faces:
+            continue
+        name = f"torus-{'tri' if tri else 'quad'}-{faces}"
+        log(f"bench: input {name}")
+        path = cached_torus_obj(directory, name, nu, nv, tri)
+        inputs.append({"name": name, "kind": "triangle torus" if tri else "quad torus", "path": str(path),
+                       "faces": faces, "vertices": nu * nv, "grid": [nu, nv]})
+    for name, path in REAL_MESHES.items() if not (args.no_real or args.quick) else ():
+        if path.exists():
+            points, sizes, _ = read_polygon_obj(path)
+            inputs.append({"name": name, "kind": "real mesh", "path": str(path), "faces": int(len(sizes)),
+                           "vertices": int(len(points))})
+    return inputs
+
+
+def repeats_for(faces: int, resolution: int, repeats: int) -> int:
+    """One process for outputs above 400,000 faces at -r 2 (minutes each), ``repeats`` below."""
+    return 1 if faces * resolution**2 > 1_600_000 else repeats
+
+
+# ---------------------------------------------------------------------------------------------------------
+# measurements
+
+
+def convert_process(item: dict, options: list, args) -> dict:
+    """``c1surf convert INPUT -o out.ply OPTIONS`` as a process of its own; output counts from the PLY's header.
+
+    Above --max-memory-faces the process gets the smaller --large-memory-cap-gb.
+    """
+    target = Path(args.scratch) / f"convert-{os.getpid()}.ply"
+    cap = args.large_memory_cap_gb * 2**30 if item["faces"] > args.max_memory_faces else None
+    result = run_c1surf(["convert", item["path"], "-o", target, *options], args.timeout, cap)
+    if result["ok"]:
+        result["output"] = ply_counts(target)
+    elif cap:
+        result["error"] += f" (address-space cap {args.large_memory_cap_gb:g} GiB)"
+    target.unlink(missing_ok=True)
+    return result
+
+
+def measure_c1surf(item: dict, args, count: int) -> dict:
+    """c1surf on one input: the command line (whole process) and, up to --max-memory-faces, the in-memory worker."""
+    entry = {"process": repeated(lambda: convert_process(item, ["-r", "2"], args), count)}
+    if item["faces"] > args.max_memory_faces:
+        reason = f"skipped: in-memory worker above {args.max_memory_faces:,} faces"
+        entry.update(ok=False, skipped=reason, error=reason)
+        return entry
+    job = {"tool": "c1surf", "path": item["path"], "resolution": 2, "scratch": args.scratch}
+    memory = repeated(lambda: run_worker(job, args.timeout), count)
+    if memory["ok"]:  # peak of read + build + tessellation, like the peers' read + subdivision; the worker's whole too
+        memory.update(worker_peak_mb=memory["peak_mb"], peak_mb=memory["peak_mb_after"]["tessellation"])
+    return {**memory, **entry}
+
+
+def measure_peer(item: dict, tool: str, args, count: int) -> dict:
+    """A peer's whole process (read, 2 levels, binary PLY); its subdivision call is the in-memory number."""
+    job = {"tool": tool, "path": item["path"], "levels": 2, "output": str(Path(args.scratch) / f"{tool}-out.ply")}
+    summary = repeated(lambda: run_worker(job, args.timeout), count)
+    Path(job["output"]).unlink(missing_ok=True)
+    if not summary["ok"]:
+        return {**summary, "process": summary}
+    process = {"ok": True, "seconds": summary["wall_seconds"], "cpu_seconds": summary["cpu_seconds"],
+               "peak_mb": summary["peak_mb"], "output": summary["output"]}
+    return {**summary, "peak_mb": summary["peak_mb_after"]["convert"], "process": process}
+
+
+def guarded(measure, *args) -> dict:
+    """``measure(*args)``, or a failed entry saying why: one broken measurement never stops the run."""
+    try:
+        return measure(*args)
+    except Exception as e:  # noqa: BLE001 - recorded in results.json and shown in the tables
+        log(f"bench: FAILED: {type(e).__name__}: {e}")
+        return {"ok": False, "error": f"harness: {type(e).__name__}: {e}", "peak_mb": 0.0}
+
+
+def save_partial(args, runs) -> None:
+    """The speed runs so far, in case the run is stopped (the complete file replaces it at the end)."""
+    Path(args.out).with_suffix(".partial.json").write_text(json.dumps(runs, indent=1) + "\n")
+
+
+def measure_speed(inputs, tools, args, repeats: int) -> list[dict]:
+    runs = []
     for item in inputs:
         for tool in tools:
             if tool != "c1surf" and item["faces"] > args.max_peer_faces:
                 continue
-            # one repeat for the largest inputs (minutes each); medians elsewhere
-            count = 1 if item["faces"] > 400_000 else repeats
-            runs = []
-            for _ in range(count):
-                job = {"tool": tool, "path": item["path"], "resolution": 2, "scratch": str(scratch)}
-                runs.append(run_worker(job, args.timeout))
-                if not runs[-1]["ok"]:
-                    break
-            summary = median_of(runs)
-            summary.update(input=item["name"], tool=tool, faces=item["faces"])
-            results["runs"].append(summary)
-            if summary["ok"]:
-                log(f"bench: {item['name']:>24} {tool:>13} convert {summary['seconds']['convert']:8.3f} s "
-                    f"peak {summary['peak_mb']:7.0f} MB")
-            else:
-                log(f"bench: {item['name']:>24} {tool:>13} FAILED: {summary['error']}")
-            if args.out:  # partial results, in case the run is stopped
-                Path(args.out).write_text(json.dumps(results, indent=1) + "\n")
+            count = repeats_for(item["faces"], 2, repeats)
+            measure = measure_c1surf if tool == "c1surf" else lambda *a: measure_peer(a[0], tool, *a[1:])
+            entry = guarded(measure, item, args, count)
+            entry.setdefault("process", {"ok": False, "error": entry.get("error")})
+            entry.update(input=item["name"], tool=tool, faces=item["faces"])
+            runs.append(entry)
+            save_partial(args, runs)
+            p = entry["process"]
+            memory = f"{entry['seconds']['convert']:.3f} s" if entry["ok"] else entry.get("skipped", "failed")
+            log(f"bench: {item['name']:>20} {tool:>13} whole "
+                + (f"{p['seconds']:7.2f} s {p['peak_mb']:7.0f} MB" if p["ok"] else f"FAILED ({p['error']})")
+                + f"; in memory {memory}")
+    return runs
+
+
+def measure_default_resolution(inputs, args, repeats: int) -> dict | None:
+    """The 100,000-triangle torus (quick: the largest triangle torus) converted at the default resolution."""
+    tri = [i for i in inputs if i["kind"] == "triangle torus"]
+    item = next((i for i in tri if i["name"] == DEFAULT_RESOLUTION_INPUT), tri[0] if args.quick and tri else None)
+    if item is None:
+        return None
+    log(f"bench: {item['name']} at the default resolution ...")
+    result = repeated(lambda: convert_process(item, [], args), repeats_for(item["faces"], 8, repeats))
+    result.update(input=item["name"], faces=item["faces"], resolution="default (8)")
+    return result
+
+
+def measure_limits(args, repeats: int) -> dict:
+    grid = (50, 20) if args.quick else (250, 250)  # 16,000 / 1,000,000 patches
+    log("bench: tessellation throughput at N=8, and the numpy limit ...")
+    return {"throughput": run_worker({"tool": "throughput", "grid": list(grid), "resolution": 8, "repeats": repeats},
+                                     args.timeout),
+            "limit": run_worker({"tool": "limit", "patches": 16_000 if args.quick else 1_000_000,
+                                 "repeats": max(3, repeats)}, args.timeout)}
+
+
+def measure_fidelity(inputs, tools, args) -> list[dict]:
+    """Every tool's surface against each fidelity input: c1surf at two blends, the peers after 3 levels."""
+    variants = [("c1surf", "c1surf, default blend (0.5)", []), ("c1surf", "c1surf --blend 0.2", ["--blend", "0.2"])]
+    variants = [v for v in variants[: 1 if args.quick else None] if "c1surf" in tools]
+    variants += [(t, f"{PEERS[t].label} x{FIDELITY_LEVELS}", None) for t in tools if t in PEERS]
+    out = []
+    for item in [i for i in inputs if i["name"] in (QUICK_FIDELITY_INPUTS if args.quick else FIDELITY_INPUTS)]:
+        for tool, label, options in variants:
+            log(f"bench: fidelity {item['name']} {label} ...")
+            job = {"tool": "fidelity", "root": str(SETTINGS["root"]), "path": item["path"], "scratch": args.scratch,
+                   "timeout": args.timeout, "budget": 1_000_000 if args.quick else 6_000_000, "max_resolution": 16,
+                   "coarse_resolution": 3, "options": options or [], "levels": FIDELITY_LEVELS}
+            result = run_worker({**job, "measured": tool}, args.timeout)
+            out.append({**result, "input": item["name"], "tool": tool, "label": label})
+    return out
+
+
+def measure_tolerance(inputs, args) -> dict:
+    if "--tolerance" not in convert_help():
+        return {"skipped": "this c1surf's convert has no --tolerance option"}
+    meshes = sorted(SAMPLE_MESHES.glob("*.obj"))[: 1 if args.quick else None]
+    meshes += [Path(i["path"]) for i in inputs if i["name"] == "spot" and not args.quick]
+    out = []
+    for path in meshes:
+        log(f"bench: --tolerance on {path.stem} ...")
+        job = {"tool": "tolerance", "root": str(SETTINGS["root"]), "path": str(path), "scratch": args.scratch,
+               "timeout": args.timeout, "tolerances": list(TOLERANCES[:1] if args.quick else TOLERANCES),
+               "budget": 500_000 if args.quick else 12_500_000 if path.stem == "spot" else 4_000_000, "max_resolution": 64}
+        out.append({**run_worker(job, args.timeout), "input": path.stem})
+    return {"meshes": out}
+
+
+# ---------------------------------------------------------------------------------------------------------
+# driver
+
+
+def installed_peers(wanted) -> list[str]:
+    found = []
+    for tool in wanted:
+        if subprocess.run([sys.executable, "-c", f"import {PEERS[tool].module}"], capture_output=True).returncode == 0:
+            found.append(tool)
+        else:
+            log(f"bench: {tool} is not installed (pip install -e '.[bench]'); skipped")
+    return found
+
+
+def versions() -> dict:
+    from importlib.metadata import version
+
+    out = {"python": platform.python_version(), "numpy": np.__version__}
+    for tool, dist in (("scipy", "scipy"), ("pymeshlab", "pymeshlab"), ("igl", "libigl"), ("trimesh", "trimesh"),
+                       ("pyopensubdiv", "pyOpenSubdiv")):
+        try:
+            out[tool] = version(dist)
+        except Exception:
+            pass
+    def git(*words):
+        return subprocess.run(["git", "-C", str(SETTINGS["root"]), *words], capture_output=True, text=True).stdout.strip()
+
+    out["c1surf"] = git("rev-parse", "--short", "HEAD") or "unknown"  # the checkout measured
+    out["c1surf_code"] = git("log", "-1", "--format=%h", "--", "c1surf") or "unknown"  # its last change under c1surf/
+    return out
+
+
+def machine() -> dict:
+    info = {"cores": os.cpu_count(), "platform": platform.platform(), "load_average_at_start": os.getloadavg()}
+    with open("/proc/meminfo") as f:
+        info["memory_gb"] = round(int(f.readline().split()[1]) / 2**20, 1)
+    return info
+
+
+def run(args) -> dict:
+    repeats = args.repeats or (1 if args.quick else 3)
+    Path(args.scratch).mkdir(parents=True, exist_ok=True)
+    inputs = make_inputs(Path(args.inputs), args)
+    tools = (["c1surf"] if "c1surf" in args.tools else []) + installed_peers([t for t in args.tools if t in PEERS])
+    results = {"format": "c1surf-bench", "version": 2, "quick": bool(args.quick), "repeats": repeats,
+               "machine": machine(), "versions": versions(), "c1surf_root": str(SETTINGS["root"]), "inputs": inputs}
+    started = time.perf_counter()
     if "c1surf" in tools:
-        grid = (50, 20) if args.quick else (250, 250)  # 16,000 / 1,000,000 patches
-        log("bench: tessellation throughput at resolution 8 ...")
-        results["throughput"] = run_worker({"tool": "throughput", "grid": list(grid), "resolution": 8, "repeats": repeats},
-                                           args.timeout)
-        log("bench: numpy limit (bicubic patches on an 8 x 8 grid) ...")
-        results["limit"] = run_worker({"tool": "limit", "patches": 16_000 if args.quick else 1_000_000,
-                                       "repeats": max(3, repeats)}, args.timeout)
+        results["startup"] = repeated(lambda: run_c1surf(["--version"], args.timeout), repeats)
+    results["runs"] = measure_speed(inputs, tools, args, repeats)
+    if "c1surf" in tools:
+        results["default_resolution"] = guarded(measure_default_resolution, inputs, args, repeats)
+        limits = guarded(measure_limits, args, repeats)
+        results.update(limits if "limit" in limits else {"throughput": limits, "limit": limits})
+        results["tolerance"] = guarded(measure_tolerance, inputs, args)
+    fidelity = guarded(measure_fidelity, inputs, tools, args)
+    results["fidelity"] = fidelity if isinstance(fidelity, list) else [{**fidelity, "input": "-", "tool": "-", "label": "-"}]
     results["elapsed_seconds"] = time.perf_counter() - started
+    results["machine"]["load_average_at_end"] = os.getloadavg()
     results["comparisons"] = comparisons(results)
     results["targets"] = targets(results)
     return results
 
 
-def _run(results, name, tool):
-    for r in results["runs"]:
-        if r["input"] == name and r["tool"] == tool and r["ok"]:
-            return r
-    return None
-
-
-def convert_peak_mb(run: dict) -> float:
-    """c1surf's peak memory up to the end of the in-memory conversion (read, build, tessellation).
-
-    The peers' processes read and subdivide only, so writing files (which the
-    c1surf worker also times) is left out of the comparison.
-    """
-    return run["peak_mb_after"].get("tessellation", run["peak_mb"])
-
-
-def comparisons(results) -> list[dict]:
-    """c1surf convert / peer time and memory on every input both finished."""
-    out = []
-    for item in results["inputs"]:
-        mine = _run(results, item["name"], "c1surf")
-        if mine is None:
-            continue
-        for peer in PEERS:
-            theirs = _run(results, item["name"], peer)
-            if theirs is None:
-                continue
-            out.append({"input": item["name"], "faces": item["faces"], "peer": peer,
-                        "c1surf_seconds": mine["seconds"]["convert"], "peer_seconds": theirs["seconds"]["convert"],
-                        "time_ratio": mine["seconds"]["convert"] / theirs["seconds"]["convert"],
-                        "c1surf_peak_mb": convert_peak_mb(mine), "peer_peak_mb": theirs["peak_mb"],
-                        "c1surf_vertices": mine["output"]["vertices"], "peer_vertices": theirs["output"]["vertices"]})
-    return out
-
-
-def targets(results) -> list[dict]:
-    """The issue's targets, each with the measured value and whether it is met."""
-    out = []
-
-    def add(name, value, goal, met, note=""):
-        out.append({"target": name, "value": value, "goal": goal, "met": bool(met) if met is not None else None, "note": note})
-
-    target = next((i for i in results["inputs"] if i.get("target")), None)
-    if target is not None:
-        mine = _run(results, target["name"], "c1surf")
-        tri_name = f"torus-tri-{2 * target['faces']}"  # the triangulated version of the same torus
-        for peer, factor, on in (("pymeshlab", 5.0, target["name"]), ("igl", 2.0, tri_name)):
-            theirs = _run(results, on, peer)
-            if mine and theirs:
-                speedup = theirs["seconds"]["convert"] / mine["seconds"]["convert"]
-                add(f"convert {factor:g}x faster than {PEER_LABELS[peer]} ({target['name']} vs {on})",
-                    round(speedup, 2), f">= {factor:g}", speedup >= factor,
-                    f"c1surf {mine['seconds']['convert']:.2f} s, {peer} {theirs['seconds']['convert']:.2f} s")
-        if mine:
-            peers = [r for r in results["runs"] if r["input"] in (target["name"], tri_name) and r["tool"] != "c1surf" and r["ok"]]
-            if peers:
-                lowest = min(r["peak_mb"] for r in peers)
-                peak = convert_peak_mb(mine)
-                add("peak memory below every peer's (convert: read, build, tessellation)", round(peak), f"< {lowest:.0f} MB",
-                    peak < lowest, ", ".join(f"{r['tool']} {r['peak_mb']:.0f} MB" for r in peers)
-                    + f"; c1surf with file writing {mine['peak_mb']:.0f} MB")
-            build, update = mine["seconds"]["build"], mine["seconds"]["update_points"]
-            convert = mine["seconds"]["convert"]
-            add("update_points 10x faster than a fresh conversion", round(convert / update, 1), ">= 10", convert / update >= 10,
-                f"convert {convert:.2f} s (of which build {build:.2f} s: {build / update:.1f}x), update_points {update:.3f} s")
-    thr, lim = results.get("throughput"), results.get("limit")
-    if thr and lim and thr.get("ok") and lim.get("ok"):
-        ratio = thr["samples_per_second"] / lim["samples_per_second"]
-        add("tessellation throughput >= half the numpy Bezier-evaluation limit", round(ratio, 3), ">= 0.5", ratio >= 0.5,
-            f"c1surf {thr['samples_per_second'] / 1e6:.0f} M samples/s (positions, normals, welding, triangles) at N=8 "
-            f"on {thr['patches']} patches; numpy limit {lim['samples_per_second'] / 1e6:.0f} M samples/s (positions only)")
-    per_face = [(r["faces"], r["seconds"]["convert"] / r["faces"]) for r in results["runs"]
-                if r["tool"] == "c1surf" and r["ok"] and r["input"].startswith("torus-quad") and r["faces"] >= 10_000]
-    if len(per_face) >= 2:
-        values = [v for _, v in per_face]
-        spread = max(values) / min(values)
-        add("time per input face flat (within 2x) from 10,000 to 1,000,000 faces (quad tori)", round(spread, 2), "<= 2",
-            spread <= 2 and max(f for f, _ in per_face) >= 1_000_000,
-            ", ".join(f"{f}: {v * 1e6:.1f} us" for f, v in per_face))
-    largest = [r for r in results["runs"] if r["tool"] == "c1surf" and r["input"] == "torus-quad-1000000"]
-    if largest:
-        r = largest[0]
-        add("a 1,000,000-quad input converts to a patch file and an N=2 tessellation", "ok" if r["ok"] else r["error"],
-            "ok", r["ok"], f"peak {r['peak_mb']:.0f} MB" + (f", convert {r['seconds']['convert']:.1f} s" if r["ok"] else ""))
-    return out
-
-
-# ---------------------------------------------------------------------------------------
-# report
-
-
-def table(results) -> str:
-    """Markdown table: one row per input, c1surf and each peer."""
-    tools = [t for t in TOOLS if any(r["tool"] == t for r in results["runs"])]
-    head = "| input | faces | " + " | ".join(f"{t} s (peak MB)" for t in tools) + " | c1surf update_points s |"
-    lines = [head, "|" + "---|" * (len(tools) + 3)]
-    for item in results["inputs"]:
-        cells = []
-        for tool in tools:
-            r = next((x for x in results["runs"] if x["input"] == item["name"] and x["tool"] == tool), None)
-            if r is None:
-                cells.append("")
-            elif not r["ok"]:
-                cells.append("failed")
-            else:
-                cells.append(f"{r['seconds']['convert']:.3g} ({r['peak_mb']:.0f})")
-        mine = _run(results, item["name"], "c1surf")
-        update = f"{mine['seconds']['update_points']:.3g}" if mine else ""
-        lines.append(f"| {item['name']} | {item['faces']:,} | " + " | ".join(cells) + f" | {update} |")
-    return "\n".join(lines)
-
-
-def phase_table(results) -> str:
-    phases = ["read", "topology", "refinement", "patches", "geometry", "tessellation", "write", "write_patches", "update_points"]
-    lines = ["| input | " + " | ".join(phases) + " | convert | peak MB |", "|" + "---|" * (len(phases) + 3)]
-    for r in results["runs"]:
-        if r["tool"] != "c1surf" or not r["ok"]:
-            continue
-        s = r["seconds"]
-        lines.append(f"| {r['input']} | " + " | ".join(f"{s.get(p, float('nan')):.3g}" for p in phases)
-                     + f" | {s['convert']:.3g} | {r['peak_mb']:.0f} |")
-    return "\n".join(lines)
-
-
-def plot(results, path: Path) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    fig, ax = plt.subplots(figsize=(7.5, 5))
-    series = [("c1surf", "torus-quad", "c1surf convert, quad tori", "o-"),
-              ("c1surf", "torus-tri", "c1surf convert, triangle tori", "o--")]
-    series += [(p, "torus-quad", f"{PEER_LABELS[p]}, quad tori", "s-") for p in ("pymeshlab", "pyopensubdiv")]
-    series += [(p, "torus-tri", f"{PEER_LABELS[p]}, triangle tori", "^--") for p in ("igl", "trimesh")]
-    for tool, prefix, label, style in series:
-        pts = sorted((r["faces"], r["seconds"]["convert"] / r["faces"] * 1e6) for r in results["runs"]
-                     if r["tool"] == tool and r["ok"] and r["input"].startswith(prefix))
-        if pts:
-            ax.plot(*zip(*pts), style, label=label)
-    ax.set_xscale("log")
-    ax.set_yscale("log")
-    ax.set_xlabel("input faces")
-    ax.set_ylabel("time per input face (microseconds)")
-    ax.set_title("Two levels of subdivision (same output size): in-memory time")
-    ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
+def print_report(results) -> None:
+    sections = [
+        ("Whole process, seconds (peak MB): `c1surf convert in.obj -o out.ply -r 2`; each peer reads the OBJ, "
+         "subdivides 2 levels, writes a binary PLY", tables.process_table),
+        ("In memory, seconds (peak MB after it): c1surf build + N=2 tessellation; the peers' subdivision call",
+         tables.memory_table),
+        ("c1surf's phases in memory (seconds)", tables.phase_table),
+        ("The default resolution (`c1surf convert in.obj -o out.ply`)", tables.default_resolution_table),
+        ("Fidelity: distance from the input's vertices to each surface (relative to the bounding-box diagonal), "
+         "enclosed volume over the input's", tables.fidelity_table),
+        ("--tolerance against uniform resolution", tables.tolerance_table),
+    ]
+    for title, table in sections:
+        print(f"{title}\n\n{table(results)}\n")
+    print(f"start-up of the c1surf command line (`--version`): {results.get('startup', {}).get('seconds', float('nan')):.2f} s\n")
+    for t in results["targets"]:
+        print(f"[{t['status']}] {t['target']}: {t['value']} (goal {t['goal']}) {t['note']}")
 
 
 def main(argv=None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter)
     parser.add_argument("--quick", action="store_true", help="small inputs, one repeat (a smoke run)")
     parser.add_argument("--repeats", type=int, default=0, help="processes per measurement (default 3, quick 1)")
-    parser.add_argument("--tools", default=",".join(TOOLS), help=f"comma-separated subset of {','.join(TOOLS)}")
+    parser.add_argument("--tools", default=",".join(tables.TOOLS), help=f"comma-separated subset of {','.join(tables.TOOLS)}")
     parser.add_argument("--max-faces", type=int, default=10**9, help="skip generated inputs with more faces")
-    parser.add_argument("--max-peer-faces", type=int, default=400_000,
-                        help="run the peers only up to this many faces (they need minutes and most of the memory above)")
-    parser.add_argument("--no-real", action="store_true", help="skip the meshes of ../shared/meshes")
+    parser.add_argument("--max-peer-faces", type=int, default=400_000, help="run the peers only up to this many faces")
+    parser.add_argument("--max-memory-faces", type=int, default=1_000_000,
+                        help="run c1surf's in-memory worker only up to this many faces (it holds the whole surface)")
+    parser.add_argument("--no-real", action="store_true", help="skip the meshes of ../shared/meshes (--quick skips them too)")
     parser.add_argument("--timeout", type=float, default=900.0, help="seconds per process")
-    parser.add_argument("--inputs", help="folder for the generated input files (default: a temporary folder)")
+    parser.add_argument("--memory-cap-gb", type=float, default=0.0,
+                        help="address-space cap per process (default: 70%% of the machine's memory)")
+    parser.add_argument("--large-memory-cap-gb", type=float, default=12.0,
+                        help="address-space cap of the conversions above --max-memory-faces (the 4,000,000-quad torus, "
+                             "whose target is 8 GB): a conversion that needs more fails there instead of crowding the machine")
+    parser.add_argument("--c1surf-root", default=str(HERE.parent), help="repository whose c1surf is measured (default: this one)")
+    parser.add_argument("--inputs", default=str(Path(tempfile.gettempdir()) / "c1surf-bench-inputs"),
+                        help="folder for the generated input files, kept between runs")
     parser.add_argument("--out", default=str(HERE / "results.json"))
     parser.add_argument("--plot", default=str(HERE / "results.png"), help="PNG plot ('' for none)")
     parser.add_argument("--worker", nargs=2, metavar=("JOB", "RESULT"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
-        worker_main(*args.worker)
+        job = json.loads(args.worker[0])
+        module, function = WORKERS.get(job["tool"], "workers:work_peer").split(":")
+        result = getattr(importlib.import_module(f"harness.{module}"), function)(job)
+        Path(args.worker[1]).write_text(json.dumps(result))
         return 0
     args.tools = [t.strip() for t in args.tools.split(",") if t.strip()]
-    unknown = set(args.tools) - set(TOOLS)
+    unknown = set(args.tools) - set(tables.TOOLS)
     if unknown:
-        parser.error(f"unknown tools {sorted(unknown)}; choose from {', '.join(TOOLS)}")
-    results = run(args)
+        parser.error(f"unknown tools {sorted(unknown)}; choose from {', '.join(tables.TOOLS)}")
+    SETTINGS.update(root=Path(args.c1surf_root).resolve(), memory_cap=args.memory_cap_gb * 2**30)
+    Path(args.inputs).mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory(prefix="c1surf-bench-") as scratch:
+        args.scratch = scratch
+        results = run(args)
     Path(args.out).write_text(json.dumps(results, indent=1) + "\n")
+    Path(args.out).with_suffix(".partial.json").unlink(missing_ok=True)
     if args.plot:
-        plot(results, Path(args.plot))
-    print(table(results))
-    print()
-    print(phase_table(results))
-    print()
-    for t in results["targets"]:
-        mark = {True: "met", False: "NOT met", None: "?"}[t["met"]]
-        print(f"[{mark}] {t['target']}: {t['value']} (goal {t['goal']}) {t['note']}")
+        tables.plot(results, Path(args.plot))
+    print_report(results)
     print(f"\nwrote {args.out}" + (f" and {args.plot}" if args.plot else "") + f" in {results['elapsed_seconds']:.0f} s")
     return 0
 

@@ -33,10 +33,19 @@ def test_bench_quick_smoke(tmp_path):
             assert phase in phases and phases[phase] >= 0
         assert mine["peak_mb"] > 0 and mine["output"]["vertices"] > 0
         assert runs[(name, "trimesh")]["ok"]
+        # the whole process, as a user runs it: c1surf convert's command line and the peer's read + subdivide + write
+        for tool in ("c1surf", "trimesh"):
+            process = runs[(name, tool)]["process"]
+            assert process["ok"] and process["seconds"] > 0 and process["peak_mb"] > 0, process
+        assert runs[(name, "c1surf")]["process"]["output"]["vertices"] == mine["output"]["vertices"]
     # quad torus at resolution 2: one vertex per refined face, as many as two Catmull-Clark levels
     quad = runs[("torus-quad-1000", "c1surf")]["output"]
     assert quad["vertices"] == 16 * 1000
     assert results["throughput"]["ok"] and results["limit"]["ok"]
     assert {c["peer"] for c in results["comparisons"]} == {"trimesh"}
     assert all({"target", "value", "goal", "met"} <= set(t) for t in results["targets"])
+    fidelity = {(f["input"], f["tool"]): f for f in results["fidelity"]}
+    for tool in ("c1surf", "trimesh"):
+        f = fidelity[("torus-quad-1000", tool)]
+        assert f["ok"] and 0 <= f["mean"] <= f["max"] < 0.01 and 0.95 < f["volume_ratio"] < 1.0, f
     assert (tmp_path / "plot.png").stat().st_size > 0
