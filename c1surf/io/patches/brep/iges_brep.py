@@ -55,7 +55,7 @@ from ..iges_numbers import SLOT, SPACE, format_ints, format_reals
 from ..iges_records import ParameterWriter
 from .iges_edges import IgesEdges, iges_edges
 from .solids import closed_components, face_components, signed_volumes
-from .topology import BRepTopology, brep_topology
+from .topology import BRepTopology, brep_topology, edge_polygons
 
 __all__ = ["IgesBRep", "iges_brep", "edge_polygons", "LIST_BLOCK"]
 
@@ -107,54 +107,6 @@ class IgesBRep:
         """Write the Parameter Data records of every B-rep entity, in Directory order."""
         for first, rows in self._parts:
             _emit_rows(pdw, first, *rows())  # tables made when written, one kind at a time: bounded memory
-
-
-# ----------------------------------------------------------------------------
-# geometry: edge curves and orientation
-
-
-_SIDE_INDEX = {}  # degree -> (4, d + 1, 2) net indices (u, v) of each side's polygon, in increasing parameter
-
-
-def _side_index(d: int) -> np.ndarray:
-    if d not in _SIDE_INDEX:
-        t = np.arange(d + 1)
-        zero, full = np.zeros_like(t), np.full_like(t, d)
-        _SIDE_INDEX[d] = np.stack([np.stack(p, axis=1) for p in ((t, zero), (full, t), (t, full), (zero, t))])
-    return _SIDE_INDEX[d]
-
-
-def edge_polygons(patch_set: PatchSet, topology: BRepTopology):
-    """Every edge's Bezier control polygon in its direction, grouped by degree (``topology.edge_curves``, gathered at once).
-
-    Returns
-    -------
-    list of (edges (n,) int64, points (n, d + 1, 3) float, weights (n, d + 1) float or None), one per
-    degree present, increasing; every edge in exactly one entry
-    """
-    patch, side = topology.edge_patch_side[:, 0], topology.edge_patch_side[:, 1]
-    by_degree: dict = {}
-    first = 0
-    for k, g in enumerate(patch_set.groups):
-        inside = np.flatnonzero((patch >= first) & (patch < first + len(g)))
-        if inside.size:
-            d = g.shape[1] - 1
-            index = _side_index(d)[side[inside]]  # (n, d + 1, 2)
-            index = np.where(topology.edge_reversed[inside, None, None], index[:, ::-1], index)
-            local = (patch[inside] - first)[:, None]
-            points = np.asarray(g)[local, index[..., 0], index[..., 1], :3]
-            weights = None
-            if patch_set.weights is not None:
-                weights = np.asarray(patch_set.weights[k])[local, index[..., 0], index[..., 1]]
-            by_degree.setdefault(d, []).append((inside, points, weights))
-        first += len(g)
-    out = []
-    for d in sorted(by_degree):
-        parts = by_degree[d]
-        weights = None if parts[0][2] is None else np.concatenate([p[2] for p in parts])
-        out.append((np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]).astype(np.float64),
-                    weights))
-    return out
 
 
 # ----------------------------------------------------------------------------

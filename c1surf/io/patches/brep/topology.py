@@ -235,35 +235,68 @@ def _corner_positions(patch_set: PatchSet, patch: np.ndarray, corner: np.ndarray
     return out
 
 
+_SIDE_INDEX = {}  # degree -> (4, d + 1, 2) net indices (u, v) of each side's polygon, in increasing parameter
+
+
+def _side_index(d: int) -> np.ndarray:
+    if d not in _SIDE_INDEX:
+        t = np.arange(d + 1)
+        zero, full = np.zeros_like(t), np.full_like(t, d)
+        _SIDE_INDEX[d] = np.stack([np.stack(p, axis=1) for p in ((t, zero), (full, t), (t, full), (zero, t))])
+    return _SIDE_INDEX[d]
+
+
+def edge_polygons(patch_set: PatchSet, topology: BRepTopology) -> list:
+    """Every edge's Bezier control polygon in its direction, grouped by degree, gathered at once.
+
+    Returns
+    -------
+    list of (edges (n,) int64, points (n, d + 1, 3) float, weights (n, d + 1) float or None), one per
+    degree present, increasing; every edge in exactly one entry
+    """
+    patch, side = topology.edge_patch_side[:, 0], topology.edge_patch_side[:, 1]
+    by_degree: dict = {}
+    first = 0
+    for k, g in enumerate(patch_set.groups):
+        inside = np.flatnonzero((patch >= first) & (patch < first + len(g)))
+        if inside.size:
+            d = g.shape[1] - 1
+            index = _side_index(d)[side[inside]]  # (n, d + 1, 2)
+            index = np.where(topology.edge_reversed[inside, None, None], index[:, ::-1], index)
+            local = (patch[inside] - first)[:, None]
+            points = np.asarray(g)[local, index[..., 0], index[..., 1], :3]
+            weights = None
+            if patch_set.weights is not None:
+                weights = np.asarray(patch_set.weights[k])[local, index[..., 0], index[..., 1]]
+            by_degree.setdefault(d, []).append((inside, points, weights))
+        first += len(g)
+    out = []
+    for d in sorted(by_degree):
+        parts = by_degree[d]
+        weights = None if parts[0][2] is None else np.concatenate([p[2] for p in parts])
+        out.append((np.concatenate([p[0] for p in parts]), np.concatenate([p[1] for p in parts]).astype(np.float64),
+                    weights))
+    return out
+
+
 def edge_curves(patch_set: PatchSet, topology: BRepTopology):
-    """Each edge's Bezier control polygon, in the edge's direction.
+    """Each edge's Bezier control polygon, in the edge's direction, one array per edge (``edge_polygons`` by edge).
 
     Returns
     -------
     points : list of E arrays (d + 1, 3) float (d = 2 or 3)
     weights : list of E arrays (d + 1,) float, or None for a polynomial surface
     """
-    patch, side = topology.edge_patch_side[:, 0], topology.edge_patch_side[:, 1]
-    points, weights = [None] * topology.n_edges, ([None] * topology.n_edges if patch_set.weights else None)
-    first = 0
-    for k, g in enumerate(patch_set.groups):
-        group_weights = patch_set.weights[k] if patch_set.weights else None
-        for e in np.flatnonzero((patch >= first) & (patch < first + len(g))).tolist():
-            net = np.asarray(g[patch[e] - first])
-            polygon = _side(net, int(side[e]))[..., :3]
-            w = None if group_weights is None else _side(np.asarray(group_weights[patch[e] - first]), int(side[e]))
-            if topology.edge_reversed[e]:
-                polygon, w = polygon[::-1], (None if w is None else w[::-1])
-            points[e] = np.ascontiguousarray(polygon, dtype=np.float64)
-            if weights is not None:
-                weights[e] = np.ascontiguousarray(w, dtype=np.float64)
-        first += len(g)
+    points = [None] * topology.n_edges
+    weights = [None] * topology.n_edges if patch_set.weights else None
+    for edges, polygons, polygon_weights in edge_polygons(patch_set, topology):
+        for e, polygon in zip(edges.tolist(), polygons):
+            points[e] = polygon
+        if weights is not None:
+            for e, w in zip(edges.tolist(), polygon_weights):
+                weights[e] = w
     return points, weights
 
 
-def _side(net: np.ndarray, s: int) -> np.ndarray:
-    """The control polygon of side ``s`` of one net (du+1, dv+1, ...), in increasing parameter."""
-    return (net[:, 0], net[-1, :], net[:, -1], net[0, :])[s]
-
-
-__all__ = ["BRepTopology", "brep_topology", "edge_curves", "FACE_PIECE", "FACE_PATCH", "ROTATED_SIDE", "ROTATED_FLIP"]
+__all__ = ["BRepTopology", "brep_topology", "edge_curves", "edge_polygons", "FACE_PIECE", "FACE_PATCH", "ROTATED_SIDE",
+           "ROTATED_FLIP"]
