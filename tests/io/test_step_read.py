@@ -30,12 +30,41 @@ from c1surf.evaluation.patch_set import PatchSet  # noqa: E402
 from c1surf.evaluation.smoothness import measure_smoothness  # noqa: E402
 from c1surf.io.errors import MeshInputError  # noqa: E402
 from c1surf.io.patches.formats import load_patch_set, write_patch_set  # noqa: E402
-from c1surf.io.patches.step import bezier_faces, bspline_faces, read_patch_set_step, write_step_shape  # noqa: E402
+from c1surf.io.patches.brep.step_brep import bezier_surface, bspline_surface, occ_classes  # noqa: E402
+from c1surf.io.patches.step import read_patch_set_step, write_step_shape  # noqa: E402
 
 from conftest import CLOSED_SAMPLES, SAMPLES, weighted_cube  # noqa: E402
 
 WORST = {}  # what -> largest relative disagreement found, for the summary below
 
+
+
+# free faces (no shared edges), to write STEP files the writer would not: test-only
+def bezier_faces(patch_groups, weights=None) -> list:
+    """One free ``TopoDS_Face`` per patch (in order), on an exact ``Geom_BezierSurface`` over [0,1]^2 (no shared edges).
+
+    Parameters
+    ----------
+    patch_groups : list of (p_k, du+1, dv+1, >= 3) float
+    weights : None or a list parallel to ``patch_groups`` of (p_k, du+1, dv+1) float or None each (rational patches)
+    """
+    occ = occ_classes()
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+
+    faces = []
+    for group, group_weights in zip(patch_groups, weights or [None] * len(patch_groups)):
+        for k, points in enumerate(np.asarray(group, dtype=np.float64)):
+            surface = bezier_surface(occ, points, None if group_weights is None else group_weights[k])
+            faces.append(BRepBuilderAPI_MakeFace(surface, 1e-7).Face())
+    return faces
+
+
+def bspline_faces(pieces) -> list:
+    """One free ``TopoDS_Face`` per merged piece, on its clamped ``Geom_BSplineSurface`` of degree (2, 2)."""
+    occ = occ_classes()
+    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
+
+    return [BRepBuilderAPI_MakeFace(bspline_surface(occ, piece), 1e-7).Face() for piece in pieces]
 
 def run(*args, code=0):
     result = CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)

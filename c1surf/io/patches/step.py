@@ -28,37 +28,10 @@ import numpy as np
 from ...evaluation.merge import MergedPiece
 from ...evaluation.patch_set import PatchSet
 from ..errors import MeshInputError
-from .brep.step_brep import bezier_surface, brep_shape, bspline_surface, occ_classes
+from .brep.step_brep import brep_shape, occ_classes
 from .merged import is_piece_knots, piece_patches
 
 _READ_HINT = "reading STEP needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
-
-
-def bezier_faces(patch_groups, weights=None) -> list:
-    """One free ``TopoDS_Face`` per patch (in order), on an exact ``Geom_BezierSurface`` over [0,1]^2 (no shared edges).
-
-    Parameters
-    ----------
-    patch_groups : list of (p_k, du+1, dv+1, >= 3) float
-    weights : None or a list parallel to ``patch_groups`` of (p_k, du+1, dv+1) float or None each (rational patches)
-    """
-    occ = occ_classes()
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
-
-    faces = []
-    for group, group_weights in zip(patch_groups, weights or [None] * len(patch_groups)):
-        for k, points in enumerate(np.asarray(group, dtype=np.float64)):
-            surface = bezier_surface(occ, points, None if group_weights is None else group_weights[k])
-            faces.append(BRepBuilderAPI_MakeFace(surface, 1e-7).Face())
-    return faces
-
-
-def bspline_faces(pieces) -> list:
-    """One free ``TopoDS_Face`` per merged piece, on its clamped ``Geom_BSplineSurface`` of degree (2, 2)."""
-    occ = occ_classes()
-    from OCP.BRepBuilderAPI import BRepBuilderAPI_MakeFace
-
-    return [BRepBuilderAPI_MakeFace(bspline_surface(occ, piece), 1e-7).Face() for piece in pieces]
 
 
 def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_options) -> None:
@@ -339,4 +312,4 @@ def _step_string(text: str) -> str:
     return f"'{text}'"
 
 
-__all__ = ["write_patch_set_step", "read_patch_set_step", "write_step_shape", "bezier_faces", "bspline_faces"]
+__all__ = ["write_patch_set_step", "read_patch_set_step", "write_step_shape"]
