@@ -32,7 +32,7 @@ from .refine.doo_sabin import FACE_FROM_VERTEX
 from .stencils.bicubic import bicubic_layout
 from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_corner_ratios
-from .stencils.creases import crease_correction, refined_sharpness
+from .stencils.creases import crease_correction, mirror_perturbation, mirror_rows, refined_sharpness
 from .stencils.doo_sabin import DooSabinStep, doo_sabin_matrix
 from .stencils.hole_rules import HoleRules
 from .stencils.perturbation import perturbation_matrix
@@ -184,6 +184,8 @@ def first_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixSt
         step = step if correction is None else (step + correction).tocsr()
     if inputs.interpolate_vertices:
         step = vertex_interpolation_step(step, topology.input, topology.faces1)
+    if topology.crease_sheets is not None:  # C0 creases: ghost points mirror the real ones (stencils.creases)
+        step = mirror_rows(step, topology.input, topology.crease_sheets, inputs.corner_ratio)
     return MatrixStage("doo_sabin_1", step)
 
 
@@ -203,6 +205,8 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
 
 def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:
     matrix = perturbation_matrix(topology.refined, topology.holes)
+    if matrix is not None and topology.crease_sheets is not None:  # C0 creases: ghost partners follow
+        matrix = mirror_perturbation(matrix, topology.refined, topology.real_vertex)
     return None if matrix is None else MatrixStage("perturbation", matrix)
 
 

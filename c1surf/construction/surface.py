@@ -19,6 +19,7 @@ from .patch_blocks import PatchSource, patch_source
 from .stages import STAGE_BUILDERS, StageInputs
 from .stencil import flat_stencil, row_stencil
 from .stencils.blend import check_ratios, corner_ratios
+from .stencils.creases import crease_corner_ratios
 from .stencils.doo_sabin import DooSabinStep
 from .stencils.hole_rules import TRIANGLE_RULES, HoleRules
 from .topology import build_topology
@@ -40,6 +41,10 @@ class SurfaceOptions:
         parametrically C1 to the biquadratic patches around); ``stencils.hole_rules``
     refinements : 2 (the paper's A1), 0 or 1 (closed meshes that already satisfy R1-R3 after
         that many steps, Prop. 1.3.1), or "auto" (the fewest that work; ``refine.fewer_steps``)
+    exact_creases : bool, infinitely sharp creases become C0 seams where the construction makes
+        them exact (``mesh.crease_sheets``; the others stay the sharpest G1 crease). The library's
+        construction only, for now: the command line, the patch files and the checks do not yet mark
+        crease sides (docs/sharp-features.md)
     """
 
     blend: float = 0.5
@@ -49,6 +54,7 @@ class SurfaceOptions:
     interpolate_vertices: bool = False
     triangles: str = "g1"
     refinements: int | str = 2
+    exact_creases: bool = False
 
     def check(self, vertex_normals=None) -> "SurfaceOptions":
         """Raise ValueError for a value or combination the construction cannot take; else return self."""
@@ -60,6 +66,8 @@ class SurfaceOptions:
             raise ValueError("refinements must be 0, 1, 2 or 'auto'")
         if self.interpolate_vertices and self.refinements == 0:
             raise ValueError("vertex interpolation (A1a) needs at least one refinement step")
+        if self.interpolate_vertices and self.exact_creases:
+            raise ValueError("vertex interpolation (A1a) is not available with exact creases yet")
         if self.interpolate_vertices and self.beta != 0:
             raise ValueError("vertex interpolation (A1a) needs beta = 0: beta moves the cell centres off the vertices")
         if vertex_normals is not None and not self.interpolate_vertices:
@@ -129,10 +137,12 @@ class Surface:
             features = features.check(n_vertices, n_faces)
         self.features = features
         self.topology = t = build_topology(face_sizes, face_vertices, n_vertices, o.refinements, o.interpolate_vertices,
-                                           features)
+                                           features, o.exact_creases)
         self.timings["topology"] = time.perf_counter() - start
         # First step: a corner takes its vertex's ratio where one is given, else its cell's (stencils.blend).
         corner = corner_ratios(t.input, t.per_coarse_face(blend, float(o.blend)), t.per_coarse_vertex(vertex_blend))
+        if t.crease_sheets is not None:  # both sheets of a C0 crease refine alike along it
+            corner = crease_corner_ratios(corner, t.input, t.crease_sheets.crease_vertex)
         inputs = StageInputs(points, corner, o.hole_rules(), o.interpolate_vertices, t.per_coarse_vertex(vertex_normals),
                              self.weights is not None)
         self.stages = self._build_stages(inputs)

@@ -18,7 +18,8 @@ from ..mesh.errors import TopologyError
 from ..mesh.ghost_layer import GhostLayer, add_ghost_layer
 from ..mesh.halfedges import HalfEdgeMesh
 from ..mesh.repair import check_valence, prepare_topology
-from .features import CoarseSharpness, SharpFeatures, coarse_sharpness
+from ..mesh.crease_sheets import CreaseSheets, cut_crease_sheets
+from .features import INFINITELY_SHARP, CoarseSharpness, SharpFeatures, coarse_sharpness
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_VERTEX, RefinedFaces, refine_doo_sabin, refined_halfedges
 from .refine.fewer_steps import check_refinements, fewer_refinement_sources, refinements_needed
 from .refine.holes import HoleGroup, hole_neighbourhoods, patch_frames
@@ -47,8 +48,12 @@ class SurfaceTopology:
     cubic_frames : (Nc, 4) int, frames of the kept bicubic patches
     cubic_keep : (sum over holes of n,) bool or None, which bicubic patches are kept (None: all)
     cubic_hole : (Nc,) int, hole (in ``holes`` order) of every kept bicubic patch
-    sharpness : CoarseSharpness or None, creases and corners on ``input`` (``features``)
+    sharpness : CoarseSharpness or None, creases and corners on ``input`` (``features``) that the
+        refinement steps pull towards (the G1 creases: semi-sharp ones, and infinitely sharp ones
+        not cut into sheets)
     hole_faces : (k,) int, input faces tagged as holes (no patches)
+    crease_sheets : CreaseSheets or None, the C0 creases: the mesh cut along them, ghost quads
+        across them (``mesh.crease_sheets``; ``exact_creases``)
     """
 
     n_input_vertices: int
@@ -71,6 +76,7 @@ class SurfaceTopology:
     cubic_hole: np.ndarray
     sharpness: CoarseSharpness | None = None
     hole_faces: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
+    crease_sheets: CreaseSheets | None = None
 
     @property
     def frames(self) -> np.ndarray:
@@ -120,7 +126,7 @@ class SurfaceTopology:
 
 
 def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto", interpolate_vertices: bool = False,
-                   features: SharpFeatures | None = None) -> SurfaceTopology:
+                   features: SharpFeatures | None = None, exact_creases: bool = False) -> SurfaceTopology:
     """Repair, close, refine and lay out the patches of a polygon mesh.
 
     Parameters
@@ -132,6 +138,8 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     interpolate_vertices : bool, A1a (needs at least one refinement)
     features : SharpFeatures or None: hole faces lose their patches; creases and corners
         are mapped onto the coarse mesh for the refinement stages
+    exact_creases : bool, cut the mesh along its infinitely sharp creases where that is exact
+        (``mesh.crease_sheets``): C0 creases instead of the sharpest G1 ones
     """
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     prepared, vertex_source, repairs = prepare_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), n_vertices)
@@ -139,12 +147,18 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     # both sheets are refined, the patches of the second are dropped.
     second_sheet = repairs.pop("second_sheet")
     check_valence(prepared, vertex_source)
-    ghost = add_ghost_layer(prepared) if repairs["boundary_edges"] else None
+    sheets = crease_sheets(prepared, vertex_source, features) if exact_creases and features is not None else None
+    if sheets is not None:  # the sheets and their ghost quads, which are open along the ghost strips
+        prepared, vertex_source = sheets.mesh, vertex_source[sheets.vertex_source]
+        second_sheet = np.r_[second_sheet, np.zeros(sheets.ghost_faces.size, bool)]
+    ghost = add_ghost_layer(prepared) if repairs["boundary_edges"] or sheets is not None else None
     coarse = prepared if ghost is None else ghost.mesh
     real_face = np.ones(coarse.n_faces, bool) if ghost is None else ghost.real_face.copy()
     real_face[: second_sheet.size] &= ~second_sheet
     hole_faces = np.zeros(0, dtype=np.int64) if features is None else np.unique(features.hole_faces)
     real_face[hole_faces] = False  # a hole keeps its corners in the refinement, but no patches
+    if sheets is not None:
+        real_face[sheets.ghost_faces] = False
     if not real_face.any():
         raise TopologyError("every face is tagged as a hole: there is no surface to build", hole_faces[:8])
     closed = real_face.all() and not repairs["boundary_edges"]
@@ -161,8 +175,30 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
         refinements=levels, faces1=faces1, level1=level1, refined=refined, real_vertex=real_vertex, holes=holes,
         quad_frames=quad_frames, cubic_frames=cubic_frames[real_cubic], cubic_keep=None if real_cubic.all() else real_cubic,
         cubic_hole=np.repeat(np.arange(sizes.size), sizes)[real_cubic],
-        sharpness=None if features is None else coarse_sharpness(coarse, vertex_source, features), hole_faces=hole_faces,
+        sharpness=pulled_sharpness(coarse, vertex_source, features, sheets), hole_faces=hole_faces, crease_sheets=sheets,
     )
+
+
+def crease_sheets(prepared: HalfEdgeMesh, vertex_source: np.ndarray, features: SharpFeatures) -> CreaseSheets | None:
+    """``mesh.crease_sheets.cut_crease_sheets`` of the infinitely sharp edges and corners, or None."""
+    sharp = coarse_sharpness(prepared, vertex_source, features)
+    if sharp is None or not np.any(sharp.halfedge >= INFINITELY_SHARP):
+        return None
+    tagged = np.zeros(int(max(vertex_source.max(initial=-1), features.corner_vertices.max(initial=-1))) + 1, dtype=bool)
+    tagged[features.corner_vertices[features.corner_sharpness >= INFINITELY_SHARP]] = True
+    return cut_crease_sheets(prepared, sharp.halfedge >= INFINITELY_SHARP, tagged[vertex_source])
+
+
+def pulled_sharpness(coarse: HalfEdgeMesh, vertex_source: np.ndarray, features: SharpFeatures | None,
+                     sheets: CreaseSheets | None) -> CoarseSharpness | None:
+    """The creases and corners the refinement pulls towards: all of ``features``'s but those cut into sheets."""
+    sharp = None if features is None else coarse_sharpness(coarse, vertex_source, features)
+    if sharp is None or sheets is None:
+        return sharp
+    cut = np.full(coarse.n_vertices, False)
+    cut[: sheets.crease_vertex.size] = sheets.crease_vertex >= 0
+    halfedge, vertex = np.where(cut[coarse.origin], 0.0, sharp.halfedge), np.where(cut, 0.0, sharp.vertex)
+    return CoarseSharpness(halfedge, vertex) if (halfedge > 0).any() or (vertex > 0).any() else None
 
 
 def refinement_count(coarse: HalfEdgeMesh, requested, closed: bool, interpolate_vertices: bool) -> int:

@@ -31,7 +31,7 @@ a corner vertex's V-cell is a corner.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import csr_matrix
+from scipy.sparse import csr_matrix, diags, vstack
 
 from ...mesh.halfedges import HalfEdgeMesh
 
@@ -120,4 +120,108 @@ def refined_sharpness(coarse: HalfEdgeMesh, level1: HalfEdgeMesh, halfedge_sharp
     return halfedge, vertex_sharpness[coarse.origin]
 
 
-__all__ = ["crease_weight", "crease_correction", "refined_sharpness"]
+
+
+def crease_corner_ratios(corner_ratio: np.ndarray, mesh: HalfEdgeMesh, crease_vertex: np.ndarray) -> np.ndarray:
+    """(H,) float: ``corner_ratio`` with every corner at a cut crease vertex given that vertex's smallest ratio.
+
+    Both sheets of a C0 crease (``mesh.crease_sheets``) then refine their cells along it alike, so the
+    mirrored pairs stay mirrored about the same crease points in the second step.
+
+    Parameters
+    ----------
+    corner_ratio : (H,) float, first-step ratio of every corner of ``mesh``
+    mesh : HalfEdgeMesh with V vertices, the coarse mesh (cut, ghost quads, any outer ghost layer)
+    crease_vertex : (V0,) int, uncut vertex of each of the first V0 vertices on a cut crease, -1 elsewhere
+    """
+    key = np.full(mesh.n_vertices, -1, dtype=np.int64)
+    key[: crease_vertex.size] = crease_vertex
+    at = key[mesh.origin]
+    on = at >= 0
+    if not on.any():
+        return corner_ratio
+    smallest = np.full(int(at.max()) + 1, np.inf)
+    np.minimum.at(smallest, at[on], corner_ratio[on])
+    out = corner_ratio.copy()
+    out[on] = smallest[at[on]]
+    return out
+
+
+def mirror_rows(step: csr_matrix, mesh: HalfEdgeMesh, sheets, corner_ratio: np.ndarray) -> csr_matrix:
+    """The first Doo-Sabin step with the ghost points at cut crease vertices mirrored across the crease.
+
+    A ghost quad's corner at crease vertex v, across crease edge (v, w) from real corner p, becomes
+    ``2 chi - p`` with ``chi = (1 - a/2) v + (a/2) w`` (a: the corners' shared ratio at v): chi is the
+    crease polygon's Chaikin point, where a face and its point reflection through the edge's midpoint
+    put the midpoint of their two Doo-Sabin points. The diagonal ghost of a one-face sector becomes p
+    at a smooth crease vertex (its cell's centre, the crease point between the sector's two chi) and
+    ``4 v - p - m1 - m2`` at a corner (m1, m2 the two mirrors of p: the cell's centre is v).
+
+    Parameters
+    ----------
+    step : (H, V) csr_matrix, the first step (coarse points to once-refined points)
+    mesh : HalfEdgeMesh, the coarse mesh (``sheets.mesh``, possibly closed by an outer ghost layer)
+    sheets : ``mesh.crease_sheets.CreaseSheets``
+    corner_ratio : (H,) float, ``crease_corner_ratios`` of the step's ratios
+
+    Returns
+    -------
+    (H, V) csr_matrix, ``step`` with the ghost rows replaced (still affine: every row sums to 1)
+    """
+    n_rows, n_cols = step.shape
+    real, ghost = sheets.mirror_real, sheets.mirror_ghost
+    v, w, b = mesh.origin[real], sheets.mirror_toward, corner_ratio[real] / 2
+    chi = csr_matrix((np.r_[2 * (1 - b), 2 * b], (np.r_[np.arange(real.size), np.arange(real.size)], np.r_[v, w])),
+                     shape=(real.size, n_cols))
+    mirrored = (chi - step[real]).tocsr()
+    slot = np.full(n_rows, -1, dtype=np.int64)
+    slot[ghost] = np.arange(ghost.size)
+    at_real = step[sheets.diagonal_real]
+    corner = sheets.diagonal_corner
+    m1, m2 = mirrored[slot[sheets.diagonal_mirrors[:, 0]]], mirrored[slot[sheets.diagonal_mirrors[:, 1]]]
+    vertex = csr_matrix((np.full(corner.sum(), 4.0), (np.flatnonzero(corner), mesh.origin[sheets.diagonal_ghost[corner]])),
+                        shape=(corner.size, n_cols))
+    square = (corner.size, corner.size)
+    scale = csr_matrix((np.where(corner, -1.0, 1.0), (np.arange(corner.size), np.arange(corner.size))), shape=square)
+    only_corner = csr_matrix((corner.astype(float), (np.arange(corner.size), np.arange(corner.size))), shape=square)
+    diagonal = (vertex + scale @ at_real - only_corner @ (m1 + m2)).tocsr()
+    replaced = np.r_[ghost, sheets.diagonal_ghost]
+    keep = np.ones(n_rows)
+    keep[replaced] = 0.0
+    new = csr_matrix((np.ones(replaced.size), (replaced, np.arange(replaced.size))), shape=(n_rows, replaced.size))
+    return (diags(keep) @ step + new @ vstack([mirrored, diagonal]).tocsr()).tocsr()
+
+
+
+def mirror_perturbation(matrix: csr_matrix, refined: HalfEdgeMesh, real_vertex: np.ndarray) -> csr_matrix:
+    """A1's perturbation with every ghost point next to a C0 crease moved opposite to its real partner.
+
+    The second Doo-Sabin step keeps mirrored pairs mirrored; the perturbation of even holes may move
+    a real point beside a crease, and its ghost partner (the refined point across the crease edge
+    from it) then moves by minus as much, so the pair's midpoint, a control point of the crease
+    curve, stays where both sheets put it.
+
+    Parameters
+    ----------
+    matrix : (Vr, Vr) csr_matrix, the perturbation (identity plus the even holes' corrections)
+    refined : HalfEdgeMesh, the twice-refined mesh
+    real_vertex : (Vr,) bool, refined points whose patches are kept (the ghost quads' are not)
+    """
+    crossing = real_vertex[refined.origin] & ~real_vertex[refined.dest]
+    ghost, real = refined.dest[crossing], refined.origin[crossing]
+    ghost, first = np.unique(ghost, return_index=True)
+    real = real[first]
+    identity = diags(np.ones(matrix.shape[0]), format="csr")
+    delta = (matrix - identity).tocsr()
+    moved = np.diff(delta.indptr)[real] > 0
+    if not moved.any():
+        return matrix
+    ghost, real = ghost[moved], real[moved]
+    keep = np.ones(matrix.shape[0])
+    keep[ghost] = 0.0
+    select = csr_matrix((np.ones(ghost.size), (ghost, real)), shape=matrix.shape)
+    return (identity + diags(keep) @ delta - select @ delta).tocsr()
+
+
+__all__ = ["crease_weight", "crease_correction", "refined_sharpness", "crease_corner_ratios", "mirror_rows",
+           "mirror_perturbation"]

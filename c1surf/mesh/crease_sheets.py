@@ -1,0 +1,206 @@
+"""Infinitely sharp creases as C0 seams: the mesh cut into sheets along them, each sheet closed by ghost quads.
+
+The paper has no creases; this is c1surf's exact crease (docs/sharp-features.md, "C0 creases"). Along
+an infinitely sharp edge the mesh is cut: every vertex on it gets one copy per *sector* (the faces
+between two consecutive crease edges around it), so each side of the crease is a sheet of its own,
+and every crease half-edge gets a ghost quad across it, a face that refines but makes no patches.
+Where a sector has one face the ghost quads at that vertex copy are joined by one more, diagonal,
+quad; where it has two faces the two ghost quads share their edge there. Every crease vertex copy
+then has exactly four faces, so after two Doo-Sabin steps the crease runs between regular patches.
+
+The geometry (``construction.stencils.creases.mirror_rows``) sets every ghost point at a crease
+vertex, after the first step, to the mirror of the real point across the crease; then both sheets
+build the same crease curve from crease points only. This module is the integers: which crease
+components the construction makes exact, the cut, the ghost quads and the mirror pairs.
+
+Exact (``exact_crease_vertices``): a vertex on two crease edges whose sectors have one or two faces
+each (quad meshes: valence 3 or 4 on the crease), and a corner (three or more crease edges, or a
+tagged corner) whose sectors have one face each (a box's corners). A crease component (crease edges
+joined at vertices) is cut only when all its vertices are exact and none is on the mesh boundary;
+the others keep the sharpest G1 crease of ``stencils.creases`` (the caller says which, in a note).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.sparse import coo_matrix
+from scipy.sparse.csgraph import connected_components
+
+from .halfedges import HalfEdgeMesh, build_halfedges
+
+
+@dataclass(frozen=True)
+class CreaseSheets:
+    """A mesh cut along its exact creases and closed by ghost quads (integers only).
+
+    Attributes
+    ----------
+    mesh : HalfEdgeMesh, the cut mesh: the uncut mesh's faces first (same corners, same half-edge
+        numbering), then the ghost quads
+    vertex_source : (V',) int, vertex of the uncut mesh of every vertex of ``mesh`` (ghost vertices:
+        the crease vertex they sit at)
+    ghost_faces : (G,) int, the ghost quads (faces of ``mesh``)
+    mirror_ghost, mirror_real : (M,) int, half-edges of ``mesh``: a ghost quad's corner at a crease
+        vertex, and the real corner it mirrors (the same vertex, the face across the crease edge)
+    mirror_toward : (M,) int, vertex of ``mesh`` at the other end of that crease edge (the crease
+        polygon's Chaikin point lies between the corner's vertex and this one)
+    crease_vertex : (V',) int, vertex of the uncut mesh of every vertex of ``mesh`` on a cut crease
+        (its copies and the ghost vertices at it), -1 elsewhere: the corners there share one blend ratio
+    diagonal_ghost, diagonal_real : (D,) int, the diagonal ghost quad's corner at a one-face sector's
+        vertex, and that sector's one real corner
+    diagonal_mirrors : (D, 2) int, the two crease ghost quads' corners at the same vertex
+    diagonal_corner : (D,) bool, the vertex is a corner (else a smooth crease vertex)
+    cut_edges : (E, 2) int, the crease edges cut (vertex pairs of the uncut mesh)
+    kept_edges : (K, 2) int, crease edges left uncut (in components that are not exact)
+    inexact_vertices : (k,) int, vertices of the uncut mesh that keep their components from being cut
+    """
+
+    mesh: HalfEdgeMesh
+    vertex_source: np.ndarray
+    ghost_faces: np.ndarray
+    mirror_ghost: np.ndarray
+    mirror_real: np.ndarray
+    mirror_toward: np.ndarray
+    crease_vertex: np.ndarray
+    diagonal_ghost: np.ndarray
+    diagonal_real: np.ndarray
+    diagonal_mirrors: np.ndarray
+    diagonal_corner: np.ndarray
+    cut_edges: np.ndarray
+    kept_edges: np.ndarray
+    inexact_vertices: np.ndarray
+
+
+def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
+    """(H,) int: the sector of every corner (half-edge ``h`` = the corner at ``origin[h]`` in ``face[h]``).
+
+    Corners around a vertex share a sector unless a sharp edge lies between them.
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh
+    sharp : (H,) bool, half-edges on a sharp edge (both half-edges of an edge alike)
+    """
+    h = np.arange(mesh.n_halfedges)
+    turned = mesh.twin[mesh.prev]  # the next corner around origin[h], across the edge prev[h]
+    join = (turned >= 0) & ~sharp[mesh.prev]
+    graph = coo_matrix((np.ones(join.sum()), (h[join], turned[join])), shape=(h.size, h.size))
+    return connected_components(graph, directed=False)[1]
+
+
+def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray):
+    """Which vertices on sharp edges the C0 crease handles exactly.
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh with V vertices
+    sharp : (H,) bool, half-edges on infinitely sharp edges
+    tagged_corner : (V,) bool, infinitely sharp corners named by the input
+
+    Returns
+    -------
+    on_crease : (V,) bool, vertices on a sharp edge
+    exact : (V,) bool, of those, the ones handled exactly (module docstring)
+    corner : (V,) bool, corners (three or more sharp edges, or tagged)
+    """
+    n = mesh.n_vertices
+    once = sharp & ((mesh.twin < 0) | (np.arange(mesh.n_halfedges) < mesh.twin))
+    crease_edges = np.bincount(np.r_[mesh.origin[once], mesh.dest[once]], minlength=n)
+    on_crease = crease_edges > 0
+    corner = on_crease & ((crease_edges >= 3) | tagged_corner)
+    sector = corner_sectors(mesh, sharp)
+    size = np.bincount(sector, minlength=mesh.n_halfedges)[sector]  # faces in each corner's sector
+    largest = np.zeros(n, dtype=np.int64)
+    np.maximum.at(largest, mesh.origin, size)
+    boundary = np.zeros(n, dtype=bool)
+    boundary[mesh.origin[mesh.twin < 0]] = True
+    boundary[mesh.dest[mesh.twin < 0]] = True
+    smooth_ok = (crease_edges == 2) & ~corner & (largest <= 2)
+    corner_ok = corner & (crease_edges >= 2) & (largest == 1)
+    return on_crease, on_crease & ~boundary & (smooth_ok | corner_ok), corner
+
+
+def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray) -> CreaseSheets | None:
+    """Cut ``mesh`` along the crease components it handles exactly and close every cut with ghost quads.
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh, oriented, every vertex one fan (``repair.prepare_topology``)
+    sharp : (H,) bool, half-edges on infinitely sharp edges
+    tagged_corner : (V,) bool, infinitely sharp corners named by the input
+
+    Returns
+    -------
+    CreaseSheets, or None when no crease component is exact (nothing to cut).
+    Long: one pass of vectorized steps (components, copies, ghost slots, quads, mirror pairs) that
+    share their index arrays; split up they would pass a dozen arrays between them.
+    """
+    n, h_all = mesh.n_vertices, np.arange(mesh.n_halfedges)
+    on_crease, exact, corner = exact_crease_vertices(mesh, sharp, tagged_corner)
+    # crease components: vertices joined by sharp edges; cut those whose every vertex is exact
+    a, b = mesh.origin[sharp], mesh.dest[sharp]
+    component = connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(n, n)), directed=False)[1]
+    bad = np.zeros(component.max() + 1, dtype=bool)
+    bad[component[on_crease & ~exact]] = True
+    cut = sharp & ~bad[component[mesh.origin]]
+    once = (mesh.twin < 0) | (h_all < mesh.twin)
+    edges = lambda mask: np.sort(np.stack([mesh.origin[mask & once], mesh.dest[mask & once]], axis=1), axis=1)
+    if not cut.any():
+        return None
+    # one vertex per (vertex, sector) of the cut
+    sector = corner_sectors(mesh, cut)
+    keys, copy = np.unique(sector, return_inverse=True)
+    copy = copy.ravel()
+    n_copies = keys.size
+    copy_source = np.zeros(n_copies, dtype=np.int64)
+    copy_source[copy] = mesh.origin
+    faces_in_sector = np.bincount(copy, minlength=n_copies)
+    # every cut half-edge A -> B gets the ghost quad (B, A, out[A], in[B]); a sector's copy X has one
+    # cut half-edge leaving it and one arriving, whose ghost quads hold out[X] and in[X] next to X
+    leaving, arriving = h_all[cut], mesh.next[cut]
+    A, B = copy[leaving], copy[arriving]
+    crease_copies = np.unique(A)
+    k = faces_in_sector[crease_copies]
+    single = crease_copies[k == 1]
+    slot_out = np.full(n_copies, -1, dtype=np.int64)
+    slot_in = np.full(n_copies, -1, dtype=np.int64)
+    slot_out[crease_copies] = n_copies + np.arange(crease_copies.size)
+    slot_in[crease_copies] = slot_out[crease_copies]  # two faces: the ghost quads share their edge at X
+    slot_in[single] = n_copies + crease_copies.size + np.arange(single.size)
+    diagonal_vertex = n_copies + crease_copies.size + single.size + np.arange(single.size)
+    n_total = n_copies + crease_copies.size + 2 * single.size
+    quads = np.stack([B, A, slot_out[A], slot_in[B]], axis=1)
+    diagonals = np.stack([single, slot_in[single], diagonal_vertex, slot_out[single]], axis=1)
+    ghost_quads = np.concatenate([quads, diagonals])
+    sizes = np.r_[mesh.face_sizes, np.full(len(ghost_quads), 4)]
+    cut_mesh = build_halfedges(sizes, np.r_[copy, ghost_quads.ravel()], n_total)
+    source = np.r_[copy_source, copy_source[crease_copies], copy_source[single], copy_source[single]]
+    # mirror pairs: the crease ghost quad of half-edge A -> B has its corner at B first, at A second
+    first_quad = mesh.n_halfedges + 4 * np.arange(len(quads))
+    mirror_ghost = np.r_[first_quad + 1, first_quad]
+    mirror_real = np.r_[leaving, arriving]
+    mirror_toward = np.r_[B, A]
+    # the diagonal quad (X, in[X], d, out[X]): its corner at X; the crease quads' corners at X
+    diagonal_ghost = mesh.n_halfedges + 4 * len(quads) + 4 * np.arange(single.size)
+    real_of = np.full(n_copies, -1, dtype=np.int64)
+    real_of[copy] = h_all
+    ghost_at_out = np.full(n_copies, -1, dtype=np.int64)
+    ghost_at_out[A] = first_quad + 1
+    ghost_at_in = np.full(n_copies, -1, dtype=np.int64)
+    ghost_at_in[B] = first_quad
+    on_cut = np.zeros(n, dtype=bool)
+    on_cut[mesh.origin[cut]] = True
+    crease_vertex = np.where(on_cut[source], source, -1)
+    return CreaseSheets(
+        mesh=cut_mesh, vertex_source=source, ghost_faces=mesh.n_faces + np.arange(len(ghost_quads)),
+        mirror_ghost=mirror_ghost, mirror_real=mirror_real, mirror_toward=mirror_toward, crease_vertex=crease_vertex,
+        diagonal_ghost=diagonal_ghost, diagonal_real=real_of[single],
+        diagonal_mirrors=np.stack([ghost_at_out[single], ghost_at_in[single]], axis=1),
+        diagonal_corner=corner[copy_source[single]],
+        cut_edges=edges(cut), kept_edges=edges(sharp & ~cut),
+        inexact_vertices=np.flatnonzero(on_crease & ~exact),
+    )
+
+
+__all__ = ["CreaseSheets", "corner_sectors", "exact_crease_vertices", "cut_crease_sheets"]

@@ -1,0 +1,184 @@
+"""C0 creases (SurfaceOptions.exact_creases; mesh.crease_sheets, stencils.creases.mirror_rows): the
+sheets on either side of an infinitely sharp crease meet exactly along one curve and stay G1 inside.
+
+Shared patch sides are found from the geometry alone (``adjacency_from_geometry``) and measured
+independently: a crease pair is a pair of sides whose normals differ (by the crease's angle), every
+other pair must be G1.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from c1surf.construction.features import SharpFeatures
+from c1surf.construction.surface import Surface, SurfaceOptions
+from c1surf.evaluation.adjacency import adjacency_from_geometry
+from c1surf.evaluation.bezier import raise_degree
+from c1surf.evaluation.smoothness import side_frames
+from c1surf.io.meshes.read import read_mesh
+from c1surf.mesh.crease_sheets import exact_crease_vertices
+from c1surf.mesh.halfedges import build_halfedges
+
+from conftest import SAMPLES, shared_mesh
+
+SHARP = 10.0
+
+
+def all_edges(sizes, corners) -> np.ndarray:
+    faces = np.split(corners, np.cumsum(sizes)[:-1])
+    return np.array(sorted({tuple(sorted((int(f[i]), int(f[(i + 1) % len(f)])))) for f in faces for i in range(len(f))}))
+
+
+def side_pairs(surface: Surface):
+    """Every shared side pair found from the geometry: (gap (k,), normal jump (k,) in rad, diagonal)."""
+    quads, cubics = surface.biquadratic, surface.bicubic
+    cubic = np.concatenate([raise_degree(quads, 3, 3), cubics])
+    adjacency = adjacency_from_geometry([quads, cubics], 1e-9)
+    across = adjacency.neighbours()
+    p, side = np.nonzero(across[:, :, 0] >= 0)
+    q, q_side = across[p, side, 0], across[p, side, 1]
+    once = p < q
+    p, side, q, q_side = p[once], side[once], q[once], q_side[once]
+    t = np.linspace(0.0, 1.0, 11)
+    flip = adjacency.reversed[p, side] != adjacency.reversed[q, q_side]
+    a, na = side_frames(cubic, 4 * p + side, t)
+    b, nb = side_frames(cubic, 4 * q + q_side, t, reverse=flip)
+    gap = np.abs(a - b).reshape(p.size, -1).max(axis=1)
+    # the angle from the cross product: arccos of a dot product near 1 keeps only half the digits
+    angle = np.arctan2(np.linalg.norm(np.cross(na, nb), axis=1), np.abs(np.einsum("ij,ij->i", na, nb)))
+    jump = angle.reshape(p.size, -1)
+    points = np.concatenate([quads.reshape(-1, 3), cubics.reshape(-1, 3)])
+    unmatched = int((across[:, :, 0] < 0).sum())
+    return gap, jump, float(np.linalg.norm(points.max(axis=0) - points.min(axis=0))), unmatched
+
+
+def crease_and_smooth(surface: Surface):
+    """(crease gap, smooth gap, smooth jump, crease pairs, unmatched sides), gaps relative to the diagonal.
+
+    A crease pair has a normal jump above 1e-6 rad somewhere along it (a one-face sector's patch has
+    a straight angle where the crease passes its corner: its normal there is undefined, NaN)."""
+    gap, jump, diagonal, unmatched = side_pairs(surface)
+    crease = ~np.all(jump <= 1e-6, axis=1)
+    smooth_jump = float(jump[~crease].max()) if (~crease).any() else 0.0
+    return (float(gap[crease].max(initial=0)) / diagonal, float(gap[~crease].max(initial=0)) / diagonal, smooth_jump,
+            int(crease.sum()), unmatched)
+
+
+def exact_surface(mesh, features, points=None) -> Surface:
+    return Surface(mesh.face_sizes, mesh.face_vertices, mesh.points if points is None else points,
+                   SurfaceOptions(exact_creases=True), features=features)
+
+
+def sharp_everywhere(mesh) -> SharpFeatures:
+    edges = all_edges(mesh.face_sizes, mesh.face_vertices)
+    return SharpFeatures(edges, np.full(len(edges), SHARP))
+
+
+def creased_torus(nu=10, nv=8, noise=0.03, hexagon=False, seed=0):
+    """A quad torus with a ring of crease edges (every crease vertex 2 | 2), two triangles away from
+    it (A3 holes) and, with ``hexagon``, a hexagon against it (an even hole perturbed beside the crease)."""
+    rng = np.random.default_rng(seed)
+    i, j = np.meshgrid(np.arange(nu), np.arange(nv), indexing="ij")
+    u, v = 2 * np.pi * i / nu, 2 * np.pi * j / nv
+    points = np.stack([(1 + 0.4 * np.cos(v)) * np.cos(u), (1 + 0.4 * np.cos(v)) * np.sin(u), 0.4 * np.sin(v)], -1).reshape(-1, 3)
+    points += noise * rng.standard_normal(points.shape)
+    at = lambda a, b: (a % nu) * nv + (b % nv)
+    faces = [[at(a, b), at(a + 1, b), at(a + 1, b + 1), at(a, b + 1)] for a in range(nu) for b in range(nv)]
+    split = faces.index([at(3, 4), at(4, 4), at(4, 5), at(3, 5)])
+    q = faces.pop(split)
+    faces += [[q[0], q[1], q[2]], [q[0], q[2], q[3]]]
+    if hexagon:
+        gone = (faces.index([at(6, 0), at(7, 0), at(7, 1), at(6, 1)]), faces.index([at(7, 0), at(8, 0), at(8, 1), at(7, 1)]))
+        faces = [f for n, f in enumerate(faces) if n not in gone] + [[at(6, 0), at(7, 0), at(8, 0), at(8, 1), at(7, 1), at(6, 1)]]
+    crease = np.array([[at(a, 0), at(a + 1, 0)] for a in range(nu)])
+    sizes = np.array([len(f) for f in faces])
+    return points, sizes, np.concatenate(faces), SharpFeatures(crease, np.full(len(crease), SHARP))
+
+
+def test_a_cube_with_every_edge_sharp_is_the_cube():
+    mesh = read_mesh(SAMPLES / "cube.obj")  # side 2, centred on the origin
+    surface = exact_surface(mesh, sharp_everywhere(mesh))
+    points = np.concatenate([surface.biquadratic.reshape(-1, 3), surface.bicubic.reshape(-1, 3)])
+    # every coefficient lies on a face plane of the cube and inside it: every surface point is on the cube
+    assert np.min(np.abs(np.abs(points) - 1.0), axis=1).max() <= 1e-12
+    assert np.abs(points).max() <= 1.0 + 1e-12
+    # the eight corners are patch corners
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    patch_corners = np.concatenate([surface.biquadratic[:, ::2, ::2].reshape(-1, 3), surface.bicubic[:, ::3, ::3].reshape(-1, 3)])
+    assert max(np.linalg.norm(patch_corners - c, axis=1).min() for c in corners) <= 1e-12
+    # each face of the cube is a planar sheet: 16 patches, all on its plane
+    assert surface.n_patches == 96 and len(surface.topology.crease_sheets.cut_edges) == 12
+    crease_gap, smooth_gap, smooth_jump, crease_pairs, unmatched = crease_and_smooth(surface)
+    assert crease_pairs == 48 and unmatched == 0
+    assert crease_gap <= 1e-12 and smooth_gap <= 1e-12 and smooth_jump <= 1e-12
+
+
+def test_opensubdiv_cube_creases2_meets_along_its_creases_and_interpolates_its_corners():
+    mesh = read_mesh(shared_mesh("opensubdiv/catmark_cube_creases2.obj"))  # 11 sharp edges: corners 1|1|1, creases 1|2
+    tags = mesh.tags
+    surface = exact_surface(mesh, SharpFeatures(tags.crease_edges, tags.crease_sharpness))
+    sheets = surface.topology.crease_sheets
+    assert len(sheets.cut_edges) == 11 and len(sheets.kept_edges) == 0
+    crease_gap, smooth_gap, smooth_jump, crease_pairs, unmatched = crease_and_smooth(surface)
+    assert crease_pairs > 0 and unmatched == 0
+    assert crease_gap <= 1e-12 and smooth_gap <= 1e-12 and smooth_jump <= 1e-10
+    # the corners (three sharp edges) are reached
+    halfedges = build_halfedges(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices)
+    sharp = np.isin(np.sort(np.stack([halfedges.origin, halfedges.dest], 1), 1).view([("", np.int64)] * 2),
+                    np.sort(tags.crease_edges[tags.crease_sharpness >= SHARP], 1).astype(np.int64).view([("", np.int64)] * 2)).ravel()
+    _, exact, corner = exact_crease_vertices(halfedges, sharp, np.zeros(mesh.n_vertices, bool))
+    assert exact[corner].all() and corner.sum() == 6
+    patch_corners = np.concatenate([surface.biquadratic[:, ::2, ::2].reshape(-1, 3), surface.bicubic[:, ::3, ::3].reshape(-1, 3)])
+    for vertex in mesh.points[corner]:
+        assert np.linalg.norm(patch_corners - vertex, axis=1).min() <= 1e-12
+
+
+@pytest.mark.parametrize("hexagon", [False, True])
+def test_a_creased_torus_is_exact_along_its_crease_and_g1_elsewhere(hexagon):
+    points, sizes, corners, features = creased_torus(hexagon=hexagon)
+    surface = Surface(sizes, corners, points, SurfaceOptions(exact_creases=True), features=features)
+    crease_gap, smooth_gap, smooth_jump, crease_pairs, unmatched = crease_and_smooth(surface)
+    assert unmatched == 0 and crease_pairs == 40  # 10 crease edges, 4 patch sides along each
+    assert crease_gap <= 1e-12 and smooth_gap <= 1e-12 and smooth_jump <= 1e-10
+    assert len(surface.bicubic) > 0  # the triangles (and the hexagon) are A3 holes
+
+
+def test_c0_creases_are_linear_in_the_points():
+    points, sizes, corners, features = creased_torus(hexagon=True)
+    surface = Surface(sizes, corners, points, SurfaceOptions(exact_creases=True), features=features)
+    moved = points + 0.05 * np.random.default_rng(3).standard_normal(points.shape)
+    fresh = Surface(sizes, corners, moved, SurfaceOptions(exact_creases=True), features=features)
+    surface.update_points(moved)
+    assert np.abs(surface.biquadratic - fresh.biquadratic).max() <= 1e-13
+    assert np.abs(surface.bicubic - fresh.bicubic).max() <= 1e-13
+    stacked = np.concatenate([surface.biquadratic.reshape(-1, 3), surface.bicubic.reshape(-1, 3)])
+    assert np.abs(surface.stencil() @ moved - stacked).max() <= 1e-13
+
+
+def test_a_crease_component_that_is_not_exact_keeps_the_g1_crease():
+    # catmark_cubes_infsharp: two darts (a crease ending inside the surface) keep their edges' G1
+    # crease; the other components are cut
+    mesh = read_mesh(shared_mesh("opensubdiv/catmark_cubes_infsharp.obj"))
+    tags = mesh.tags
+    features = SharpFeatures(tags.crease_edges, tags.crease_sharpness, tags.corner_vertices, tags.corner_sharpness)
+    surface = exact_surface(mesh, features)
+    sheets = surface.topology.crease_sheets
+    assert len(sheets.kept_edges) == 2 and sheets.inexact_vertices.size == 2
+    assert surface.topology.sharpness is not None  # the kept edges are still pulled
+    crease_gap, smooth_gap, smooth_jump, crease_pairs, unmatched = crease_and_smooth(surface)
+    assert unmatched == 0 and crease_pairs > 0
+    assert crease_gap <= 1e-12 and smooth_jump <= 1e-10
+
+
+def test_without_the_option_nothing_is_cut():
+    mesh = read_mesh(SAMPLES / "cube.obj")
+    features = sharp_everywhere(mesh)
+    plain = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, features=features)
+    assert plain.topology.crease_sheets is None
+    crease_gap, smooth_gap, smooth_jump, crease_pairs, unmatched = crease_and_smooth(plain)
+    assert crease_pairs == 0 and smooth_jump <= 1e-10  # the sharpest G1 crease
+
+
+def test_exact_creases_refuse_vertex_interpolation():
+    with pytest.raises(ValueError, match="exact creases"):
+        SurfaceOptions(exact_creases=True, interpolate_vertices=True).check()
