@@ -60,8 +60,10 @@ def tessellate_surface(surface: Surface, resolution: int = 8, tolerance: float |
 
 
 def check_surface(surface: Surface, samples: int = 11):
-    """Independent G1 measurement of ``surface`` (a ``SmoothnessReport``)."""
-    return measure_smoothness([surface.biquadratic, surface.bicubic], samples=samples, weights=surface.patch_weights)
+    """Independent G1 measurement of ``surface`` (a ``SmoothnessReport``); C0 crease pieces are measured for
+    their gap, G1 everywhere else."""
+    return measure_smoothness([surface.biquadratic, surface.bicubic], samples=samples, weights=surface.patch_weights,
+                              crease_sides=surface.crease_sides)
 
 
 __all__ = ["surface_from_file", "tessellate_surface", "check_surface", "build_surface", "Surface", "SurfaceOptions"]

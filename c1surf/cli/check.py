@@ -11,7 +11,7 @@ from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import prepare_surface_input
-from .common import dissolve_notes, file_notes, friendly_errors, weld_notes
+from .common import crease_notes, dissolve_notes, file_notes, friendly_errors, weld_notes
 from .convert import build_or_fail, extension_setup
 from .options import extension_options, surface_options, weld_options, weld_tolerance
 
@@ -30,9 +30,9 @@ def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
     mesh = read_mesh(path)
     options, data = extension_setup(mesh, None, **shape)
     mesh, data = prepare_surface_input(mesh, data, weld)
-    for note in data.feature_notes + file_notes(mesh) + weld_notes(mesh.weld) + dissolve_notes(mesh):
-        click.echo(f"c1surf: note: {note}", err=True)
     surface = build_or_fail(mesh, options, data)
+    for note in data.feature_notes + crease_notes(surface) + file_notes(mesh) + weld_notes(mesh.weld) + dissolve_notes(mesh):
+        click.echo(f"c1surf: note: {note}", err=True)
     return surface_patch_set(surface, str(path))
 
 
@@ -55,12 +55,14 @@ def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
     converted first (with the surface and weld options below). Shared edges are found
     from the patch geometry alone (matching end and mid points), not from the
     construction's bookkeeping. Prints the largest position gap and normal
-    jump and exits 1 when the surface is not G1 to within --tolerance.
+    jump and exits 1 when the surface is not G1 to within --tolerance. The
+    crease edges a patch file lists (`convert --exact-creases`) must be shared
+    by their two sides to within --tolerance and are not measured for G1.
     """
     patch_set = read_or_build(path, shape, weld_tolerance(weld, no_weld))
     groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,
-                                unoriented=unoriented)
+                                unoriented=unoriented, crease_sides=patch_set.crease_sides)
     n_patches = sum(len(g) for g in groups)
     click.echo(f"patches:          {n_patches}")
     click.echo(f"shared edges:     {report.shared_edges}")
@@ -69,6 +71,11 @@ def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
         click.echo(f"edges in > 2 patches: {report.overshared_edges}")
     click.echo(f"max position gap: {report.max_gap:.3e} ({report.relative_gap:.3e} of the bounding box)")
     click.echo(f"max normal jump:  {report.max_normal_jump:.3e} rad")
+    if patch_set.crease_sides is not None:  # C0 creases (--exact-creases): met exactly, not G1 across
+        click.echo(f"crease edges:     {report.crease_edges} of {len(patch_set.crease_sides)} listed, max gap "
+                   f"{report.max_crease_gap:.3e} ({report.relative_crease_gap:.3e} of the bounding box)")
+        if report.unpaired_crease_sides:
+            click.echo(f"crease edges whose two sides do not meet: {report.unpaired_crease_sides}")
     ok = report.is_g1(tolerance, tolerance)
     click.echo(f"G1: {'yes' if ok else 'NO'} (tolerance {tolerance:g})")
     if not ok:

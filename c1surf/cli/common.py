@@ -7,7 +7,9 @@ import time
 import traceback
 
 import click
+import numpy as np
 
+from ..construction.features import INFINITELY_SHARP
 from ..mesh.errors import TopologyError
 from ..io.errors import C1SurfFileError
 from ..io.registry import UnsupportedFormat, suffix_of
@@ -52,7 +54,7 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
     ``feature_notes`` say which tags were honoured and which not), or None.
     """
     r = getattr(surface, "repairs", {}) or {}
-    notes = list(getattr(data, "feature_notes", [])) + file_notes(mesh_file)
+    notes = list(getattr(data, "feature_notes", [])) + crease_notes(surface) + file_notes(mesh_file)
     if getattr(mesh_file, "collapsed_corners", 0):
         notes.append(f"dropped {mesh_file.collapsed_corners} repeated corners (zero-length edges such as 'f a b c c')")
     notes += weld_notes(getattr(mesh_file, "weld", None)) + dissolve_notes(mesh_file)
@@ -70,6 +72,32 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
         notes.append(f"ignored {unused} vertices used by no face")
     if r.get("boundary_edges"):
         notes.append(f"open mesh: {r['boundary_edges']} boundary edges, closed for the construction by a ghost layer")
+    return notes
+
+
+def crease_notes(surface) -> list[str]:
+    """With ``--exact-creases``: how many infinitely sharp crease edges became C0 seams, and which did not, why."""
+    options, features = getattr(surface, "options", None), getattr(surface, "features", None)
+    if not getattr(options, "exact_creases", False) or features is None:
+        return []
+    sharp = int(np.count_nonzero(features.crease_sharpness >= INFINITELY_SHARP))
+    corners = np.unique(features.corner_vertices[features.corner_sharpness >= INFINITELY_SHARP])
+    if sharp == 0 and corners.size == 0:
+        return []
+    sheets = surface.topology.crease_sheets
+    cut = 0 if sheets is None else len(sheets.cut_edges)
+    kept = sharp - cut
+    notes = [f"--exact-creases: {cut} of {sharp} infinitely sharp crease edges are C0 seams"] if cut else []
+    lone = np.setdiff1d(corners, np.zeros(0, dtype=np.int64) if sheets is None else sheets.cut_edges.ravel())
+    if lone.size:
+        notes.append(f"{lone.size} infinitely sharp corners are not on a C0 seam and stay the sharpest G1 corner "
+                     f"(vertices {', '.join(map(str, lone[:8].tolist()))}{' ...' if lone.size > 8 else ''}, 0-based)")
+    if kept:
+        named = [] if sheets is None else sheets.inexact_vertices.tolist()
+        at = f" (at vertices {', '.join(map(str, named[:8]))}{' ...' if len(named) > 8 else ''}, 0-based)" if named else ""
+        notes.append(f"{kept} infinitely sharp crease edges stay the sharpest G1 crease: their crease lines have a "
+                     f"vertex where a C0 seam is not exact yet{at}: a crease end inside the surface, the mesh boundary, "
+                     "three or more faces on one side, or a corner with a sector of several faces (docs/sharp-features.md)")
     return notes
 
 

@@ -77,7 +77,7 @@ def build_or_fail(mesh, options: SurfaceOptions, data=None, lazy_patches: bool =
 
 def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
                     interpolate_normals, weights, triangles, attributes, refinements="2", creases_file=None,
-                    crease_angle=None, ignore_tags=False):
+                    crease_angle=None, ignore_tags=False, exact_creases=False):
     """SurfaceOptions and SurfaceData for the surface options and the extension options of a command.
 
     ``mesh_suffix``: of the tessellated output (``--attributes`` needs one that
@@ -90,13 +90,17 @@ def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_r
         raise click.BadParameter("--interpolate-normals needs --alpha > 0")
     if attributes and mesh_suffix is not None and mesh_suffix not in MESH_WRITERS.holding("attributes"):
         raise click.BadParameter(f"--attributes needs an --output in {', '.join(MESH_WRITERS.holding('attributes'))}")
+    if interpolate and exact_creases:
+        raise click.BadParameter("--exact-creases does not work with --interpolate-vertices/--interpolate-normals yet")
     if interpolate and refinements == "0":
         raise click.BadParameter("--interpolate-vertices needs at least one refinement step (--refinements 1, 2 or auto)")
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
                              interpolate_vertices=interpolate, triangles=triangles,
-                             refinements=refinements if refinements == "auto" else int(refinements))
+                             refinements=refinements if refinements == "auto" else int(refinements),
+                             exact_creases=exact_creases)
     data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=interpolate_normals, attributes=attributes,
-                        creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags)
+                        creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags,
+                        exact_creases=exact_creases)
     return options, data
 
 

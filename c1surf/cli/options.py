@@ -63,6 +63,10 @@ def feature_options(command):
                           "sharp crease (for meshes without tags)."),
         click.option("--ignore-tags", is_flag=True,
                      help="Build the smooth surface: the file's crease, corner and hole tags are read but not used."),
+        click.option("--exact-creases", is_flag=True,
+                     help="Make infinitely sharp creases C0 seams where c1surf builds them exactly (closed crease lines "
+                          "through quad meshes, box corners; a note names the others, which stay the sharpest G1 "
+                          "crease). Patch files list the crease sides; check measures their gap (docs/sharp-features.md)."),
     ]
     return with_options(command, options)
 

@@ -16,6 +16,7 @@ from ..mesh.errors import TopologyError
 from ..mesh.halfedges import HalfEdgeMesh
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX
 from .patch_blocks import PatchSource, patch_source
+from .crease_sides import crease_side_pairs
 from .stages import STAGE_BUILDERS, StageInputs
 from .stencil import flat_stencil, row_stencil
 from .stencils.blend import check_ratios, corner_ratios
@@ -147,6 +148,7 @@ class Surface:
                              self.weights is not None)
         self.stages = self._build_stages(inputs)
         self._stencils = {}
+        self._crease_sides = None
         self._reused = False
         self._apply(points)
 
@@ -295,6 +297,14 @@ class Surface:
     bicubic = property(lambda self: self._patch_arrays()[1], doc="(Nc, 4, 4, d) float, the A3 patches")
     biquadratic_weights = property(lambda self: self._patch_arrays()[2], doc="(Nq, 3, 3) float or None")
     bicubic_weights = property(lambda self: self._patch_arrays()[3], doc="(Nc, 4, 4) float or None")
+
+    @property
+    def crease_sides(self) -> np.ndarray:
+        """(k, 2) int: curve ids ``4 * patch + side`` of the two patch sides along each piece of a C0
+        crease (``exact_creases``; ``crease_sides.crease_side_pairs``): equal curves, not G1 across."""
+        if self._crease_sides is None:
+            self._crease_sides = crease_side_pairs(self.topology)
+        return self._crease_sides
 
     def patch_source(self, **options) -> PatchSource:
         """The patch coefficients by blocks on demand, bit for bit those of ``biquadratic`` / ``bicubic``

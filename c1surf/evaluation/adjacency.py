@@ -424,5 +424,37 @@ def adjacency_from_geometry(patch_groups, tolerance: float = 1e-9, weights=None)
     return _canonical(matching.corners, matching.edges, matching.forward)
 
 
-__all__ = ["PatchAdjacency", "neighbour_rows", "patch_adjacency", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
+
+def with_seams(adjacency: PatchAdjacency, seams: np.ndarray, same_direction: np.ndarray) -> PatchAdjacency:
+    """``adjacency`` with each pair of sides in ``seams`` made one shared side (C0 creases: B-rep edges).
+
+    Parameters
+    ----------
+    adjacency : PatchAdjacency in which the two sides of each seam are separate (boundary) sides
+    seams : (k, 2) int, curve ids ``4 * patch + side`` of the two sides of each seam
+    same_direction : (k,) bool, the two sides run the same way in increasing parameter
+
+    Returns
+    -------
+    PatchAdjacency, canonical, with the seams' sides sharing an edge id and their end corners a corner id
+    """
+    seams = np.asarray(seams, dtype=np.int64).reshape(-1, 2)
+    if seams.size == 0:
+        return adjacency
+    corners = np.asarray(adjacency.corners, dtype=np.int64)
+    ends = lambda curve: corners.reshape(-1)[4 * (curve // 4)[:, None] + SIDE_CORNERS[curve % 4]]  # (k, 2) start, end
+    a, b = ends(seams[:, 0]), ends(seams[:, 1])
+    b = np.where(same_direction[:, None], b, b[:, ::-1])
+    n = adjacency.n_corners
+    graph = coo_matrix((np.ones(2 * len(seams)), (a.ravel(), b.ravel())), shape=(n, n))
+    merged = connected_components(graph, directed=False)[1]
+    corner_labels = merged[corners]
+    edge_labels = np.asarray(adjacency.edges, dtype=np.int64).copy()
+    flat = edge_labels.reshape(-1)
+    flat[seams[:, 1]] = flat[seams[:, 0]]
+    start = corner_labels.reshape(-1, 4)[:, SIDE_CORNERS[:, 0]]  # the corner each side starts at
+    return _canonical(corner_labels, edge_labels, start)
+
+
+__all__ = ["PatchAdjacency", "with_seams", "neighbour_rows", "patch_adjacency", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
            "SIDE_CORNERS", "side_offsets", "side_polygons", "corner_points", "cluster_points"]

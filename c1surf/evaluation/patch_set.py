@@ -57,6 +57,16 @@ class PatchSet:
     def n_patches(self) -> int:
         return int(sum(len(g) for g in self.groups))
 
+    @property
+    def crease_sides(self) -> np.ndarray | None:
+        """(k, 2) int: curve ids ``4 * patch + side`` of the two sides of every C0 crease piece (the header's
+        "crease_sides"), or None when the file names none."""
+        rows = self.header.get("crease_sides")
+        if rows is None:
+            return None
+        rows = np.asarray(rows, dtype=np.int64).reshape(-1, 4)
+        return np.stack([4 * rows[:, 0] + rows[:, 1], 4 * rows[:, 2] + rows[:, 3]], axis=1)
+
     def degrees(self) -> list:
         """(du, dv) of every patch, in file order."""
         out = []
@@ -124,8 +134,8 @@ def source_names(kind: np.ndarray) -> np.ndarray:
 
 
 def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -> dict:
-    """Header of a Surface's patch file (everything but the patches)."""
-    return {
+    """Header of a Surface's patch file (everything but the patches); "crease_sides" only with C0 creases."""
+    header = {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "c1surf_version": __version__,
@@ -138,6 +148,10 @@ def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -
             "edges": adjacency.n_edges,
         },
     }
+    crease = getattr(surface, "crease_sides", np.zeros((0, 2), dtype=np.int64))
+    if len(crease):  # the two sides of each C0 crease piece: [patch, side, patch, side]
+        header["crease_sides"] = np.stack(np.divmod(crease, 4), axis=-1).reshape(-1, 4).tolist()
+    return header
 
 
 def surface_patch_set(surface, input_path: str | None = None, adjacency: PatchAdjacency | None = None) -> PatchSet:

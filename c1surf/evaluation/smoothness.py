@@ -26,6 +26,10 @@ class SmoothnessReport:
     max_normal_jump : float, largest angle (radians) between the two normals
     bbox_diagonal : float, diagonal of the control points' bounding box
     worst_pair : (2,) int, patches with the largest normal jump (-1 if none)
+    crease_edges : int, shared edges that are C0 crease pieces (``crease_sides``): their normal
+        jump is the crease's and is not in ``max_normal_jump``
+    max_crease_gap : float, largest distance between the two sides of a crease piece
+    unpaired_crease_sides : int, crease pieces whose two sides were not found at the same place
     """
 
     shared_edges: int
@@ -35,13 +39,22 @@ class SmoothnessReport:
     max_normal_jump: float
     bbox_diagonal: float
     worst_pair: tuple
+    crease_edges: int = 0
+    max_crease_gap: float = 0.0
+    unpaired_crease_sides: int = 0
 
     @property
     def relative_gap(self) -> float:
         return self.max_gap / self.bbox_diagonal if self.bbox_diagonal > 0 else self.max_gap
 
+    @property
+    def relative_crease_gap(self) -> float:
+        return self.max_crease_gap / self.bbox_diagonal if self.bbox_diagonal > 0 else self.max_crease_gap
+
     def is_g1(self, angle_tolerance: float = 1e-9, gap_tolerance: float = 1e-9) -> bool:
-        return self.overshared_edges == 0 and self.max_normal_jump <= angle_tolerance and self.relative_gap <= gap_tolerance
+        """G1 across every shared edge but the crease pieces, which must meet (C0) with a partner each."""
+        return (self.overshared_edges == 0 and self.max_normal_jump <= angle_tolerance and self.relative_gap <= gap_tolerance
+                and self.unpaired_crease_sides == 0 and self.relative_crease_gap <= gap_tolerance)
 
 
 def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=None, rational: bool = False):
@@ -87,7 +100,7 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
 
 
 def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False, tolerance: float = 1e-9,
-                       weights=None) -> SmoothnessReport:
+                       weights=None, crease_sides=None) -> SmoothnessReport:
     """Sample every shared patch edge; measure position gap and normal jump.
 
     Parameters
@@ -98,6 +111,8 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     samples : int, points per edge (end points included)
     unoriented : bool, compare normals up to sign (non-orientable surfaces)
     tolerance : float, relative distance below which two points are the same
+    crease_sides : (k, 2) int or None, curve ids ``4 p + s`` of the two sides of each C0 crease piece:
+        found shared by those two sides, they are measured for their gap only
 
     Returns
     -------
@@ -118,7 +133,8 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     first, second = sides.first, sides.second
     boundary, overshared = int(sides.lone.size), sides.overshared
     if first.size == 0:
-        return SmoothnessReport(0, boundary, overshared, 0.0, 0.0, diagonal, (-1, -1))
+        return SmoothnessReport(0, boundary, overshared, 0.0, 0.0, diagonal, (-1, -1),
+                                unpaired_crease_sides=0 if crease_sides is None else len(crease_sides))
 
     t = np.linspace(0.0, 1.0, samples)
     reversed_ = sides.reversed
@@ -127,12 +143,8 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     pa_r = np.repeat(first // 4, samples)
     pb_r = np.repeat(second // 4, samples)
     gap = np.linalg.norm(xa - xb, axis=1)
-    cross = np.linalg.norm(np.cross(na, nb), axis=1)
-    dot = np.einsum("ij,ij->i", na, nb)
-    if unoriented:
-        dot = np.abs(dot)
-    angle = np.arctan2(cross, dot)
-    angle = np.where(np.isnan(angle), 0.0, angle)  # singular points (zero-length derivative) have no normal
+    angle = normal_angles(na, nb, unoriented)
+    gap, angle, creases = _set_creases_apart(gap, angle, first, second, crease_sides, samples)
     worst = int(np.argmax(angle))
     return SmoothnessReport(
         shared_edges=int(first.size),
@@ -142,4 +154,35 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
         max_normal_jump=float(angle.max()),
         bbox_diagonal=diagonal,
         worst_pair=(int(pa_r[worst]), int(pb_r[worst])),
+        **creases,
     )
+
+
+def normal_angles(na: np.ndarray, nb: np.ndarray, unoriented: bool = False) -> np.ndarray:
+    """(k,) float: angles (rad) between unit normals (k, 3), from the cross product (arccos of a dot product
+    near 1 keeps half the digits); up to sign when ``unoriented``; 0 where a normal is undefined (NaN)."""
+    dot = np.einsum("ij,ij->i", na, nb)
+    angle = np.arctan2(np.linalg.norm(np.cross(na, nb), axis=1), np.abs(dot) if unoriented else dot)
+    return np.where(np.isnan(angle), 0.0, angle)  # singular points (zero-length derivative) have no normal
+
+
+def _set_creases_apart(gap: np.ndarray, angle: np.ndarray, first, second, crease_sides, samples: int):
+    """(gap, angle) with the samples on crease pieces zeroed, and the crease fields of the report."""
+    crease, unpaired = _crease_edges(first, second, crease_sides)
+    on_crease = np.repeat(crease, samples)
+    creases = {"crease_edges": int(crease.sum()), "max_crease_gap": float(gap[on_crease].max(initial=0.0)),
+               "unpaired_crease_sides": unpaired}
+    return np.where(on_crease, 0.0, gap), np.where(on_crease, 0.0, angle), creases
+
+
+def _crease_edges(first: np.ndarray, second: np.ndarray, crease_sides) -> tuple:
+    """((k,) bool: which matched side pairs are crease pieces, number of crease pieces not matched as such)."""
+    if crease_sides is None or len(crease_sides) == 0:
+        return np.zeros(first.size, dtype=bool), 0
+    pairs = np.sort(np.asarray(crease_sides, dtype=np.int64).reshape(-1, 2), axis=1)
+    matched = np.sort(np.stack([first, second], axis=1).astype(np.int64), axis=1)
+    width = int(max(pairs.max(), matched.max(initial=0))) + 1
+    known = np.unique(pairs[:, 0] * width + pairs[:, 1])
+    found = matched[:, 0] * width + matched[:, 1]
+    crease = np.isin(found, known)
+    return crease, int(known.size - np.unique(found[crease]).size)

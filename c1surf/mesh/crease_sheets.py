@@ -51,9 +51,9 @@ class CreaseSheets:
         vertex, and that sector's one real corner
     diagonal_mirrors : (D, 2) int, the two crease ghost quads' corners at the same vertex
     diagonal_corner : (D,) bool, the vertex is a corner (else a smooth crease vertex)
-    cut_edges : (E, 2) int, the crease edges cut (vertex pairs of the uncut mesh)
-    kept_edges : (K, 2) int, crease edges left uncut (in components that are not exact)
-    inexact_vertices : (k,) int, vertices of the uncut mesh that keep their components from being cut
+    cut_edges : (E, 2) int, the crease edges cut (vertex pairs, in ``names`` numbering)
+    kept_edges : (K, 2) int, crease edges left uncut (in components that are not exact; ``names``)
+    inexact_vertices : (k,) int, vertices that keep their components from being cut (``names``)
     """
 
     mesh: HalfEdgeMesh
@@ -121,7 +121,8 @@ def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: 
     return on_crease, on_crease & ~boundary & (smooth_ok | corner_ok), corner
 
 
-def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray) -> CreaseSheets | None:
+def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray,
+                      names: np.ndarray | None = None) -> CreaseSheets | None:
     """Cut ``mesh`` along the crease components it handles exactly and close every cut with ghost quads.
 
     Parameters
@@ -129,6 +130,7 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     mesh : HalfEdgeMesh, oriented, every vertex one fan (``repair.prepare_topology``)
     sharp : (H,) bool, half-edges on infinitely sharp edges
     tagged_corner : (V,) bool, infinitely sharp corners named by the input
+    names : (V,) int or None, the vertex numbers to report edges and vertices in (the input's)
 
     Returns
     -------
@@ -145,7 +147,8 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     bad[component[on_crease & ~exact]] = True
     cut = sharp & ~bad[component[mesh.origin]]
     once = (mesh.twin < 0) | (h_all < mesh.twin)
-    edges = lambda mask: np.sort(np.stack([mesh.origin[mask & once], mesh.dest[mask & once]], axis=1), axis=1)
+    names = np.arange(n) if names is None else np.asarray(names)
+    edges = lambda mask: np.sort(names[np.stack([mesh.origin[mask & once], mesh.dest[mask & once]], axis=1)], axis=1)
     if not cut.any():
         return None
     # one vertex per (vertex, sector) of the cut
@@ -199,7 +202,7 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
         diagonal_mirrors=np.stack([ghost_at_out[single], ghost_at_in[single]], axis=1),
         diagonal_corner=corner[copy_source[single]],
         cut_edges=edges(cut), kept_edges=edges(sharp & ~cut),
-        inexact_vertices=np.flatnonzero(on_crease & ~exact),
+        inexact_vertices=np.unique(names[on_crease & ~exact]),
     )
 
 

@@ -20,7 +20,7 @@ NOTE = ("sharp-feature tags honoured: crease (4 edges), corner (1 vertex), hole 
         "interpolateboundary 1 (c1surf's boundary rule, a ghost layer, always ends the surface on a curve along the "
         "boundary polygon); creasemethod (1 tag: c1surf's own crease rule is used (stencils.creases))")
 SHARP = ("infinitely sharp creases and corners (sharpness >= 10) are built as the sharpest G1 crease (sharpness 10: a "
-         "narrow G1 fillet), not as a C0 edge")
+         "narrow G1 fillet), not as a C0 edge (--exact-creases makes C0 seams where it can)")
 IGNORED = ("sharp-feature tags ignored (--ignore-tags), the surface is smooth: crease (4 edges), corner (1 vertex), "
            "hole (1 face), interpolateboundary 1, creasemethod (1 tag)")
 

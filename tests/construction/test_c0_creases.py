@@ -182,3 +182,29 @@ def test_without_the_option_nothing_is_cut():
 def test_exact_creases_refuse_vertex_interpolation():
     with pytest.raises(ValueError, match="exact creases"):
         SurfaceOptions(exact_creases=True, interpolate_vertices=True).check()
+
+
+def _infinitely_sharp(path) -> bool:
+    mesh = read_mesh(path)
+    return bool(np.any(mesh.tags.crease_sharpness >= SHARP) or np.any(mesh.tags.corner_sharpness >= SHARP))
+
+
+SHARP_CORPUS = ["catmark_cube_corner4", "catmark_cube_creases2", "catmark_cubes_infsharp", "catmark_edgenone",
+                "catmark_edgeonly", "catmark_fvar_project0", "catmark_inf_crease0", "catmark_inf_crease1",
+                "catmark_single_crease", "catmark_val2_interior"]
+
+
+@pytest.mark.parametrize("name", SHARP_CORPUS)
+def test_opensubdiv_files_with_infinitely_sharp_tags_meet_exactly_where_cut_and_stay_g1(name):
+    from c1surf.api import check_surface, surface_from_file
+
+    path = shared_mesh(f"opensubdiv/{name}.obj")
+    assert _infinitely_sharp(path)
+    surface, _ = surface_from_file(path, exact_creases=True)
+    report = check_surface(surface)
+    sheets = surface.topology.crease_sheets
+    assert report.unpaired_crease_sides == 0 and report.crease_edges == len(surface.crease_sides)
+    assert report.relative_crease_gap <= 1e-12 and report.relative_gap <= 1e-12
+    assert report.max_normal_jump <= 1e-10
+    cut = 0 if sheets is None else len(sheets.cut_edges)
+    assert cut == {"catmark_cube_creases2": 11, "catmark_cubes_infsharp": 15}.get(name, 0)

@@ -153,7 +153,7 @@ def _used_vertices(mesh: MeshFile) -> np.ndarray:
 
 def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = None, normals: bool = False,
                  attributes: bool = False, creases_file=None, crease_angle: float | None = None,
-                 ignore_tags: bool = False) -> SurfaceData:
+                 ignore_tags: bool = False, exact_creases: bool = False) -> SurfaceData:
     """Collect the extension data of ``mesh`` (see the module docstring).
 
     Parameters
@@ -172,7 +172,7 @@ def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = Non
     data = SurfaceData(points=np.asarray(mesh.points, dtype=np.float64))
     data.face_blend, data.vertex_blend = _blend_ratios(mesh, blend_file)
     data.weights = _weights(mesh, use_weights)
-    data.features, data.feature_notes = sharp_features(mesh, creases_file, crease_angle, ignore_tags)
+    data.features, data.feature_notes = sharp_features(mesh, creases_file, crease_angle, ignore_tags, exact_creases)
     if normals:
         data.vertex_normals = _vertex_normals(mesh)
     if attributes:

@@ -14,7 +14,7 @@ from ...evaluation.patch_set import FORMAT_NAME, FORMAT_VERSION
 from ..errors import MeshInputError
 from .merged import clamped_knots
 
-__all__ = ["check_header", "checked_adjacency", "checked_weights", "checked_piece"]
+__all__ = ["check_header", "checked_adjacency", "checked_weights", "checked_piece", "check_crease_sides"]
 
 
 def check_header(path, header) -> None:
@@ -79,3 +79,20 @@ def checked_piece(path, k: int, points, weights, knots_u, knots_v, patches, rota
         raise MeshInputError(str(path), f"{what}: patches must number biquadratic patches (0 .. {n_biquadratic - 1}) "
                              "and rotation count quarter turns (0 .. 3)")
     return MergedPiece(points, weights, knots_u, knots_v, patches, rotation)
+
+
+def check_crease_sides(path, header: dict, n_patches: int) -> None:
+    """The header's "crease_sides" ([[patch, side, patch, side], ...], docs/patch-format.md), if any, must name
+    sides of this file's patches, each at most once."""
+    if "crease_sides" not in header:
+        return
+    try:
+        rows = np.asarray(header["crease_sides"], dtype=np.int64).reshape(-1, 4)
+    except (ValueError, TypeError) as e:
+        raise MeshInputError(str(path), f'"crease_sides" must be rows [patch, side, patch, side] ({e})') from None
+    patches, sides = rows[:, [0, 2]], rows[:, [1, 3]]
+    if np.any((patches < 0) | (patches >= n_patches) | (sides < 0) | (sides > 3)):
+        raise MeshInputError(str(path), f'"crease_sides" names a side that is not one of the {n_patches} patches\' sides 0..3')
+    curves = (4 * patches + sides).ravel()
+    if np.unique(curves).size != curves.size:
+        raise MeshInputError(str(path), '"crease_sides" names a patch side twice')

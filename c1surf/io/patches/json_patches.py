@@ -26,7 +26,7 @@ import numpy as np
 
 from ...evaluation.patch_set import KIND_BY_DEGREE, PatchSet, degree_runs, surface_patch_set
 from ..errors import MeshInputError
-from .checks import check_header, checked_adjacency, checked_piece, checked_weights
+from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
 
 _PIECE_KEYS = ("points", "knots_u", "knots_v", "patches", "rotation")  # and "weights" when rational
 _SEPARATORS = (",", ":")  # compact, one line
@@ -148,6 +148,7 @@ def read_patch_set_json(path) -> PatchSet:
         adjacency = checked_adjacency(path, *([patch[key] for patch in entries] for key in ("corners", "edges", "reversed")),
                                       len(entries))
     header = {key: value for key, value in doc.items() if key not in ("patches", "merged")}
+    check_crease_sides(path, header, len(entries))
     return PatchSet(degree_runs(patches), adjacency, source_kind, source, header, _weights(path, entries, patches),
                     _merged(path, doc.get("merged", []), patches))
 

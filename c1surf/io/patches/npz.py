@@ -36,7 +36,7 @@ import numpy as np
 
 from ...evaluation.patch_set import FORMAT_NAME, PatchSet
 from ..errors import MeshInputError
-from .checks import check_header, checked_adjacency, checked_piece, checked_weights
+from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
 _STREAM_BLOCK = 1 << 15  # patches per block of a streamed file (bicubic: 12 MB)
@@ -234,6 +234,7 @@ def read_patch_set_npz(path) -> PatchSet:
         weights = [checked_weights(path, f"{name}_weights", data.get(f"{name}_weights"), g.shape[:3])
                    for name, g in (("biquadratic", quad), ("bicubic", cubic)) if len(g)]
     groups = [g for g in (quad, cubic) if len(g)]
+    check_crease_sides(path, header, len(quad) + len(cubic))
     return PatchSet(groups, adjacency, source_kind, source, header, weights, _merged(path, data, len(quad)))
 
 

@@ -37,7 +37,8 @@ OTHER_TAGS = {
 }
 
 
-def sharp_features(mesh, creases_file=None, crease_angle: float | None = None, ignore_tags: bool = False):
+def sharp_features(mesh, creases_file=None, crease_angle: float | None = None, ignore_tags: bool = False,
+                   exact_creases: bool = False):
     """The creases, corners and holes of ``mesh`` for the construction, and the notes about them.
 
     Parameters
@@ -46,6 +47,8 @@ def sharp_features(mesh, creases_file=None, crease_angle: float | None = None, i
     creases_file : path of a JSON sidecar, or None
     crease_angle : float degrees, or None
     ignore_tags : build the smooth surface: the file's tags are read and named in a note, not used
+    exact_creases : the construction makes infinitely sharp creases C0 where it can (its own note says
+        which); without it a note says they are the sharpest G1 crease
 
     Returns
     -------
@@ -61,9 +64,10 @@ def sharp_features(mesh, creases_file=None, crease_angle: float | None = None, i
         edges = feature_edges(mesh.face_sizes, mesh.face_vertices, mesh.points, crease_angle)
         features = features.merged(SharpFeatures(edges, np.full(len(edges), INFINITELY_SHARP)))
         notes.append(f"--crease-angle {crease_angle:g}: {len(edges)} edges with a dihedral angle above it are creases")
-    if np.any(features.crease_sharpness >= INFINITELY_SHARP) or np.any(features.corner_sharpness >= INFINITELY_SHARP):
+    infinite = np.any(features.crease_sharpness >= INFINITELY_SHARP) or np.any(features.corner_sharpness >= INFINITELY_SHARP)
+    if infinite and not exact_creases:
         notes.append("infinitely sharp creases and corners (sharpness >= 10) are built as the sharpest G1 crease "
-                     "(sharpness 10: a narrow G1 fillet), not as a C0 edge")
+                     "(sharpness 10: a narrow G1 fillet), not as a C0 edge (--exact-creases makes C0 seams where it can)")
     return (None if features.is_empty() else features), notes
 
 

@@ -32,7 +32,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ....evaluation.adjacency import SIDE_CORNERS
+from ....evaluation.adjacency import SIDE_CORNERS, with_seams
 from ....evaluation.patch_set import PatchSet
 
 FACE_PIECE, FACE_PATCH = 0, 1
@@ -184,6 +184,9 @@ def brep_topology(patch_set: PatchSet, tolerance: float = 1e-9) -> BRepTopology:
     BRepTopology
     """
     adjacency = patch_set.welding(tolerance)
+    seams = patch_set.crease_sides
+    if seams is not None and len(seams):  # C0 creases: their two sides are one B-rep edge
+        adjacency = with_seams(adjacency, seams, _same_direction(patch_set, seams))
     face_kind, face_index, face_size, face_of, patch, side, flip, uv = _face_borders(patch_set)
     side_edge = np.asarray(adjacency.edges)[patch, side].astype(np.int64)
     side_reversed = np.asarray(adjacency.reversed)[patch, side]
@@ -216,6 +219,17 @@ def brep_topology(patch_set: PatchSet, tolerance: float = 1e-9) -> BRepTopology:
     loop_start = np.r_[0, np.cumsum(np.bincount(face_of, minlength=face_kind.size))].astype(np.int64)
     return BRepTopology(face_kind, face_index, face_size, points, edge_vertices, edge_patch_side, edge_reversed,
                         edge_uses, loop_start, loop_edge, forward, uv)
+
+
+def _same_direction(patch_set: PatchSet, seams: np.ndarray) -> np.ndarray:
+    """(k,) bool: the two sides of each seam (curve ids) run the same way: the first one's start point is
+    nearer the second one's start than its end (the two curves are equal, so this is never close)."""
+    patch, side = np.divmod(seams, 4)
+    corners = SIDE_CORNERS[side]  # (k, 2, 2): start and end corner of both sides
+    start_a = _corner_positions(patch_set, patch[:, 0], corners[:, 0, 0])
+    start_b = _corner_positions(patch_set, patch[:, 1], corners[:, 1, 0])
+    end_b = _corner_positions(patch_set, patch[:, 1], corners[:, 1, 1])
+    return np.linalg.norm(start_a - start_b, axis=-1) <= np.linalg.norm(start_a - end_b, axis=-1)
 
 
 def _corner_positions(patch_set: PatchSet, patch: np.ndarray, corner: np.ndarray) -> np.ndarray:

@@ -1,0 +1,64 @@
+"""The patch sides on either side of a C0 crease, paired (``mesh.crease_sheets``; integers only).
+
+A crease side of a kept patch is the side dual to a refined edge from a real point to a ghost point:
+an edge that *crosses* the crease. Both sheets have one such crossing for every place the crease is
+crossed, named alike on both: by the uncut crease edge it lies on, the crease vertex it is next
+to, and the once-refined cell it lies in (the crease edge's E-cell, or the vertex's V-cell). Sides
+with the same name are the two sides of one crease curve piece.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_VERTEX
+
+SIDE_EDGE = np.array([3, 0, 1, 2])  # side s of a patch crosses its frame's half-edge e_{(s + 3) % 4}
+
+
+def crease_side_pairs(topology) -> np.ndarray:
+    """(k, 2) int: curve ids ``4 * patch + side`` of the two sides of every crease piece.
+
+    Parameters
+    ----------
+    topology : SurfaceTopology with ``crease_sheets`` (two refinements)
+
+    Returns
+    -------
+    (k, 2) int64, in the order of the first side's curve id; (0, 2) without C0 creases.
+    """
+    sheets = topology.crease_sheets
+    if sheets is None:
+        return np.zeros((0, 2), dtype=np.int64)
+    refined, level1, coarse, faces1 = topology.refined, topology.level1, topology.input, topology.faces1
+    frames = topology.frames
+    crossed = frames[:, SIDE_EDGE]  # (P, 4) refined half-edges from each patch's centre
+    real = topology.real_vertex
+    crease = ~real[refined.dest[crossed]]  # the neighbour across the side is a ghost point
+    crease[topology.quad_frames.shape[0]:] = False  # no A3 hole touches a C0 crease (every crease vertex has 4 faces)
+    patch, side = np.nonzero(crease)
+    h = crossed[patch, side]
+    near, far = refined.origin[h], refined.dest[h]  # level-2 points = level-1 half-edges (corners of level-1 cells)
+    cell = level1.face[near]
+    kind, parent = faces1.kind[cell], faces1.parent[cell]
+    source = np.full(coarse.n_vertices, -1, dtype=np.int64)
+    source[: sheets.vertex_source.size] = sheets.vertex_source
+    near_corner, far_corner = level1.origin[near], level1.origin[far]  # coarse half-edges (corners)
+    vertex = source[coarse.origin[near_corner]]  # the crease vertex the crossing is next to
+    # the crease edge: an E-cell's own edge; in a V-cell, the edge the ghost corner's quad lies across
+    # (a crease ghost quad (B, A, ., .) starts with the crease half-edge B -> A)
+    ghost_quad_first = coarse.face_offsets[coarse.face[far_corner]]
+    edge_halfedge = np.where(kind == FACE_FROM_EDGE, parent, ghost_quad_first)
+    a, b = source[coarse.origin[edge_halfedge]], source[coarse.dest[edge_halfedge]]
+    if not np.all((kind == FACE_FROM_EDGE) | (kind == FACE_FROM_VERTEX)):
+        raise ValueError("internal: a crease crossing in a face cell")
+    keys = np.stack([kind.astype(np.int64), vertex, np.minimum(a, b), np.maximum(a, b)], axis=1)
+    order = np.lexsort(keys.T[::-1])
+    keys, curves = keys[order], (4 * patch + side)[order]
+    same = np.all(keys[1:] == keys[:-1], axis=1)
+    if keys.shape[0] % 2 or not np.all(same[::2]) or (same.size > 1 and np.any(same[1::2])):
+        raise ValueError("internal: a crease side without exactly one partner")
+    pairs = np.sort(curves.reshape(-1, 2), axis=1)
+    return pairs[np.argsort(pairs[:, 0])]
+
+
+__all__ = ["crease_side_pairs"]

@@ -1,0 +1,135 @@
+"""convert/check --exact-creases: C0 creases in every output (patch files list the crease sides, check
+measures their gap, tessellations split normals along them, STEP/IGES solids close over them)."""
+from __future__ import annotations
+
+import json
+import os
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+from plyfile import PlyData
+
+from c1surf.cli.main import main
+
+from conftest import SAMPLES, shared_mesh
+
+CUBE = SAMPLES / "cube.obj"  # side 2, centred on the origin
+
+
+def run(*args, env=None):
+    return CliRunner(env=env).invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+@pytest.fixture(scope="module")
+def sharp_cube(tmp_path_factory):
+    """The sample cube with every edge an infinitely sharp crease (--crease-angle 40), C0."""
+    d = tmp_path_factory.mktemp("cube")
+    result = run("convert", CUBE, "-o", d / "cube.ply", "-r", 5, "--crease-angle", 40, "--exact-creases",
+                 "--patches", d / "cube.json", "--patches", d / "cube.npz", "--patches", d / "cube.step",
+                 "--patches", d / "cube.igs")
+    assert result.exit_code == 0, result.output
+    return d, result
+
+
+def test_the_patch_files_list_the_crease_sides_and_check_measures_them(sharp_cube):
+    d, result = sharp_cube
+    assert "--exact-creases: 12 of 12 infinitely sharp crease edges are C0 seams" in result.stderr
+    doc = json.loads((d / "cube.json").read_text())
+    rows = np.array(doc["crease_sides"])
+    assert rows.shape == (48, 4) and set(rows[:, [1, 3]].ravel()) <= {0, 1, 2, 3}
+    for name in ("cube.json", "cube.npz"):
+        check = run("check", d / name)
+        assert check.exit_code == 0, check.output
+        assert "crease edges:     48 of 48 listed, max gap 0.000e+00" in check.output
+        assert "G1: yes" in check.output
+
+
+def test_the_tessellation_is_the_cube_with_split_normals(sharp_cube):
+    d, _ = sharp_cube
+    vertex = PlyData.read(str(d / "cube.ply"))["vertex"]
+    points = np.stack([vertex["x"], vertex["y"], vertex["z"]], axis=1)
+    normals = np.stack([vertex["nx"], vertex["ny"], vertex["nz"]], axis=1)
+    # every vertex on a face of the cube; every normal that face's (none averaged across an edge)
+    assert np.abs(np.abs(points).max(axis=1) - 1.0).max() <= 1e-12
+    assert np.abs(np.abs(normals).max(axis=1) - 1.0).max() <= 1e-12
+    assert np.abs(np.sort(np.abs(normals), axis=1)[:, :2]).max() <= 1e-12
+    # the corners are reached, once per face they belong to
+    corners = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], dtype=float)
+    hits = [(np.linalg.norm(points - c, axis=1) <= 1e-12).sum() for c in corners]
+    assert hits == [3] * 8
+
+
+@pytest.mark.parametrize("name", ["cube.step", "cube.igs"])
+def test_cad_files_are_one_closed_valid_solid_of_the_cube(sharp_cube, name):
+    pytest.importorskip("OCP")
+    from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.BRepGProp import BRepGProp
+    from OCP.GProp import GProp_GProps
+    from OCP.IGESControl import IGESControl_Reader
+    from OCP.STEPControl import STEPControl_Reader
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_SOLID
+    from OCP.TopExp import TopExp_Explorer
+
+    d, _ = sharp_cube
+    reader = STEPControl_Reader() if name.endswith(".step") else IGESControl_Reader()
+    reader.ReadFile(str(d / name))
+    reader.TransferRoots()
+    shape = reader.OneShape()
+
+    def count(kind):
+        explorer, n = TopExp_Explorer(shape, kind), 0
+        while explorer.More():
+            n, _ = n + 1, explorer.Next()
+        return n
+
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape, props)
+    assert count(TopAbs_SOLID) == 1 and count(TopAbs_FACE) == 6
+    assert BRepCheck_Analyzer(shape).IsValid()
+    assert abs(props.Mass() - 8.0) <= 1e-12
+
+
+def test_check_fails_when_a_listed_crease_does_not_meet(sharp_cube, tmp_path):
+    d, _ = sharp_cube
+    doc = json.loads((d / "cube.json").read_text())
+    first, second = doc["crease_sides"][0], doc["crease_sides"][1]
+    doc["crease_sides"][0] = [first[0], first[1], second[2], second[3]]  # two sides that are not one edge
+    doc["crease_sides"][1] = [second[0], second[1], first[2], first[3]]
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    check = run("check", bad)
+    assert check.exit_code == 1
+    assert "crease edges whose two sides do not meet: 2" in check.output and "G1: NO" in check.output
+
+
+def test_malformed_crease_sides_are_one_line(sharp_cube, tmp_path):
+    d, _ = sharp_cube
+    doc = json.loads((d / "cube.json").read_text())
+    doc["crease_sides"][0] = [0, 7, 1, 0]
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps(doc))
+    check = run("check", bad)
+    assert check.exit_code != 0
+    assert check.stderr.strip().splitlines()[-1].startswith("c1surf: error:") and "crease_sides" in check.stderr
+
+
+def test_crease_lines_that_are_not_exact_are_named(tmp_path):
+    result = run("check", shared_mesh("opensubdiv/catmark_cubes_infsharp.obj"), "--exact-creases")
+    assert result.exit_code == 0, result.output
+    assert "--exact-creases: 15 of 17 infinitely sharp crease edges are C0 seams" in result.stderr
+    assert "2 infinitely sharp crease edges stay the sharpest G1 crease" in result.stderr
+    assert "1 infinitely sharp corners are not on a C0 seam" in result.stderr
+    assert "crease edges:     60 of 60 listed" in result.output
+
+
+def test_streamed_and_in_memory_files_are_identical(tmp_path):
+    outputs = {}
+    for stream in ("1", "0"):
+        d = tmp_path / stream
+        d.mkdir()
+        result = run("convert", CUBE, "-o", d / "c.ply", "-r", 4, "--crease-angle", 40, "--exact-creases",
+                     "--patches", d / "c.json", "--patches", d / "c.npz", env={"C1SURF_STREAM": stream})
+        assert result.exit_code == 0, result.output
+        outputs[stream] = [(d / name).read_bytes() for name in ("c.ply", "c.json", "c.npz")]
+    assert outputs["1"] == outputs["0"]
