@@ -4,7 +4,8 @@ A crease side of a kept patch is the side dual to a refined edge from a real poi
 an edge that *crosses* the crease. Both sheets have one such crossing for every place the crease is
 crossed, named alike on both: by the uncut crease edge it lies on, the crease vertex it is next
 to, and the once-refined cell it lies in (the crease edge's E-cell, or the vertex's V-cell). Sides
-with the same name are the two sides of one crease curve piece.
+with the same name are the two sides of one crease curve piece; the sides along a cut boundary
+(``CreaseSheets.open_edges``) have none and stay boundary sides.
 """
 from __future__ import annotations
 
@@ -38,6 +39,9 @@ def crease_side_pairs(topology) -> np.ndarray:
     patch, side = np.nonzero(crease)
     h = crossed[patch, side]
     near, far = refined.origin[h], refined.dest[h]  # level-2 points = level-1 half-edges (corners of level-1 cells)
+    # a ghost point of the sheets' ghost quads, not of the ghost layer closing the mesh boundary
+    ours = np.isin(coarse.face[level1.origin[far]], sheets.ghost_faces)
+    patch, side, near, far = patch[ours], side[ours], near[ours], far[ours]
     cell = level1.face[near]
     kind, parent = faces1.kind[cell], faces1.parent[cell]
     source = np.full(coarse.n_vertices, -1, dtype=np.int64)
@@ -52,6 +56,9 @@ def crease_side_pairs(topology) -> np.ndarray:
     if not np.all((kind == FACE_FROM_EDGE) | (kind == FACE_FROM_VERTEX)):
         raise ValueError("internal: a crease crossing in a face cell")
     keys = np.stack([kind.astype(np.int64), vertex, np.minimum(a, b), np.maximum(a, b)], axis=1)
+    width = int(source.max(initial=0)) + 1
+    on_boundary = np.isin(keys[:, 2] * width + keys[:, 3], sheets.open_edges[:, 0] * width + sheets.open_edges[:, 1])
+    keys, patch, side = keys[~on_boundary], patch[~on_boundary], side[~on_boundary]  # one side: a boundary
     order = np.lexsort(keys.T[::-1])
     keys, curves = keys[order], (4 * patch + side)[order]
     same = np.all(keys[1:] == keys[:-1], axis=1)

@@ -13,11 +13,16 @@ vertex, after the first step, to the mirror of the real point across the crease;
 build the same crease curve from crease points only. This module is the integers: which crease
 components the construction makes exact, the cut, the ghost quads and the mirror pairs.
 
-Exact (``exact_crease_vertices``): a vertex on two crease edges whose sectors have one or two faces
-each (quad meshes: valence 3 or 4 on the crease), and a corner (three or more crease edges, or a
-tagged corner) whose sectors have one face each (a box's corners). A crease component (crease edges
-joined at vertices) is cut only when all its vertices are exact and none is on the mesh boundary;
-the others keep the sharpest G1 crease of ``stencils.creases`` (the caller says which, in a note).
+Exact (``exact_crease_vertices``): a vertex on two seam edges whose sectors have one or two faces
+each (quad meshes: valence 3 or 4 on the crease), and a corner (three or more seam edges, a tagged
+corner, or a boundary vertex in one face) whose sectors have one face each (a box's corners). The
+mesh boundary is a seam with one side: a crease that reaches it cuts the boundary loop too, whose
+ghost quads are then mirrored like a crease's (the boundary curve becomes the quadratic B-spline of
+the twice Chaikin-refined boundary polygon, ending at corners), so the crease ends at a corner of
+the boundary curve. A seam component (crease and boundary edges joined at vertices) that holds a
+crease is cut only when all its vertices are exact; the others keep the sharpest G1 crease of
+``stencils.creases`` (the caller says which, in a note), and boundary loops that no crease reaches
+keep the ghost layer's rule (``mesh.ghost_layer``).
 """
 from __future__ import annotations
 
@@ -52,6 +57,8 @@ class CreaseSheets:
     diagonal_mirrors : (D, 2) int, the two crease ghost quads' corners at the same vertex
     diagonal_corner : (D,) bool, the vertex is a corner (else a smooth crease vertex)
     cut_edges : (E, 2) int, the crease edges cut (vertex pairs, in ``names`` numbering)
+    open_edges : (B, 2) int, the boundary edges cut with them (vertex pairs of the uncut mesh): their
+        ghost quads are mirrored too, but they have one side
     kept_edges : (K, 2) int, crease edges left uncut (in components that are not exact; ``names``)
     inexact_vertices : (k,) int, vertices that keep their components from being cut (``names``)
     """
@@ -68,6 +75,7 @@ class CreaseSheets:
     diagonal_mirrors: np.ndarray
     diagonal_corner: np.ndarray
     cut_edges: np.ndarray
+    open_edges: np.ndarray
     kept_edges: np.ndarray
     inexact_vertices: np.ndarray
 
@@ -90,7 +98,10 @@ def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
 
 
 def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray):
-    """Which vertices on sharp edges the C0 crease handles exactly.
+    """Which vertices on seams (sharp edges and the mesh boundary) the C0 crease handles exactly.
+
+    The mesh boundary counts as a seam with one side: where a crease reaches it, the boundary is cut
+    and mirrored as the crease is, so the crease ends at a corner of the boundary curve.
 
     Parameters
     ----------
@@ -100,25 +111,26 @@ def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: 
 
     Returns
     -------
-    on_crease : (V,) bool, vertices on a sharp edge
+    on_seam : (V,) bool, vertices on a sharp or boundary edge
     exact : (V,) bool, of those, the ones handled exactly (module docstring)
-    corner : (V,) bool, corners (three or more sharp edges, or tagged)
+    corner : (V,) bool, corners: three or more seam edges, a tagged corner, or a boundary vertex in one face
     """
     n = mesh.n_vertices
-    once = sharp & ((mesh.twin < 0) | (np.arange(mesh.n_halfedges) < mesh.twin))
-    crease_edges = np.bincount(np.r_[mesh.origin[once], mesh.dest[once]], minlength=n)
-    on_crease = crease_edges > 0
-    corner = on_crease & ((crease_edges >= 3) | tagged_corner)
-    sector = corner_sectors(mesh, sharp)
+    open_ = mesh.twin < 0
+    seam = sharp | open_
+    once = seam & (open_ | (np.arange(mesh.n_halfedges) < mesh.twin))
+    seam_edges = np.bincount(np.r_[mesh.origin[once], mesh.dest[once]], minlength=n)
+    on_seam = seam_edges > 0
+    sector = corner_sectors(mesh, seam)
     size = np.bincount(sector, minlength=mesh.n_halfedges)[sector]  # faces in each corner's sector
     largest = np.zeros(n, dtype=np.int64)
     np.maximum.at(largest, mesh.origin, size)
     boundary = np.zeros(n, dtype=bool)
-    boundary[mesh.origin[mesh.twin < 0]] = True
-    boundary[mesh.dest[mesh.twin < 0]] = True
-    smooth_ok = (crease_edges == 2) & ~corner & (largest <= 2)
-    corner_ok = corner & (crease_edges >= 2) & (largest == 1)
-    return on_crease, on_crease & ~boundary & (smooth_ok | corner_ok), corner
+    boundary[mesh.origin[open_]] = True
+    corner = on_seam & ((seam_edges >= 3) | tagged_corner | (boundary & (largest == 1)))
+    smooth_ok = (seam_edges == 2) & ~corner & (largest <= 2)
+    corner_ok = corner & (seam_edges >= 2) & (largest == 1)
+    return on_seam, on_seam & (smooth_ok | corner_ok), corner
 
 
 def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray,
@@ -139,13 +151,18 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     share their index arrays; split up they would pass a dozen arrays between them.
     """
     n, h_all = mesh.n_vertices, np.arange(mesh.n_halfedges)
-    on_crease, exact, corner = exact_crease_vertices(mesh, sharp, tagged_corner)
-    # crease components: vertices joined by sharp edges; cut those whose every vertex is exact
-    a, b = mesh.origin[sharp], mesh.dest[sharp]
+    on_seam, exact, corner = exact_crease_vertices(mesh, sharp, tagged_corner)
+    # seam components: vertices joined by sharp or boundary edges; cut those that hold a sharp edge
+    # and whose every vertex is exact (a boundary loop no crease reaches keeps the ghost layer's rule)
+    seam = sharp | (mesh.twin < 0)
+    a, b = mesh.origin[seam], mesh.dest[seam]
     component = connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(n, n)), directed=False)[1]
+    creased = np.zeros(component.max() + 1, dtype=bool)
+    creased[component[mesh.origin[sharp]]] = True
     bad = np.zeros(component.max() + 1, dtype=bool)
-    bad[component[on_crease & ~exact]] = True
-    cut = sharp & ~bad[component[mesh.origin]]
+    bad[component[on_seam & ~exact]] = True
+    cut = seam & creased[component[mesh.origin]] & ~bad[component[mesh.origin]]
+    on_crease = on_seam & creased[component]
     once = (mesh.twin < 0) | (h_all < mesh.twin)
     names = np.arange(n) if names is None else np.asarray(names)
     edges = lambda mask: np.sort(names[np.stack([mesh.origin[mask & once], mesh.dest[mask & once]], axis=1)], axis=1)
@@ -201,7 +218,8 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
         diagonal_ghost=diagonal_ghost, diagonal_real=real_of[single],
         diagonal_mirrors=np.stack([ghost_at_out[single], ghost_at_in[single]], axis=1),
         diagonal_corner=corner[copy_source[single]],
-        cut_edges=edges(cut), kept_edges=edges(sharp & ~cut),
+        cut_edges=edges(cut & sharp), kept_edges=edges(sharp & ~cut),
+        open_edges=np.sort(np.stack([mesh.origin[cut & (mesh.twin < 0)], mesh.dest[cut & (mesh.twin < 0)]], axis=1), axis=1),
         inexact_vertices=np.unique(names[on_crease & ~exact]),
     )
 

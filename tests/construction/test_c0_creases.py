@@ -207,4 +207,24 @@ def test_opensubdiv_files_with_infinitely_sharp_tags_meet_exactly_where_cut_and_
     assert report.relative_crease_gap <= 1e-12 and report.relative_gap <= 1e-12
     assert report.max_normal_jump <= 1e-10
     cut = 0 if sheets is None else len(sheets.cut_edges)
-    assert cut == {"catmark_cube_creases2": 11, "catmark_cubes_infsharp": 15}.get(name, 0)
+    # cut: closed crease components, and those reaching the boundary with one-face sectors there
+    assert cut == {"catmark_cube_creases2": 11, "catmark_cubes_infsharp": 15, "catmark_edgenone": 18,
+                   "catmark_single_crease": 4, "catmark_val2_interior": 3}.get(name, 0)
+
+
+def test_a_crease_reaching_the_boundary_ends_at_a_corner_of_the_boundary_curve():
+    # catmark_edgenone: crease tags along boundaries and a tagged corner (vertex 48) on one
+    from c1surf.api import surface_from_file
+
+    surface, mesh = surface_from_file(shared_mesh("opensubdiv/catmark_edgenone.obj"), exact_creases=True)
+    assert 48 in mesh.tags.corner_vertices
+    patch_corners = np.concatenate([surface.biquadratic[:, ::2, ::2].reshape(-1, 3), surface.bicubic[:, ::3, ::3].reshape(-1, 3)])
+    assert np.linalg.norm(patch_corners - mesh.points[48], axis=1).min() <= 1e-12
+    # a boundary loop that no crease reaches keeps the ghost layer's rule: the one grid of the four
+    # without tags (a quarter of the patches) is the untagged surface's, bit for bit
+    from scipy.spatial import cKDTree
+
+    plain, _ = surface_from_file(shared_mesh("opensubdiv/catmark_edgenone.obj"), ignore_tags=True)
+    flat = lambda s: s.biquadratic.reshape(len(s.biquadratic), -1)
+    distance, _ = cKDTree(flat(surface)).query(flat(plain))
+    assert (distance == 0).sum() >= len(plain.biquadratic) // 4
