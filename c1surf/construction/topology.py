@@ -197,7 +197,9 @@ def pulled_sharpness(coarse: HalfEdgeMesh, vertex_source: np.ndarray, features: 
         return sharp
     cut = np.full(coarse.n_vertices, False)
     cut[: sheets.crease_vertex.size] = sheets.crease_vertex >= 0
-    halfedge, vertex = np.where(cut[coarse.origin], 0.0, sharp.halfedge), np.where(cut, 0.0, sharp.vertex)
+    halfedge, vertex = sharp.halfedge.copy(), np.where(cut, 0.0, sharp.vertex)
+    halfedge[sheets.cut_halfedges] = 0.0  # the seams (the semi-sharp edges at their vertices keep their pull)
+    halfedge[np.isin(coarse.face, sheets.ghost_faces)] = 0.0
     return CoarseSharpness(halfedge, vertex) if (halfedge > 0).any() or (vertex > 0).any() else None
 
 

@@ -50,6 +50,7 @@ class CreaseSheets:
         vertex, and the real corner it mirrors (the same vertex, the face across the crease edge)
     mirror_toward : (M,) int, vertex of ``mesh`` at the other end of that crease edge (the crease
         polygon's Chaikin point lies between the corner's vertex and this one)
+    cut_halfedges : (C,) int, the half-edges cut (crease and boundary; the same numbers in ``mesh``)
     crease_vertex : (V',) int, vertex of the uncut mesh of every vertex of ``mesh`` on a cut crease
         (its copies and the ghost vertices at it), -1 elsewhere: the corners there share one blend ratio
     diagonal_ghost, diagonal_real : (D,) int, the diagonal ghost quad's corner at a one-face sector's
@@ -69,6 +70,7 @@ class CreaseSheets:
     mirror_ghost: np.ndarray
     mirror_real: np.ndarray
     mirror_toward: np.ndarray
+    cut_halfedges: np.ndarray
     crease_vertex: np.ndarray
     diagonal_ghost: np.ndarray
     diagonal_real: np.ndarray
@@ -214,7 +216,7 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     crease_vertex = np.where(on_cut[source], source, -1)
     return CreaseSheets(
         mesh=cut_mesh, vertex_source=source, ghost_faces=mesh.n_faces + np.arange(len(ghost_quads)),
-        mirror_ghost=mirror_ghost, mirror_real=mirror_real, mirror_toward=mirror_toward, crease_vertex=crease_vertex,
+        mirror_ghost=mirror_ghost, mirror_real=mirror_real, mirror_toward=mirror_toward, cut_halfedges=leaving, crease_vertex=crease_vertex,
         diagonal_ghost=diagonal_ghost, diagonal_real=real_of[single],
         diagonal_mirrors=np.stack([ghost_at_out[single], ghost_at_in[single]], axis=1),
         diagonal_corner=corner[copy_source[single]],

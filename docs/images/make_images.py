@@ -36,7 +36,52 @@ def main():
                "--range", "0", "10")
     broken_pair(HERE / "misprint_zebra.png")
     crease_strip(HERE / "crease_sharpness.png")
+    c0_crease_pair(HERE / "c0_creases.png")
     valence_two_diagram(HERE / "valence_two.png")
+
+
+def crease_strip(path):
+    """The sample cube with its 12 edges tagged as creases of sharpness 0, 0.5, 1, 2 and 10, side by side."""
+    import tempfile
+
+    cube = (ROOT / "sample_meshes" / "cube.obj").read_text()
+    faces = [[int(v) - 1 for v in line.split()[1:]] for line in cube.splitlines() if line.startswith("f ")]
+    edges = sorted({tuple(sorted((f[i], f[(i + 1) % 4]))) for f in faces for i in range(4)})
+    tiles = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for s in (0, 0.5, 1, 2, 10):
+            mesh = Path(tmp) / f"cube_{s}.obj"
+            mesh.write_text(cube + "".join(f"t crease 2/1/0 {a} {b} {s}\n" for a, b in edges))
+            png = Path(tmp) / f"cube_{s}.png"
+            c1surf("render", mesh, "--png", png, "--size", "220x200", "--range", "0", "8")
+            tiles.append((Image.open(png).convert("RGB"), f"sharpness {s:g}"))
+    out = Image.new("RGB", (5 * 220, 220), (255, 255, 255))
+    draw = ImageDraw.Draw(out)
+    for k, (tile, label) in enumerate(tiles):
+        out.paste(tile, (k * 220, 20))
+        draw.text((k * 220 + 6, 4), label, fill=(0, 0, 0))
+    out.save(path, optimize=True)
+
+
+def c0_crease_pair(path):
+    """Reflection lines of the sample cube with every edge an infinitely sharp crease (--crease-angle 40):
+    the sharpest G1 crease (the default: narrow fillets) and the C0 seams of --exact-creases (the cube)."""
+    import tempfile
+
+    tiles = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for label, extra in (("default: the sharpest G1 crease", ()), ("--exact-creases: C0 seams", ("--exact-creases",))):
+            patches, png = Path(tmp) / "p.json", Path(tmp) / "z.png"
+            c1surf("convert", ROOT / "sample_meshes" / "cube.obj", "-o", Path(tmp) / "m.ply", "-r", "2",
+                   "--crease-angle", "40", "--patches", patches, *extra)
+            c1surf("render", patches, "--zebra", png, "--size", "300x280", "--stripes", "10", "--view", "iso")
+            tiles.append((Image.open(png).convert("RGB"), label))
+    out = Image.new("RGB", (2 * 300 + 10, 300), (255, 255, 255))
+    draw = ImageDraw.Draw(out)
+    for k, (tile, label) in enumerate(tiles):
+        out.paste(tile, (k * 310, 20))
+        draw.text((k * 310 + 6, 4), label, fill=(0, 0, 0))
+    out.save(path, optimize=True)
 
 
 def valence_two_diagram(path):

@@ -221,10 +221,10 @@ def test_a_crease_reaching_the_boundary_ends_at_a_corner_of_the_boundary_curve()
     patch_corners = np.concatenate([surface.biquadratic[:, ::2, ::2].reshape(-1, 3), surface.bicubic[:, ::3, ::3].reshape(-1, 3)])
     assert np.linalg.norm(patch_corners - mesh.points[48], axis=1).min() <= 1e-12
     # a boundary loop that no crease reaches keeps the ghost layer's rule: the one grid of the four
-    # without tags (a quarter of the patches) is the untagged surface's, bit for bit
+    # without tags (a quarter of the patches) is the untagged surface's (to round-off)
     from scipy.spatial import cKDTree
 
     plain, _ = surface_from_file(shared_mesh("opensubdiv/catmark_edgenone.obj"), ignore_tags=True)
     flat = lambda s: s.biquadratic.reshape(len(s.biquadratic), -1)
     distance, _ = cKDTree(flat(surface)).query(flat(plain))
-    assert (distance == 0).sum() >= len(plain.biquadratic) // 4
+    assert (distance <= 1e-12).sum() >= len(plain.biquadratic) // 4
