@@ -77,14 +77,20 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
 
 def crease_notes(surface) -> list[str]:
     """With ``--exact-creases``: how many infinitely sharp crease edges became C0 seams, and which did not, why."""
-    options, features = getattr(surface, "options", None), getattr(surface, "features", None)
-    if not getattr(options, "exact_creases", False) or features is None:
+    options = getattr(surface, "options", None)
+    return seam_notes(getattr(options, "exact_creases", False), getattr(surface, "features", None),
+                      getattr(surface, "topology", None))
+
+
+def seam_notes(exact_creases: bool, features, topology) -> list[str]:
+    """``crease_notes`` of a surface's parts: the option, its SharpFeatures and its SurfaceTopology."""
+    if not exact_creases or features is None or topology is None:
         return []
     sharp = int(np.count_nonzero(features.crease_sharpness >= INFINITELY_SHARP))
     corners = np.unique(features.corner_vertices[features.corner_sharpness >= INFINITELY_SHARP])
     if sharp == 0 and corners.size == 0:
         return []
-    sheets = surface.topology.crease_sheets
+    sheets = topology.crease_sheets
     cut = 0 if sheets is None else len(sheets.cut_edges)
     kept = sharp - cut
     notes = [f"--exact-creases: {cut} of {sharp} infinitely sharp crease edges are C0 seams"] if cut else []

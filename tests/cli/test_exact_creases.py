@@ -133,3 +133,13 @@ def test_streamed_and_in_memory_files_are_identical(tmp_path):
         assert result.exit_code == 0, result.output
         outputs[stream] = [(d / name).read_bytes() for name in ("c.ply", "c.json", "c.npz")]
     assert outputs["1"] == outputs["0"]
+
+
+def test_inspect_plans_the_seams_that_convert_makes(tmp_path):
+    path = shared_mesh("opensubdiv/catmark_cubes_infsharp.obj")
+    report = json.loads(run("inspect", path, "--exact-creases", "--json").output)
+    assert "--exact-creases: 15 of 17 infinitely sharp crease edges are C0 seams" in report["notes"]
+    result = run("convert", path, "-o", tmp_path / "x.ply", "--exact-creases", "--patches", tmp_path / "x.json")
+    assert result.exit_code == 0, result.output
+    counts = json.loads((tmp_path / "x.json").read_text())["counts"]
+    assert (report["patches"]["biquadratic"], report["patches"]["bicubic"]) == (counts["biquadratic"], counts["bicubic"])

@@ -26,7 +26,7 @@ from ...io.registry import MESH_WRITERS
 from ...mesh.errors import TopologyError
 from ...mesh.repair import prepare_topology
 from ...mesh.statistics import degenerate_faces, histogram, mesh_statistics
-from ..common import Failure, friendly_errors, repair_notes, topology_failure
+from ..common import Failure, friendly_errors, repair_notes, seam_notes, topology_failure
 from ..convert import check_tessellation_size, tessellation_bytes
 
 PLY_HEADER_BYTES = 250  # about: the header of convert's binary PLY (xyz and normals as double)
@@ -41,9 +41,11 @@ REPAIR_KEYS = ("flipped_faces", "split_vertices", "unused_vertices", "components
               help="The --resolution of the conversion the output sizes are estimated for.")
 @click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default="2", show_default=True,
               help="The --refinements of the conversion (the patch counts depend on it).")
+@click.option("--exact-creases", is_flag=True, help="Plan the C0 seams of `convert --exact-creases` (the notes say "
+              "which infinitely sharp creases become seams; the patch counts follow).")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (keys: README, \"Inspecting a mesh\").")
 @friendly_errors
-def inspect(input_path, resolution, refinements, as_json):
+def inspect(input_path, resolution, refinements, exact_creases, as_json):
     """Report what c1surf sees in the mesh INPUT and what `convert` would do with it.
 
     Counts (faces by size, valences, boundary loops, components with their
@@ -53,7 +55,7 @@ def inspect(input_path, resolution, refinements, as_json):
     the output sizes at --resolution. Exits 0 for a refused mesh too; 1 only
     when the file cannot be read.
     """
-    report = inspection(input_path, resolution, refinements if refinements == "auto" else int(refinements))
+    report = inspection(input_path, resolution, refinements if refinements == "auto" else int(refinements), exact_creases)
     if as_json:
         click.echo(json.dumps(report, indent=2))
     else:
@@ -61,7 +63,7 @@ def inspect(input_path, resolution, refinements, as_json):
             click.echo(line)
 
 
-def inspection(path, resolution: int, refinements) -> dict:
+def inspection(path, resolution: int, refinements, exact_creases: bool = False) -> dict:
     """The report of ``c1surf inspect`` as a JSON-ready dict (keys: README, "Inspecting a mesh").
 
     Raises MeshInputError (through ``read_mesh``) only for a file that cannot be read at all.
@@ -71,7 +73,7 @@ def inspection(path, resolution: int, refinements) -> dict:
     mesh, refusal = converted_mesh(raw, degenerate.size > 0)
     stats = mesh_statistics(*usable_faces(mesh.face_sizes, mesh.face_vertices), mesh.n_vertices)
     topology, repairs = None, None
-    features, feature_notes = sharp_features(mesh)  # the file's tags, as convert honours them
+    features, feature_notes = sharp_features(mesh, exact_creases=exact_creases)  # the file's tags, as convert honours them
     data = SurfaceData(mesh.points, features=features, feature_notes=feature_notes)
     built = mesh
     if refusal is None:
@@ -80,7 +82,7 @@ def inspection(path, resolution: int, refinements) -> dict:
         except MeshInputError as e:
             refusal = str(e)
     if refusal is None:
-        topology, repairs, refusal = plan(built, refinements, data.features)
+        topology, repairs, refusal = plan(built, refinements, data.features, exact_creases)
     outputs = None
     if topology is not None:
         outputs = output_sizes(topology, resolution)
@@ -99,11 +101,21 @@ def inspection(path, resolution: int, refinements) -> dict:
         "collapsed_corners": int(mesh.collapsed_corners),
         "tags": tags_dict(mesh.tags),
         "repairs": repairs,
-        "notes": repair_notes(topology, built, data) if topology is not None else data.feature_notes,
+        "notes": planned_notes(topology, built, data, exact_creases),
         "refused": refusal,
         "patches": None if topology is None else patch_counts(topology),
         "output": outputs,
     }
+
+
+def planned_notes(topology, built, data, exact_creases: bool) -> list[str]:
+    """The notes ``convert`` would print: the sharp features', the C0 seams' (``--exact-creases``), the repairs'."""
+    if topology is None:
+        return list(data.feature_notes)
+    notes = repair_notes(topology, built, data)  # the feature notes first
+    at = len(data.feature_notes)
+    notes[at:at] = seam_notes(exact_creases, data.features, topology)
+    return notes
 
 
 def converted_mesh(raw, degenerate: bool):
@@ -130,7 +142,7 @@ def usable_faces(face_sizes: np.ndarray, face_vertices: np.ndarray):
     return face_sizes[keep], face_vertices[np.repeat(keep, face_sizes)]
 
 
-def plan(mesh, refinements, features=None):
+def plan(mesh, refinements, features=None, exact_creases: bool = False):
     """(SurfaceTopology or None, repairs dict or None, refusal or None) of what ``convert`` would build.
 
     The refusal is the one line ``convert`` prints (without ``c1surf: error:``); ``features``:
@@ -138,7 +150,7 @@ def plan(mesh, refinements, features=None):
     """
     try:
         topology = build_topology(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices, refinements,
-                                  features=features)
+                                  features=features, exact_creases=exact_creases)
     except TopologyError as e:
         return None, repairs_before(mesh), topology_failure(e, mesh).message
     return topology, {key: topology.repairs[key] for key in REPAIR_KEYS}, None
