@@ -228,3 +228,52 @@ def test_a_crease_reaching_the_boundary_ends_at_a_corner_of_the_boundary_curve()
     flat = lambda s: s.biquadratic.reshape(len(s.biquadratic), -1)
     distance, _ = cKDTree(flat(surface)).query(flat(plain))
     assert (distance <= 1e-12).sum() >= len(plain.biquadratic) // 4
+
+
+def random_rings(seed, nu=8, nv=6):
+    """(points, sizes, corners, rings (k, 2), rng): two rings each way around ``creased_torus``; even seeds
+    keep them off the triangles' and the hexagon's vertices (exact), odd seeds anywhere."""
+    rng = np.random.default_rng(100 + seed)
+    points, sizes, corners, _ = creased_torus(nu=nu, nv=nv, noise=0.05, hexagon=bool(seed % 2), seed=seed)
+    at = lambda a, b: (a % nu) * nv + (b % nv)
+    around_u, around_v = (np.arange(nv), np.arange(nu)) if seed % 2 else ([2, 3], [0, 1, 2])
+    rings = [[at(a, b), at(a + 1, b)] for b in rng.choice(around_u, 2, replace=False) for a in range(nu)]
+    rings += [[at(a, b), at(a, b + 1)] for a in rng.choice(around_v, 2, replace=False) for b in range(nv)]
+    return points, sizes, corners, np.unique(np.sort(np.array(rings), axis=1), axis=0), rng
+
+
+@pytest.mark.parametrize("seed", range(8))
+def test_random_crease_rings_on_a_noisy_quad_torus_meet_exactly_or_stay_g1(seed):
+    """Random rings of edges around a noisy quad torus made infinitely sharp, plus a few random edges:
+    crossings are corners of four one-face sectors, rings through the triangles or the hexagon have
+    vertices that are not exact, stray edges make darts. Every component the sheets cut meets exactly,
+    everything else stays G1, nothing is left unpaired, and it stays linear in the points."""
+    from c1surf.api import check_surface
+
+    points, sizes, corners, rings, rng = random_rings(seed)
+    edges = all_edges(sizes, corners)
+    stray = edges[rng.random(len(edges)) < (0.03 if seed % 4 == 3 else 0.0)]
+    chosen = np.unique(np.sort(np.concatenate([np.array(rings), stray]), axis=1), axis=0)
+    features = SharpFeatures(chosen, np.full(len(chosen), SHARP))
+    surface = Surface(sizes, corners, points, SurfaceOptions(exact_creases=True), features=features)
+    report = check_surface(surface)
+    assert report.unpaired_crease_sides == 0 and report.overshared_edges == 0 and report.boundary_edges == 0
+    assert report.relative_crease_gap <= 1e-12 and report.relative_gap <= 1e-12
+    assert report.max_normal_jump <= 1e-10
+    assert report.crease_edges == len(surface.crease_sides)
+    moved = points + 0.02 * rng.standard_normal(points.shape)
+    fresh = Surface(sizes, corners, moved, SurfaceOptions(exact_creases=True), features=features)
+    surface.update_points(moved)
+    assert np.abs(surface.biquadratic - fresh.biquadratic).max() <= 1e-12
+    assert np.abs(surface.bicubic - fresh.bicubic).max() <= 1e-12
+
+
+def test_some_random_rings_are_cut():
+    """The random rings above do exercise the sheets: the even seeds' rings are all cut."""
+    cut = 0
+    for seed in range(0, 8, 2):
+        points, sizes, corners, rings, _ = random_rings(seed)
+        surface = Surface(sizes, corners, points, SurfaceOptions(exact_creases=True),
+                          features=SharpFeatures(rings, np.full(len(rings), SHARP)))
+        cut += surface.topology.crease_sheets is not None
+    assert cut == 4
