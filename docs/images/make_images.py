@@ -55,11 +55,17 @@ def crease_strip(path):
             png = Path(tmp) / f"cube_{s}.png"
             c1surf("render", mesh, "--png", png, "--size", "220x200", "--range", "0", "8")
             tiles.append((Image.open(png).convert("RGB"), f"sharpness {s:g}"))
-    out = Image.new("RGB", (5 * 220, 220), (255, 255, 255))
+    labelled_row(tiles, 220, path)
+
+
+def labelled_row(tiles, step: int, path):
+    """The (image, label) tiles side by side, ``step`` pixels apart, each label above its tile."""
+    width, height = tiles[0][0].size
+    out = Image.new("RGB", ((len(tiles) - 1) * step + width, height + 20), (255, 255, 255))
     draw = ImageDraw.Draw(out)
     for k, (tile, label) in enumerate(tiles):
-        out.paste(tile, (k * 220, 20))
-        draw.text((k * 220 + 6, 4), label, fill=(0, 0, 0))
+        out.paste(tile, (k * step, 20))
+        draw.text((k * step + 6, 4), label, fill=(0, 0, 0))
     out.save(path, optimize=True)
 
 
@@ -76,12 +82,7 @@ def c0_crease_pair(path):
                    "--crease-angle", "40", "--patches", patches, *extra)
             c1surf("render", patches, "--zebra", png, "--size", "300x280", "--stripes", "10", "--view", "iso")
             tiles.append((Image.open(png).convert("RGB"), label))
-    out = Image.new("RGB", (2 * 300 + 10, 300), (255, 255, 255))
-    draw = ImageDraw.Draw(out)
-    for k, (tile, label) in enumerate(tiles):
-        out.paste(tile, (k * 310, 20))
-        draw.text((k * 310 + 6, 4), label, fill=(0, 0, 0))
-    out.save(path, optimize=True)
+    labelled_row(tiles, 310, path)
 
 
 def valence_two_diagram(path):
