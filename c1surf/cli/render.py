@@ -64,7 +64,7 @@ def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Pro
     else:
         progress.phase(f"reading {input_path}")
         mesh = read_mesh(input_path)
-        features, notes = sharp_features(mesh)  # the file's own creases, corners and holes
+        features, notes = sharp_features(mesh, exact_creases=options.exact_creases)  # the file's own creases, corners and holes
         mesh, data = prepare_surface_input(mesh, SurfaceData(points=mesh.points, features=features, feature_notes=notes),
                                            weld)
         progress.phase(f"building the surface of {mesh.n_faces} faces")
@@ -200,11 +200,13 @@ def write_atomically(path, input_path, progress: Progress, write) -> None:
                    "the hit is then moved onto the exact patch by Newton steps.")
 @surface_options
 @weld_options
+@click.option("--exact-creases", is_flag=True,
+              help="For a mesh INPUT: infinitely sharp creases as C0 seams where exact (as convert --exact-creases).")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bars (they only appear on a terminal anyway).")
 @friendly_errors
 def render_command(input_path, output, png_path, zebra_path, view, eye, target, up, size, projection, fov, zoom, atlas,
                    tile, quantity, colormap, value_range, stripes, stripe_axis, mesh_resolution, blend, alpha, beta,
-                   tangent_rule, weld, no_weld, quiet):
+                   tangent_rule, weld, no_weld, exact_creases, quiet):
     """Render the surface of INPUT (a mesh: OBJ, PLY, OFF, STL) or PATCHES (a patch file) to images.
 
     Each pixel's curvature is exact: the pixel's ray hits a tessellation, the hit
@@ -218,7 +220,7 @@ def render_command(input_path, output, png_path, zebra_path, view, eye, target, 
     if not atlas:
         check_image_size(width * height)
     progress = Progress(quiet)
-    options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule)
+    options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule, exact_creases=exact_creases)
     patches = load_patches(input_path, options, quiet, progress, weld_tolerance(weld, no_weld))
     if stripe_axis is not None and not np.linalg.norm(stripe_axis) > 0:
         raise click.BadParameter("--stripe-axis must not be the zero vector")

@@ -143,3 +143,16 @@ def test_inspect_plans_the_seams_that_convert_makes(tmp_path):
     assert result.exit_code == 0, result.output
     counts = json.loads((tmp_path / "x.json").read_text())["counts"]
     assert (report["patches"]["biquadratic"], report["patches"]["bicubic"]) == (counts["biquadratic"], counts["bicubic"])
+
+
+def test_render_of_the_mesh_is_the_render_of_its_patch_file(sharp_cube, tmp_path):
+    d, _ = sharp_cube
+    from_mesh, from_file = tmp_path / "m.png", tmp_path / "f.png"
+    # render reads a mesh's own tags (no --crease-angle): the cube with its 12 edges tagged
+    tagged = tmp_path / "cube.obj"
+    faces = [[int(v) - 1 for v in line.split()[1:]] for line in CUBE.read_text().splitlines() if line.startswith("f ")]
+    edges = sorted({tuple(sorted((f[i], f[(i + 1) % 4]))) for f in faces for i in range(4)})
+    tagged.write_text(CUBE.read_text() + "".join(f"t crease 2/1/0 {a} {b} 10\n" for a, b in edges))
+    assert run("render", tagged, "--exact-creases", "--png", from_mesh, "--size", "64x64").exit_code == 0
+    assert run("render", d / "cube.json", "--png", from_file, "--size", "64x64").exit_code == 0
+    assert from_mesh.read_bytes() == from_file.read_bytes()
