@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.sparse import csr_matrix
 
+from ..arrays import unique_integers
 from ..mesh.errors import TopologyError
 from ..mesh.ghost_layer import GhostLayer, add_ghost_layer
 from ..mesh.halfedges import HalfEdgeMesh
@@ -143,7 +144,7 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     coarse = prepared if ghost is None else ghost.mesh
     real_face = np.ones(coarse.n_faces, bool) if ghost is None else ghost.real_face.copy()
     real_face[: second_sheet.size] &= ~second_sheet
-    hole_faces = np.zeros(0, dtype=np.int64) if features is None else np.unique(features.hole_faces)
+    hole_faces = np.zeros(0, dtype=np.int64) if features is None else unique_integers(features.hole_faces)
     real_face[hole_faces] = False  # a hole keeps its corners in the refinement, but no patches
     if not real_face.any():
         raise TopologyError("every face is tagged as a hole: there is no surface to build", hole_faces[:8])

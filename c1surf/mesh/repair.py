@@ -204,14 +204,14 @@ def prepare_topology(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertic
         sheet = np.zeros(raw.n_faces, bool)
     used = np.zeros(n_vertices, dtype=bool)
     used[face_vertices] = True
-    _, component = connected_components(
+    n_components, _ = connected_components(  # its count: the distinct labels it gives
         coo_matrix((np.ones(mesh.n_halfedges), (mesh.origin, mesh.dest)), shape=(mesh.n_vertices,) * 2), directed=False
     )
     report = {
         "flipped_faces": 0 if non_orientable.size else int(flip.sum()),
         "split_vertices": n_split,
         "unused_vertices": int((~used).sum()),
-        "components": int(np.unique(component).size),
+        "components": int(n_components),
         "boundary_edges": int(np.sum(mesh.twin < 0)) // (2 if non_orientable.size else 1),  # the cover doubles them
         "non_orientable": bool(non_orientable.size),
         "second_sheet": sheet,

@@ -5,6 +5,7 @@ import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix, identity
 from scipy.sparse.csgraph import connected_components
 
+from ...arrays import unique_integers
 from ...mesh.halfedges import HalfEdgeMesh
 from ..refine.holes import HoleGroup
 
@@ -65,7 +66,7 @@ def block_diagonal_inverse(matrix: coo_matrix) -> csr_matrix:
     position = np.empty(m, dtype=np.int64)
     position[order] = np.arange(m) - start[label[order]]
     rows, cols, vals = [], [], []
-    for size in np.unique(sizes):
+    for size in unique_integers(sizes):
         components = np.flatnonzero(sizes == size)
         slot = np.full(sizes.size, -1)
         slot[components] = np.arange(components.size)
