@@ -110,16 +110,19 @@ def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:
 
 
 def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None):
-    """Frames (e0..e3) of all biquadratic and all bicubic patches.
+    """Frames (e0..e3) of all biquadratic and the wanted bicubic patches, in one array.
 
     Parameters
     ----------
-    wanted_vertex : (V,) bool or None, refined vertices that get a biquadratic patch if regular
+    wanted_vertex : (V,) bool or None, refined vertices that get a biquadratic patch if regular,
+        and a bicubic patch if a hole's corner (None: all)
 
     Returns
     -------
-    quad_frames : (Nq, 4) int, one per regular (wanted) refined vertex, in vertex order
-    cubic_frames : (Nc, 4) int, for the holes in ``holes`` order, corner by corner
+    frames : (Nq + Nc, 4) int, the biquadratic patches' first, one per regular (wanted) refined vertex in
+        vertex order, then the bicubic patches' at wanted corners, hole by hole (``holes`` order), corner by corner
+    n_quad : int, Nq
+    cubic_keep : (sum over holes of n,) bool, which bicubic patches are kept
     """
     first = first_outgoing(mesh)
     irregular = np.zeros(mesh.n_vertices, dtype=bool)
@@ -131,9 +134,9 @@ def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None)
     # around it as long as no vertex is a corner of two holes (R3):
     if irregular.sum() != sum(g.C.size for g in holes):
         raise TopologyError("internal: a refined vertex touches two holes")
-    quad_frames = vertex_frames(mesh, first[regular])
-    if holes:
-        cubic_frames = vertex_frames(mesh, np.concatenate([g.halfedges.ravel() for g in holes]).astype(mesh.twin.dtype))
-    else:
-        cubic_frames = np.zeros((0, 4), dtype=quad_frames.dtype)
-    return quad_frames, cubic_frames
+    corners = np.concatenate([g.halfedges.ravel() for g in holes]).astype(mesh.twin.dtype) if holes else \
+        np.zeros(0, dtype=mesh.twin.dtype)
+    cubic_keep = np.ones(corners.size, dtype=bool) if wanted_vertex is None else wanted_vertex[mesh.origin[corners]]
+    # one array for both kinds (``SurfaceTopology.frames`` hands it out without a copy)
+    starts = first[regular] if not holes else np.concatenate([first[regular], corners[cubic_keep]])
+    return vertex_frames(mesh, starts), int(regular.size), cubic_keep
