@@ -142,6 +142,10 @@ class DooSabinStep:
             out += self.correction @ points
         return out
 
+    def reuse(self) -> None:
+        """Applied again (``Surface.update_points``): the matrix from now on."""
+        self.matrix()
+
     def matrix(self) -> csr_matrix:
         """(H, V) csr_matrix, built on the first call and kept (``apply`` uses it from then on)."""
         if self._matrix is None:
