@@ -200,8 +200,10 @@ def first_outgoing(mesh: HalfEdgeMesh) -> np.ndarray:
     return first
 
 
-def outgoing_rings(mesh: HalfEdgeMesh):
+def outgoing_rings(mesh: HalfEdgeMesh, index=np.int64):
     """Outgoing half-edges of every interior vertex in counter-clockwise order.
+
+    ``index`` : integer dtype of ``ring``
 
     Returns
     -------
@@ -217,7 +219,7 @@ def outgoing_rings(mesh: HalfEdgeMesh):
     # Start each ring at the vertex's first half-edge, then walk the rotation:
     # one vectorized step per ring position, over the rings still that long.
     first = first_outgoing(mesh)
-    ring = np.empty(offsets[-1], dtype=np.int64)
+    ring = np.empty(offsets[-1], dtype=index)
     current = first[vertices]
     active = np.arange(vertices.size)
     for k in range(int(sizes.max(initial=0))):
