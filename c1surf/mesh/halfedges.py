@@ -69,13 +69,15 @@ class HalfEdgeMesh:
         """
         return self.twin[self.prev[h]]
 
-    def faces_by_size(self):
-        """Yield ``(n, faces, halfedges)`` for each distinct face size n.
+    def faces_by_size(self, skip=()):
+        """Yield ``(n, faces, halfedges)`` for each distinct face size n not in ``skip``.
 
         ``faces`` is (Fn,) int, ``halfedges`` is (Fn, n) int: the half-edges of
         each face in order. Lets callers work on whole arrays per cell size.
         """
         for n in np.flatnonzero(np.bincount(self.face_sizes)):  # the sizes present (bincount: no sort)
+            if n in skip:
+                continue
             faces = np.flatnonzero(self.face_sizes == n)
             halfedges = self.face_offsets[faces][:, None] + np.arange(n)
             yield int(n), faces, halfedges

@@ -156,6 +156,10 @@ def split_pinched_vertices(mesh: HalfEdgeMesh):
     n_split : int, how many input vertices had more than one fan
     """
     fan = rotation_cycles(mesh)
+    used = np.bincount(mesh.origin, minlength=mesh.n_vertices) > 0
+    if fan.max(initial=-1) + 1 == np.count_nonzero(used):  # one fan per used vertex (the usual mesh): no sort
+        rank = np.cumsum(used) - 1  # what the sort below gives: the used vertices renumbered in order
+        return rank[mesh.origin].astype(np.int64), np.flatnonzero(used).astype(mesh.origin.dtype), 0
     key = mesh.origin * (fan.max() + 1) + fan
     unique_key, new_vertex = np.unique(key, return_inverse=True)
     vertex_source = mesh.origin[np.unique(new_vertex, return_index=True)[1]]
