@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from ..arrays import unique_integers
 
@@ -134,7 +133,9 @@ def _near_labels(points: np.ndarray, keys: np.ndarray, tolerance: float) -> np.n
     -------
     (m,) int
     """
-    from scipy.spatial import cKDTree  # only for a welding tolerance: scipy.spatial takes 80 ms to import
+    # only for a welding tolerance: scipy.spatial and csgraph take 0.3 s to import
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
 
     diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     pairs = cKDTree(points).query_pairs(tolerance * diagonal, output_type="ndarray")
@@ -230,6 +231,8 @@ def regroup_by_fans(face_sizes: np.ndarray, welded: np.ndarray, original: np.nda
     (H,) int, vertex of each corner: ``welded`` except at suspect vertices, where each
     group of corners gets the lowest file vertex among its corners
     """
+    from scipy.sparse.csgraph import connected_components  # only where welding glued surfaces (0.2 s to import)
+
     h = welded.size
     following = _next_corner(face_sizes)
     n = int(max(welded.max(), original.max())) + 1

@@ -3,7 +3,6 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix, identity
-from scipy.sparse.csgraph import connected_components
 
 from ...arrays import unique_integers
 from ...mesh.halfedges import HalfEdgeMesh
@@ -58,6 +57,8 @@ def block_diagonal_inverse(matrix: coo_matrix) -> csr_matrix:
     -------
     (m, m) csr_matrix
     """
+    from scipy.sparse.csgraph import connected_components  # only for even holes (0.2 s to import)
+
     m = matrix.shape[0]
     _, label = connected_components(matrix, directed=False)
     order = np.argsort(label, kind="stable")
