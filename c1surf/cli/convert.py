@@ -9,7 +9,6 @@ import click
 
 from ..mesh.errors import TopologyError
 from ..construction.surface import Surface, SurfaceOptions
-from ..evaluation.merge import merge_biquadratic
 from ..evaluation.patch_set import surface_patch_stream
 from ..evaluation.stream import StreamedTessellation, UndefinedNormals
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
@@ -17,13 +16,15 @@ from ..io.atomic import atomic_output
 from ..io.meshes.write import write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
 from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list, suffix_of
 from ..io.patches.formats import write_patch_stream, write_surface_patches
-from ..io.patches.iges import DEFAULT_UNITS, UNITS
+from ..io.patches.iges_writer import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import prepare_surface_input, surface_data
-from .curvature_ply import curvature_properties
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes, topology_failure
 from .options import extension_options, surface_options, tolerance_option, tolerance_value, weld_options, weld_tolerance
-from ..evaluation.tolerance import plan_tolerance, tessellate_plan, measured_chordal_error
+
+# Imported where used, not here, since a streamed conversion (the usual one) needs none of them: merging
+# (evaluation.merge), --curvature (curvature_ply, which imports the renderer's colour maps) and --tolerance
+# (evaluation.tolerance).
 
 # Peak memory of a tessellation, traced with tracemalloc on spot_quadrangulated (46,848 patches):
 # 465 bytes per patch at N = 2, 4,436 at N = 8, 40,950 at N = 24, i.e. about
@@ -310,6 +311,8 @@ def merged_pieces(surface: Surface, patch_suffixes, merge: bool | None) -> dict:
 
     The pieces (``evaluation.merge.merge_biquadratic``) are computed once, when some file takes them.
     """
+    from ..evaluation.merge import merge_biquadratic
+
     wanted = {suffix: (merge if merge is not None else suffix in CAD_SUFFIXES) for suffix in patch_suffixes}
     pieces = merge_biquadratic(surface) if any(wanted.values()) else None
     return {suffix: pieces if take else None for suffix, take in wanted.items()}
@@ -349,6 +352,8 @@ def output_formats(output, patches_paths, curvature: bool, attributes: bool) -> 
 
 def curvature_columns(surface: Surface, tess, progress) -> dict:
     """Keyword arguments of ``write_triangle_mesh`` adding the exact curvature at every tessellation vertex."""
+    from .curvature_ply import curvature_properties
+
     return curvature_properties([surface.biquadratic, surface.bicubic], tess, progress, surface.patch_weights)
 
 
@@ -391,6 +396,8 @@ def tessellate_within(groups, adjacency, tolerance: float, weights, force: bool,
     guard refuses with its exact vertex count; unless ``quiet``, a note gives the
     triangle count and the measured chordal error (``chordal.measured_chordal_error``).
     """
+    from ..evaluation.tolerance import measured_chordal_error, plan_tolerance, tessellate_plan
+
     progress.phase(f"choosing resolutions for a chordal error within {tolerance:g} of the diagonal")
     try:
         plan = plan_tolerance(groups, adjacency, tolerance, weights)

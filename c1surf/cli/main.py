@@ -1,23 +1,38 @@
 """The ``c1surf`` command: a click group; each subcommand lives in its own module."""
 from __future__ import annotations
 
+import importlib
 import signal
 
 import click
 
 from .. import __version__
 from .runtime import tune_allocator
-from .batch import batch
-from .check import check
-from .convert import convert
-from .render import render_command
-from .reports.diff import diff
-from .reports.measure import measure
-from .reports.inspect import inspect
-from .tessellate import tessellate
+
+# command name: (module, function), imported when that command runs (or --help lists the commands), so
+# `c1surf convert` does not import what `render`, `batch` or `inspect` need
+COMMANDS = {
+    "convert": (".convert", "convert"), "batch": (".batch", "batch"), "check": (".check", "check"),
+    "tessellate": (".tessellate", "tessellate"), "render": (".render", "render_command"),
+    "measure": (".reports.measure", "measure"), "diff": (".reports.diff", "diff"),
+    "inspect": (".reports.inspect", "inspect"),
+}
 
 
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
+class LazyGroup(click.Group):
+    """A click group whose subcommands (``COMMANDS``) are imported on first use."""
+
+    def list_commands(self, ctx):
+        return sorted(set(COMMANDS) | set(self.commands))
+
+    def get_command(self, ctx, name):
+        if name not in self.commands and name in COMMANDS:
+            module, function = COMMANDS[name]
+            self.add_command(getattr(importlib.import_module(module, __package__), function), name)
+        return self.commands.get(name)
+
+
+@click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="c1surf")
 @click.option("--debug", is_flag=True, help="Show a Python traceback for errors (for bug reports).")
 @click.pass_context
@@ -40,15 +55,6 @@ def main(ctx, debug):
 def _interrupt(signum, frame):
     raise KeyboardInterrupt
 
-
-main.add_command(convert)
-main.add_command(batch)
-main.add_command(check)
-main.add_command(tessellate)
-main.add_command(render_command)
-main.add_command(measure)
-main.add_command(diff)
-main.add_command(inspect)
 
 if __name__ == "__main__":  # pragma: no cover
     main()

@@ -142,6 +142,11 @@ class StackedStage:
             start += part.shape[0]
         return out
 
+    def reuse(self) -> None:
+        """Applied again (``Surface.update_points``): each part readies its faster form (``PatchLayout.reuse``)."""
+        for part in self.parts:
+            part.reuse()
+
     def matrix(self) -> csr_matrix:
         if self._matrix is None:
             self._matrix = vstack([part.matrix() for part in self.parts], format="csr")

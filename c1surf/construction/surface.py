@@ -21,7 +21,6 @@ from .stages import STAGE_BUILDERS, StageInputs
 from .stencil import flat_stencil, row_stencil
 from .stencils.blend import check_ratios, corner_ratios
 from .stencils.creases import crease_corner_ratios
-from .stencils.doo_sabin import DooSabinStep
 from .stencils.hole_rules import TRIANGLE_RULES, HoleRules
 from .topology import build_topology
 
@@ -213,9 +212,10 @@ class Surface:
 
         The result is that of a fresh Surface on these points: the ghost
         corners of an open mesh are classified again (``PlacementStage.follow``).
-        A call signals re-use (animation, optimisation), so the first one builds
-        the matrix of the factored second Doo-Sabin step, which then applies
-        ~3x faster (``stencils.doo_sabin.DooSabinStep``).
+        A call signals re-use (animation, optimisation), so the first one readies
+        the stages' faster forms (their ``reuse``): the matrix of the factored second
+        Doo-Sabin step, which then applies ~3x faster (``stencils.doo_sabin.DooSabinStep``),
+        and the whole slot table of the biquadratic patches (``stencils.biquadratic.GridSlots``).
 
         A rational surface runs every step on the homogeneous points
         ``(w x, w)`` (A2a); ``refined_points`` are then homogeneous and the
@@ -231,9 +231,9 @@ class Surface:
             self._stencils.clear()
         if not self._reused:
             self._reused = True
-            for stage in self.stages:
-                if isinstance(stage, DooSabinStep):
-                    stage.matrix()
+            for stage in self.stages:  # the faster form of a stage applied again (DooSabinStep, PatchLayout)
+                if hasattr(stage, "reuse"):
+                    stage.reuse()
         if self.stages[0].follow(points):  # the placement stage: ghost corners classified again
             self._stencils.clear()
         return self._apply(points)

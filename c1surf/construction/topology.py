@@ -14,6 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.sparse import csr_matrix
 
+from ..arrays import unique_integers
 from ..mesh.errors import TopologyError
 from ..mesh.ghost_layer import GhostLayer, add_ghost_layer
 from ..mesh.halfedges import HalfEdgeMesh
@@ -44,8 +45,9 @@ class SurfaceTopology:
     refined : HalfEdgeMesh, the mesh A2 and A3 read (twice refined, or fewer)
     real_vertex : (Vr,) bool, refined vertices inside real faces
     holes : list of HoleGroup, the holes with a real corner
-    quad_frames : (Nq, 4) int, frames of the biquadratic patches
-    cubic_frames : (Nc, 4) int, frames of the kept bicubic patches
+    frames : (Nq + Nc, 4) int, half-edges e0..e3 of every patch, biquadratic first: one array, handed out
+        without a copy (46 MB for the 180,000-quad torus); ``quad_frames`` and ``cubic_frames`` are its parts
+    n_quad : int, Nq
     cubic_keep : (sum over holes of n,) bool or None, which bicubic patches are kept (None: all)
     cubic_hole : (Nc,) int, hole (in ``holes`` order) of every kept bicubic patch
     sharpness : CoarseSharpness or None, creases and corners on ``input`` (``features``) that the
@@ -70,8 +72,8 @@ class SurfaceTopology:
     refined: HalfEdgeMesh
     real_vertex: np.ndarray
     holes: list[HoleGroup]
-    quad_frames: np.ndarray
-    cubic_frames: np.ndarray
+    frames: np.ndarray
+    n_quad: int
     cubic_keep: np.ndarray | None
     cubic_hole: np.ndarray
     sharpness: CoarseSharpness | None = None
@@ -79,9 +81,14 @@ class SurfaceTopology:
     crease_sheets: CreaseSheets | None = None
 
     @property
-    def frames(self) -> np.ndarray:
-        """(Nq + Nc, 4) int: half-edges e0..e3 of every patch, biquadratic first."""
-        return np.concatenate([self.quad_frames, self.cubic_frames])
+    def quad_frames(self) -> np.ndarray:
+        """(Nq, 4) int: frames of the biquadratic patches (a view of ``frames``)."""
+        return self.frames[: self.n_quad]
+
+    @property
+    def cubic_frames(self) -> np.ndarray:
+        """(Nc, 4) int: frames of the kept bicubic patches (a view of ``frames``)."""
+        return self.frames[self.n_quad :]
 
     def select_matrix(self) -> csr_matrix:
         """(V', V) csr_matrix: the input point of every vertex of the repaired mesh."""
@@ -155,7 +162,7 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     coarse = prepared if ghost is None else ghost.mesh
     real_face = np.ones(coarse.n_faces, bool) if ghost is None else ghost.real_face.copy()
     real_face[: second_sheet.size] &= ~second_sheet
-    hole_faces = np.zeros(0, dtype=np.int64) if features is None else np.unique(features.hole_faces)
+    hole_faces = np.zeros(0, dtype=np.int64) if features is None else unique_integers(features.hole_faces)
     real_face[hole_faces] = False  # a hole keeps its corners in the refinement, but no patches
     if sheets is not None:
         real_face[sheets.ghost_faces] = False
@@ -166,14 +173,13 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     faces1, level1, refined = refine(coarse, levels)
     real_vertex = real_refined_vertices(coarse, level1, refined, real_face, levels)
     holes = hole_neighbourhoods(refined, None if real_face.all() else real_vertex)
-    quad_frames, cubic_frames = patch_frames(refined, holes, real_vertex)
-    real_cubic = real_vertex[refined.origin[cubic_frames[:, 0]]]  # bicubic patches at real corners only
+    frames, n_quad, real_cubic = patch_frames(refined, holes, real_vertex)  # bicubic patches at real corners only
     sizes = np.concatenate([np.full(g.cells.size, g.n) for g in holes]) if holes else np.zeros(0, dtype=np.int64)
     return SurfaceTopology(
         n_input_vertices=int(n_vertices), n_input_faces=int(face_sizes.size), repairs=repairs,
         vertex_source=vertex_source, second_sheet=second_sheet, ghost=ghost, input=coarse, real_face=real_face,
         refinements=levels, faces1=faces1, level1=level1, refined=refined, real_vertex=real_vertex, holes=holes,
-        quad_frames=quad_frames, cubic_frames=cubic_frames[real_cubic], cubic_keep=None if real_cubic.all() else real_cubic,
+        frames=frames, n_quad=n_quad, cubic_keep=None if real_cubic.all() else real_cubic,
         cubic_hole=np.repeat(np.arange(sizes.size), sizes)[real_cubic],
         sharpness=pulled_sharpness(coarse, vertex_source, features, sheets), hole_faces=hole_faces, crease_sheets=sheets,
     )

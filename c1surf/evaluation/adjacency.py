@@ -34,9 +34,6 @@ from dataclasses import dataclass
 from functools import cached_property
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from ..parallel import run_tasks
 from .bezier import bernstein_basis
@@ -274,6 +271,11 @@ SIDE_SAMPLES = np.array([0.25, 0.5, 0.75])
 
 def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
     """(k,) int64 label per point of (k, 3) ``points``; points closer than ``tolerance`` share one."""
+    # imported here: a conversion never matches by geometry, and these take 0.3 s to import
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
     tree = cKDTree(points)
     pairs = tree.query_pairs(tolerance, output_type="ndarray")
     graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)

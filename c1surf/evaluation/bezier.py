@@ -17,8 +17,22 @@ turned Euclidean by ``evaluation.rational``.
 """
 from __future__ import annotations
 
+import math
+
 import numpy as np
-from scipy.special import comb
+
+
+def binomials(degree: int) -> np.ndarray:
+    """(degree + 1,) float: C(degree, i), i = 0..degree, as ``scipy.special.comb(degree, i)`` gives them.
+
+    Exact integers up to degree 30, where scipy's floating values are those integers (checked
+    for every degree up to 30), so c1surf need not import scipy.special (50 ms); beyond, scipy's own.
+    """
+    if degree <= 30:
+        return np.array([float(math.comb(degree, i)) for i in range(degree + 1)])
+    from scipy.special import comb
+
+    return comb(degree, np.arange(degree + 1))
 
 
 def bernstein_basis(degree: int, t: np.ndarray, derivative: int = 0) -> np.ndarray:
@@ -48,7 +62,7 @@ def bernstein_basis(degree: int, t: np.ndarray, derivative: int = 0) -> np.ndarr
     i = np.arange(degree + 1)
     with np.errstate(invalid="ignore"):
         # 0**0 = 1 is what the basis needs at the end points.
-        basis = comb(degree, i) * np.power.outer(t, i) * np.power.outer(1.0 - t, degree - i)
+        basis = binomials(degree) * np.power.outer(t, i) * np.power.outer(1.0 - t, degree - i)
     return basis
 
 
@@ -79,7 +93,7 @@ def bernstein_columns(degree: int, t: np.ndarray, derivative: int = 0) -> list:
     low = levels[degree - derivative]
     # d^r/dt^r B_i^n = n!/(n-r)! sum_k (-1)^(r-k) C(r, k) B_{i-k}^{n-r}
     factor = float(np.prod(np.arange(degree - derivative + 1, degree + 1)))
-    signs = [(-1) ** (derivative - k) * float(comb(derivative, k, exact=True)) for k in range(derivative + 1)]
+    signs = [(-1) ** (derivative - k) * float(math.comb(derivative, k)) for k in range(derivative + 1)]
     out = []
     for i in range(degree + 1):
         acc = None

@@ -13,6 +13,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..arrays import unique_integers
+
 
 def repeated_faces(face_sizes: np.ndarray, face_vertices: np.ndarray) -> np.ndarray:
     """(F,) bool: later copies of a face's cycle (up to rotation), or of its reversal where the two make a pillow.
@@ -31,7 +33,7 @@ def repeated_faces(face_sizes: np.ndarray, face_vertices: np.ndarray) -> np.ndar
     offsets = np.concatenate([[0], np.cumsum(sizes)])
     on_edge = _faces_per_edge(sizes, vertices, offsets)
     repeated = np.zeros(sizes.size, dtype=bool)
-    for n in np.unique(sizes):  # one array per face size: (k, n) cycles
+    for n in unique_integers(sizes):  # one array per face size: (k, n) cycles
         faces = np.flatnonzero(sizes == n)
         cycles = vertices[offsets[faces][:, None] + np.arange(n)]
         forward, backward = _least_rotation(cycles), _least_rotation(cycles[:, ::-1])

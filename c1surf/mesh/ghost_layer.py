@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import csr_matrix
 
+from ..arrays import unique_integers
 from .halfedges import HalfEdgeMesh, build_halfedges
 
 
@@ -63,7 +64,7 @@ def add_ghost_layer(mesh: HalfEdgeMesh) -> GhostLayer:
     n = mesh.n_vertices
     boundary = np.flatnonzero(mesh.twin < 0)  # half-edges a -> b with no face across
     a, b = mesh.origin[boundary], mesh.dest[boundary]
-    boundary_vertices = np.unique(a)
+    boundary_vertices = unique_integers(a)
     ghost = np.full(n, -1, dtype=np.int64)
     ghost[boundary_vertices] = n + np.arange(boundary_vertices.size)
     quads = np.stack([b, a, ghost[a], ghost[b]], axis=1)

@@ -7,10 +7,9 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix
-from scipy.sparse.csgraph import breadth_first_order, connected_components
 
 from .errors import TopologyError
-from .halfedges import HalfEdgeMesh, build_halfedges, rotation_cycles, undirected_edges
+from .halfedges import HalfEdgeMesh, build_halfedges, component_roots, rotation_cycles, undirected_edges
 
 
 def check_edge_manifold(mesh: HalfEdgeMesh) -> None:
@@ -65,6 +64,8 @@ def orientation_flips(mesh: HalfEdgeMesh):
     flip : (F,) bool
     non_orientable_faces : (k,) int, faces at an edge that no choice can make consistent (empty if orientable)
     """
+    from scipy.sparse.csgraph import breadth_first_order, connected_components  # only for meshes that need flips
+
     edges, edge_of, counts = undirected_edges(mesh)
     interior = np.flatnonzero(counts == 2)
     order = np.argsort(edge_of, kind="stable")
@@ -115,6 +116,8 @@ def orientation_double_cover(mesh: HalfEdgeMesh):
     face_vertices : (2H,) int, cover vertex of each corner
     vertex_source : (V',) int, input vertex of each cover vertex
     """
+    from scipy.sparse.csgraph import connected_components  # non-orientable meshes only
+
     n_half = mesh.n_halfedges
     # corner node (sheet s, half-edge h) = s * H + h, the corner at origin[h] of face copy s
     edges, edge_of, counts = undirected_edges(mesh)
@@ -156,6 +159,10 @@ def split_pinched_vertices(mesh: HalfEdgeMesh):
     n_split : int, how many input vertices had more than one fan
     """
     fan = rotation_cycles(mesh)
+    used = np.bincount(mesh.origin, minlength=mesh.n_vertices) > 0
+    if fan.max(initial=-1) + 1 == np.count_nonzero(used):  # one fan per used vertex (the usual mesh): no sort
+        rank = np.cumsum(used) - 1  # what the sort below gives: the used vertices renumbered in order
+        return rank[mesh.origin].astype(np.int64), np.flatnonzero(used).astype(mesh.origin.dtype), 0
     key = mesh.origin * (fan.max() + 1) + fan
     unique_key, new_vertex = np.unique(key, return_inverse=True)
     vertex_source = mesh.origin[np.unique(new_vertex, return_index=True)[1]]
@@ -204,14 +211,12 @@ def prepare_topology(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertic
         sheet = np.zeros(raw.n_faces, bool)
     used = np.zeros(n_vertices, dtype=bool)
     used[face_vertices] = True
-    _, component = connected_components(
-        coo_matrix((np.ones(mesh.n_halfedges), (mesh.origin, mesh.dest)), shape=(mesh.n_vertices,) * 2), directed=False
-    )
+    n_components = np.count_nonzero(component_roots(mesh.n_vertices, mesh.origin, mesh.dest) == np.arange(mesh.n_vertices))
     report = {
         "flipped_faces": 0 if non_orientable.size else int(flip.sum()),
         "split_vertices": n_split,
         "unused_vertices": int((~used).sum()),
-        "components": int(np.unique(component).size),
+        "components": int(n_components),
         "boundary_edges": int(np.sum(mesh.twin < 0)) // (2 if non_orientable.size else 1),  # the cover doubles them
         "non_orientable": bool(non_orientable.size),
         "second_sheet": sheet,

@@ -18,6 +18,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
+from ..arrays import unique_integers
 from .halfedges import HalfEdgeMesh, build_halfedges, undirected_edges
 from .repair import orientation_flips
 
@@ -117,7 +118,7 @@ def degenerate_faces(face_sizes: np.ndarray, face_vertices: np.ndarray) -> np.nd
     vertex = np.asarray(face_vertices, dtype=np.int64)
     span = int(vertex.max(initial=0)) + 1
     unique, count = np.unique(face * span + vertex, return_counts=True)
-    return np.unique(unique[count > 1] // span)
+    return unique_integers(unique[count > 1] // span)
 
 
 def corner_fans(mesh: HalfEdgeMesh, edge_of: np.ndarray, counts: np.ndarray) -> np.ndarray:
@@ -182,13 +183,13 @@ def mesh_statistics(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertice
     split_source = np.zeros(n_split, dtype=np.int64)
     split_source[fan] = mesh.origin
     loops = components_of(n_split, fan[boundary_half], fan[mesh.next[boundary_half]])
-    boundary_split = np.unique(fan[boundary_half])
+    boundary_split = unique_integers(fan[boundary_half])
     components = component_statistics(mesh, fan, edge_of, counts, loops, boundary_split)
     return MeshStatistics(
         n_vertices=int(n_vertices), n_faces=mesh.n_faces, n_edges=int(counts.size),
         face_sizes=histogram(mesh.face_sizes), interior_valences=histogram(valence[interior]),
         boundary_valences=histogram(valence[on_boundary]), unused_vertices=int(np.sum(valence == 0)),
-        boundary_edges=int(np.sum(counts == 1)), boundary_loops=int(np.unique(loops[boundary_split]).size),
+        boundary_edges=int(np.sum(counts == 1)), boundary_loops=int(unique_integers(loops[boundary_split]).size),
         non_manifold_edges=int(np.sum(counts > 2)),
         pinched_vertices=int(np.sum(np.bincount(split_source, minlength=n_vertices) > 1)),
         valence2_interior_vertices=int(np.sum(interior & (valence == 2))), components=components,

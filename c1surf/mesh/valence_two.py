@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ..arrays import unique_integers
 from .halfedges import build_halfedges
 
 
@@ -31,13 +32,15 @@ def valence_two_vertices(face_sizes: np.ndarray, face_vertices: np.ndarray, n_ve
     face_vertices : (sum(face_sizes),) int
     n_vertices : int
     """
+    corners = np.bincount(np.asarray(face_vertices), minlength=n_vertices)
+    if not np.any(corners == 2):  # the usual mesh: no vertex has two corners, so no half-edges are needed
+        return np.zeros(0, dtype=np.intp)
     mesh = build_halfedges(face_sizes, face_vertices, n_vertices)
     on_boundary = np.zeros(n_vertices, dtype=bool)
     open_edge = mesh.twin < 0
     on_boundary[mesh.origin[open_edge]] = True
     on_boundary[mesh.dest[open_edge]] = True
-    corners = np.bincount(mesh.origin, minlength=n_vertices)
-    faces_at = np.bincount(np.unique(mesh.face * n_vertices + mesh.origin) % n_vertices, minlength=n_vertices)
+    faces_at = np.bincount(unique_integers(mesh.face * n_vertices + mesh.origin) % n_vertices, minlength=n_vertices)
     return np.flatnonzero((corners == 2) & (faces_at == 2) & ~on_boundary)
 
 

@@ -20,8 +20,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
+
+from ..arrays import unique_integers
 
 __all__ = ["weld_vertices", "coincident_representatives", "collapse_repeated_corners", "overshared_vertices",
            "regroup_by_fans"]
@@ -58,14 +58,16 @@ def weld_vertices(points: np.ndarray, face_sizes: np.ndarray, face_vertices: np.
     original = face_vertices[keep_corner & np.repeat(kept_faces, face_sizes)]
     sizes, welded = sizes[kept_faces], welded[np.repeat(kept_faces, sizes)]
     n = points.shape[0]
-    suspect = overshared_vertices(sizes, welded, n) & (np.bincount(representative, minlength=n) > 1)
+    shared = np.bincount(representative, minlength=n) > 1  # vertices that others were welded into
+    # without any, no edge or face can be overshared by welding (and the check's sorts are skipped)
+    suspect = overshared_vertices(sizes, welded, n) & shared if shared.any() else np.zeros(n, dtype=bool)
     if suspect.any():
         welded = regroup_by_fans(sizes, welded, original, suspect)
         # what regrouping could not separate is unwelded completely
         still = overshared_vertices(sizes, welded, n)[welded] & (welded != original)
         welded = np.where(still, original, welded)
     report = {
-        "welded_vertices": int(np.unique(original).size - np.unique(welded).size),
+        "welded_vertices": int(unique_integers(original).size - unique_integers(welded).size),
         "unwelded_vertices": int(np.count_nonzero(suspect)),
         "dropped_faces": int(np.count_nonzero(~kept_faces)),
     }
@@ -131,6 +133,10 @@ def _near_labels(points: np.ndarray, keys: np.ndarray, tolerance: float) -> np.n
     -------
     (m,) int
     """
+    # only for a welding tolerance: scipy.spatial and csgraph take 0.3 s to import
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
     diagonal = float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
     pairs = cKDTree(points).query_pairs(tolerance * diagonal, output_type="ndarray")
     if keys.shape[1]:
@@ -225,6 +231,8 @@ def regroup_by_fans(face_sizes: np.ndarray, welded: np.ndarray, original: np.nda
     (H,) int, vertex of each corner: ``welded`` except at suspect vertices, where each
     group of corners gets the lowest file vertex among its corners
     """
+    from scipy.sparse.csgraph import connected_components  # only where welding glued surfaces (0.2 s to import)
+
     h = welded.size
     following = _next_corner(face_sizes)
     n = int(max(welded.max(), original.max())) + 1

@@ -31,6 +31,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.sparse import csr_matrix, identity
 
+from ...arrays import unique_integers
 from ...mesh.halfedges import HalfEdgeMesh
 from ..refine.doo_sabin import FACE_FROM_VERTEX, RefinedFaces
 from ..refine.holes import cell_neighbourhood
@@ -52,7 +53,7 @@ def vertex_interpolation_step(step1: csr_matrix, coarse: HalfEdgeMesh, faces1: R
     offsets = np.concatenate([[0], np.cumsum(faces1.face_sizes)])
     rows, cols, vals = [], [], []
     sel_rows = []
-    for n in np.unique(faces1.face_sizes[faces1.kind == FACE_FROM_VERTEX]):
+    for n in unique_integers(faces1.face_sizes[faces1.kind == FACE_FROM_VERTEX]):
         cells = np.flatnonzero((faces1.kind == FACE_FROM_VERTEX) & (faces1.face_sizes == n))
         corners = faces1.face_vertices[offsets[cells][:, None] + np.arange(n)]  # (k, n) once-refined vertices
         rows.append(np.repeat(corners, n, axis=1).ravel())
@@ -221,7 +222,7 @@ def normal_constraint(refined: HalfEdgeMesh, faces1: RefinedFaces, normals: np.n
     if cells.size == 0:
         return None
     groups = []
-    for n in np.unique(refined.face_sizes[cells]):
+    for n in unique_integers(refined.face_sizes[cells]):
         mine = cells[refined.face_sizes[cells] == n]
         h = refined.face_offsets[mine][:, None] + np.arange(n)
         nv = normals[faces1.parent[mine]]

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ...mesh.halfedges import HalfEdgeMesh, face_cycles, outgoing_rings
+from ...mesh.halfedges import HalfEdgeMesh, outgoing_rings
 
 FACE_FROM_FACE, FACE_FROM_EDGE, FACE_FROM_VERTEX = 0, 1, 2
 
@@ -58,30 +58,34 @@ def refine_doo_sabin(mesh: HalfEdgeMesh) -> RefinedFaces:
     # fine vertices are coarse half-edges, and the fine mesh has about 4 times as
     # many half-edges: int32 whenever that fits
     index = refined_index_type(mesh)
-    h = np.arange(mesh.n_halfedges, dtype=index)
+    n_half, n_faces = mesh.n_halfedges, mesh.n_faces
+    h = np.arange(n_half, dtype=index)
+    rep = h[h < mesh.twin]  # one half-edge of each interior edge, in order
+    vertices, v_sizes, ring = outgoing_rings(mesh, index)
+    # every part written in place into the arrays of all faces (no concatenation of the parts)
+    n_fine = n_faces + rep.size + vertices.size
+    face_sizes = np.empty(n_fine, dtype=np.int64)
+    face_sizes[:n_faces] = mesh.face_sizes
+    face_sizes[n_faces : n_faces + rep.size] = 4
+    face_sizes[n_faces + rep.size :] = v_sizes
+    face_vertices = np.empty(n_half + 4 * rep.size + ring.size, dtype=index)
     # F-faces: the corners of each face, in order.
-    f_sizes = mesh.face_sizes
-    f_vertices = h
+    face_vertices[:n_half] = h
     # E-faces: for the edge of h (a -> b in face f) and its twin t (b -> a in
     # face g), the quad (corner b in f, corner a in f, corner a in g, corner b in g).
-    rep = h[h < mesh.twin]
     t = mesh.twin[rep]
-    e_vertices = np.stack([mesh.next[rep], rep, mesh.next[t], t], axis=1).astype(index, copy=False).ravel()
-    e_sizes = np.full(rep.size, 4, dtype=np.int64)
+    quads = face_vertices[n_half : n_half + 4 * rep.size].reshape(-1, 4)
+    quads[:, 0], quads[:, 1], quads[:, 2], quads[:, 3] = mesh.next[rep], rep, mesh.next[t], t
     # V-faces: the corners around each vertex in rotation order.
-    vertices, v_sizes, ring = outgoing_rings(mesh)
-    return RefinedFaces(
-        face_sizes=np.concatenate([f_sizes, e_sizes, v_sizes]).astype(np.int64, copy=False),
-        face_vertices=np.concatenate([f_vertices, e_vertices, ring.astype(index, copy=False)]),
-        kind=np.concatenate(
-            [
-                np.full(f_sizes.size, FACE_FROM_FACE, np.int8),
-                np.full(rep.size, FACE_FROM_EDGE, np.int8),
-                np.full(vertices.size, FACE_FROM_VERTEX, np.int8),
-            ]
-        ),
-        parent=np.concatenate([np.arange(f_sizes.size), rep, vertices]).astype(np.int64, copy=False),
-    )
+    face_vertices[n_half + 4 * rep.size :] = ring
+    kind = np.empty(n_fine, dtype=np.int8)
+    kind[:n_faces], kind[n_faces : n_faces + rep.size], kind[n_faces + rep.size :] = \
+        FACE_FROM_FACE, FACE_FROM_EDGE, FACE_FROM_VERTEX
+    parent = np.empty(n_fine, dtype=np.int64)
+    parent[:n_faces] = np.arange(n_faces)
+    parent[n_faces : n_faces + rep.size] = rep
+    parent[n_faces + rep.size :] = vertices
+    return RefinedFaces(face_sizes=face_sizes, face_vertices=face_vertices, kind=kind, parent=parent)
 
 
 def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
@@ -101,6 +105,8 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
       twin in the E-face of ``prev[h]``'s edge.
 
     Boundary half-edges (the coarse edge or vertex has no E- or V-face) get -1.
+    The F-faces repeat the coarse faces, so their part of ``face``, ``next`` and
+    ``prev`` is the coarse mesh's; the E-faces are quads in a row.
 
     Parameters
     ----------
@@ -111,30 +117,68 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     -------
     HalfEdgeMesh with ``mesh.n_halfedges`` vertices
     """
-    n_half = mesh.n_halfedges
-    edge_faces = faces.kind == FACE_FROM_EDGE
-    rep = faces.parent[edge_faces]
-    n_edges = rep.size
-    t = mesh.twin[rep]
-    ring_start = n_half + 4 * n_edges
-    ring = faces.face_vertices[ring_start:]
-    # where each coarse half-edge's own fine half-edges are: its edge's E-face and its ring slot
-    edge_of = np.full(n_half, -1, dtype=np.int64)
-    edge_of[rep] = edge_of[t] = np.arange(n_edges)
-    is_rep = np.zeros(n_half, dtype=bool)
-    is_rep[rep] = True
-    ring_slot = np.full(n_half, -1, dtype=np.int64)
-    ring_slot[ring] = np.arange(ring_start, ring_start + ring.size)
-
     index = faces.face_vertices.dtype
-    offsets, face, nxt, prv = face_cycles(faces.face_sizes, index)
-    twin = np.full(offsets[-1], -1, dtype=index)
-    h = np.arange(n_half)
-    inner = edge_of >= 0
-    twin[h[inner]] = n_half + 4 * edge_of[inner] + np.where(is_rep[inner], 0, 2)
+    n_half, n_faces = mesh.n_halfedges, mesh.n_faces
+    n_edges = int(np.count_nonzero(faces.kind == FACE_FROM_EDGE))
+    rep = faces.parent[n_faces : n_faces + n_edges].astype(index)  # E-faces follow the F-faces
+    t = np.take(mesh.twin, rep).astype(index, copy=False)
+    ring_start = n_half + 4 * n_edges
+    n_fine = faces.face_vertices.size
+    offsets = np.zeros(faces.face_sizes.size + 1, dtype=np.int64)
+    np.cumsum(faces.face_sizes, out=offsets[1:])
+    face, nxt, prv = _refined_cycles(mesh, offsets, n_edges, n_fine, index)
+    # twins: F-face half-edge h and its E-face side (0 for rep, 2 for t) ...
+    twin = np.full(n_fine, -1, dtype=index)
+    side = np.arange(n_half, ring_start, 4, dtype=index)
+    twin[rep], twin[t] = side, side + 2
+    # ... the E-faces' sides 1 and 3 in the V-faces of the edge's ends ...
+    ring = faces.face_vertices[ring_start:]
+    ring_slot = np.full(n_half, -1, dtype=index)  # where each coarse half-edge is in its vertex's V-face
+    ring_slot[ring] = np.arange(ring_start, n_fine, dtype=index)
     e_twin = twin[n_half:ring_start].reshape(n_edges, 4)
     e_twin[:, 0], e_twin[:, 2] = rep, t
-    e_twin[:, 1], e_twin[:, 3] = ring_slot[mesh.next[t]], ring_slot[mesh.next[rep]]
-    before = mesh.prev[ring]
-    twin[ring_start:] = n_half + 4 * edge_of[before] + np.where(is_rep[before], 3, 1)
+    e_twin[:, 1], e_twin[:, 3] = ring_slot[np.take(mesh.next, t)], ring_slot[np.take(mesh.next, rep)]
+    # ... and a V-face's half-edge from h: side 3 (prev[h] is rep) or 1 (it is t) of prev[h]'s E-face,
+    # which is twin[prev[h]] (side 0 or 2) + 3 or - 1
+    across = twin[np.take(mesh.prev, ring)]
+    ends = twin[ring_start:]
+    np.subtract(across, n_half, out=ends)
+    ends &= 3
+    ends *= -2
+    ends += across
+    ends += 3  # across + 3 - 2 ((across - H) & 3)
     return HalfEdgeMesh(int(n_half), faces.face_sizes, offsets, faces.face_vertices, face, nxt, prv, twin)
+
+
+def _refined_cycles(mesh: HalfEdgeMesh, offsets: np.ndarray, n_edges: int, n_fine: int, index):
+    """``face``, ``next``, ``prev`` (n_fine,) of the refined mesh (``refined_halfedges``): the F-faces' are the
+    coarse mesh's, the E-faces are quads in a row, the V-faces cycles of their sizes (``_cycles``)."""
+    n_half, n_faces = mesh.n_halfedges, mesh.n_faces
+    ring_start = n_half + 4 * n_edges
+    face, nxt, prv = (np.empty(n_fine, dtype=index) for _ in range(3))
+    for whole, coarse in ((face, mesh.face), (nxt, mesh.next), (prv, mesh.prev)):
+        whole[:n_half] = coarse
+    # E-faces: long runs of arange, then every fourth entry wrapped (broadcasting over rows of 4 runs
+    # inner loops of 4 and is 3x slower)
+    e_face, e_next, e_prev = face[n_half:ring_start], nxt[n_half:ring_start], prv[n_half:ring_start]
+    np.right_shift(np.arange(4 * n_edges, dtype=index), 2, out=e_face)
+    e_face += n_faces
+    e_next[:] = np.arange(n_half + 1, ring_start + 1, dtype=index)
+    e_next[3::4] -= 4
+    e_prev[:] = np.arange(n_half - 1, ring_start - 1, dtype=index)
+    e_prev[::4] += 4
+    _cycles(offsets[n_faces + n_edges :], n_faces + n_edges, face[ring_start:], nxt[ring_start:], prv[ring_start:])
+    return face, nxt, prv
+
+
+def _cycles(offsets: np.ndarray, first_face: int, face: np.ndarray, nxt: np.ndarray, prv: np.ndarray) -> None:
+    """Fill ``face``, ``nxt``, ``prv`` (n,) of the faces whose half-edges start at ``offsets`` (k + 1,), numbered
+    from ``first_face``: each face's half-edges in a cycle (``halfedges.face_cycles``, shifted)."""
+    start = int(offsets[0])
+    sizes = np.diff(offsets)
+    face[:] = np.repeat(np.arange(first_face, first_face + sizes.size, dtype=face.dtype), sizes)
+    nxt[:] = np.arange(start + 1, start + nxt.size + 1, dtype=nxt.dtype)
+    prv[:] = np.arange(start - 1, start + prv.size - 1, dtype=prv.dtype)
+    if sizes.size:
+        nxt[offsets[1:] - 1 - start] = offsets[:-1]
+        prv[offsets[:-1] - start] = offsets[1:] - 1

@@ -15,11 +15,13 @@ four faces are quads (A2); bicubic patch p_i sits at corner C_i of a hole with
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
 from ...mesh.errors import TopologyError
 from ...mesh.halfedges import HalfEdgeMesh, first_outgoing
+from ...parallel import ranges_of, run_tasks
 
 
 @dataclass(frozen=True)
@@ -74,9 +76,7 @@ def hole_neighbourhoods(mesh: HalfEdgeMesh, wanted_vertex=None) -> list[HoleGrou
         (open meshes: holes that reach into the real surface)
     """
     groups = []
-    for n, cells, h in mesh.faces_by_size():
-        if n == 4:
-            continue
+    for n, cells, h in mesh.faces_by_size(skip=(4,)):  # not the quads (92 MB of half-edges for the 180k torus)
         if wanted_vertex is not None:
             keep = wanted_vertex[mesh.origin[h]].any(axis=1)
             cells, h = cells[keep], h[keep]
@@ -100,26 +100,46 @@ def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:
     -------
     (k, 4) int
     """
-    e = [first]
-    for _ in range(3):
-        e.append(mesh.rotate(e[-1]))
-    frames = np.stack(e, axis=1)
-    if np.any(frames < 0) or np.any(mesh.rotate(frames[:, 3]) != first):
+    frames = np.empty((first.size, 4), dtype=np.result_type(first, mesh.twin))
+    twin, prev = mesh.twin, mesh.prev
+
+    def fill(start: int, stop: int) -> bool:  # rotations by blocks that stay in cache, on the thread pool
+        ok = True
+        for a in range(start, stop, 1 << 16):
+            b = min(stop, a + (1 << 16))
+            block, e = frames[a:b], first[a:b]
+            block[:, 0] = e
+            for i in range(1, 5):  # rotate: twin[prev[e]]; a -1 (boundary) is in the block or breaks the cycle
+                e = np.take(twin, np.take(prev, e, mode="clip"), mode="clip")
+                if i < 4:
+                    block[:, i] = e
+            ok = ok and not (np.any(block < 0) or np.any(e != first[a:b]))
+        return ok
+
+    if not all(run_tasks([partial(fill, a, b) for a, b in zip(*_pairs(ranges_of(first.size, 1 << 17)))])):
         raise TopologyError("internal: a refined vertex is not 4-valent")
     return frames
 
 
+def _pairs(bounds: list) -> tuple:
+    """(starts, stops) of consecutive ``bounds``."""
+    return bounds[:-1], bounds[1:]
+
+
 def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None):
-    """Frames (e0..e3) of all biquadratic and all bicubic patches.
+    """Frames (e0..e3) of all biquadratic and the wanted bicubic patches, in one array.
 
     Parameters
     ----------
-    wanted_vertex : (V,) bool or None, refined vertices that get a biquadratic patch if regular
+    wanted_vertex : (V,) bool or None, refined vertices that get a biquadratic patch if regular,
+        and a bicubic patch if a hole's corner (None: all)
 
     Returns
     -------
-    quad_frames : (Nq, 4) int, one per regular (wanted) refined vertex, in vertex order
-    cubic_frames : (Nc, 4) int, for the holes in ``holes`` order, corner by corner
+    frames : (Nq + Nc, 4) int, the biquadratic patches' first, one per regular (wanted) refined vertex in
+        vertex order, then the bicubic patches' at wanted corners, hole by hole (``holes`` order), corner by corner
+    n_quad : int, Nq
+    cubic_keep : (sum over holes of n,) bool, which bicubic patches are kept
     """
     first = first_outgoing(mesh)
     irregular = np.zeros(mesh.n_vertices, dtype=bool)
@@ -131,9 +151,9 @@ def patch_frames(mesh: HalfEdgeMesh, holes: list[HoleGroup], wanted_vertex=None)
     # around it as long as no vertex is a corner of two holes (R3):
     if irregular.sum() != sum(g.C.size for g in holes):
         raise TopologyError("internal: a refined vertex touches two holes")
-    quad_frames = vertex_frames(mesh, first[regular])
-    if holes:
-        cubic_frames = vertex_frames(mesh, np.concatenate([g.halfedges.ravel() for g in holes]).astype(mesh.twin.dtype))
-    else:
-        cubic_frames = np.zeros((0, 4), dtype=quad_frames.dtype)
-    return quad_frames, cubic_frames
+    corners = np.concatenate([g.halfedges.ravel() for g in holes]).astype(mesh.twin.dtype) if holes else \
+        np.zeros(0, dtype=mesh.twin.dtype)
+    cubic_keep = np.ones(corners.size, dtype=bool) if wanted_vertex is None else wanted_vertex[mesh.origin[corners]]
+    # one array for both kinds (``SurfaceTopology.frames`` hands it out without a copy)
+    starts = first[regular] if not holes else np.concatenate([first[regular], corners[cubic_keep]])
+    return vertex_frames(mesh, starts), int(regular.size), cubic_keep

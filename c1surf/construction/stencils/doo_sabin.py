@@ -11,6 +11,7 @@ import numpy as np
 from scipy.sparse import csr_matrix
 
 from ...mesh.halfedges import HalfEdgeMesh
+from ...arrays import unique_integers
 from ...parallel import for_each_range
 
 
@@ -43,7 +44,7 @@ def doo_sabin_matrix(mesh: HalfEdgeMesh, ratio: np.ndarray, per_corner: bool = F
     data = np.empty(block[-1])
     indptr[-1] = block[-1]
     offsets = mesh.face_offsets
-    for n in np.unique(sizes):
+    for n in unique_integers(sizes):
         faces = np.flatnonzero(sizes == n)
         # faces of one size usually form one run (F-, E- and V-faces of a refined mesh):
         # then their half-edges and entries are slices, else index arrays
@@ -140,6 +141,10 @@ class DooSabinStep:
         if self.correction is not None:
             out += self.correction @ points
         return out
+
+    def reuse(self) -> None:
+        """Applied again (``Surface.update_points``): the matrix from now on."""
+        self.matrix()
 
     def matrix(self) -> csr_matrix:
         """(H, V) csr_matrix, built on the first call and kept (``apply`` uses it from then on)."""

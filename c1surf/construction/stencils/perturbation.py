@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 from scipy.sparse import coo_matrix, csr_matrix, identity
-from scipy.sparse.csgraph import connected_components
 
+from ...arrays import unique_integers
 from ...mesh.halfedges import HalfEdgeMesh
 from ..refine.holes import HoleGroup
 
@@ -57,6 +57,8 @@ def block_diagonal_inverse(matrix: coo_matrix) -> csr_matrix:
     -------
     (m, m) csr_matrix
     """
+    from scipy.sparse.csgraph import connected_components  # only for even holes (0.2 s to import)
+
     m = matrix.shape[0]
     _, label = connected_components(matrix, directed=False)
     order = np.argsort(label, kind="stable")
@@ -65,7 +67,7 @@ def block_diagonal_inverse(matrix: coo_matrix) -> csr_matrix:
     position = np.empty(m, dtype=np.int64)
     position[order] = np.arange(m) - start[label[order]]
     rows, cols, vals = [], [], []
-    for size in np.unique(sizes):
+    for size in unique_integers(sizes):
         components = np.flatnonzero(sizes == size)
         slot = np.full(sizes.size, -1)
         slot[components] = np.arange(components.size)

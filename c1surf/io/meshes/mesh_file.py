@@ -6,6 +6,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ...arrays import unique_integers
 from ...mesh.duplicate_faces import repeated_faces
 from ...mesh.valence_two import dissolve_valence_two
 from ...mesh.weld import collapse_repeated_corners, weld_vertices
@@ -267,7 +268,7 @@ def find_repeated_vertex(face_sizes: np.ndarray, face_vertices: np.ndarray):
     bad_faces = []
     # One (n_k, k) block per distinct size: a row-wise sort is far cheaper
     # than a global lexsort, and real meshes have only a few sizes.
-    for k in np.unique(face_sizes):
+    for k in unique_integers(face_sizes):
         if k < 2:
             continue
         rows = np.flatnonzero(face_sizes == k)

@@ -35,10 +35,9 @@ from ...evaluation.merge import MergedPiece, piece_dicts
 from ...evaluation.patch_set import PatchSet, degree_runs
 from ..errors import MeshInputError
 from .brep.iges_brep import iges_brep
-from .iges_writer import UNITS, bezier_patches_to_surfaces, write_iges
+from .iges_writer import DEFAULT_UNITS, UNITS, bezier_patches_to_surfaces, write_iges
 from .merged import is_piece_knots, piece_patches, uncovered_groups
 
-DEFAULT_UNITS = "mm"
 
 
 def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNITS, group: bool = True,

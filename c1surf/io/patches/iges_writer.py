@@ -40,13 +40,14 @@ from .iges_numbers import SLOT, SPACE, format_ints, format_reals, real_text
 from .iges_records import (RECORD, SG_COLS, ParameterWriter, ascii_text, de_records, hollerith, pack_text_params,
                            text_records)
 
-__all__ = ["write_iges", "bezier_patches_to_surfaces", "UNITS"]
+__all__ = ["write_iges", "bezier_patches_to_surfaces", "UNITS", "DEFAULT_UNITS"]
 
 #: accepted ``units`` names -> (IGES units flag, IGES units name)
 UNITS: dict[str, tuple[int, str]] = {
     "in": (1, "INCH"), "inch": (1, "INCH"), "mm": (2, "MM"), "ft": (4, "FT"), "mi": (5, "MI"), "m": (6, "M"),
     "km": (7, "KM"), "mil": (8, "MIL"), "um": (9, "UM"), "micron": (9, "UM"), "cm": (10, "CM"), "uin": (11, "UIN"),
 }
+DEFAULT_UNITS = "mm"
 
 _BIG_ENTITY = 1024  # entities with more tokens are packed on their own
 _CHUNK_TOKENS = 1 << 15  # tokens formatted per chunk (memory bound)

@@ -10,6 +10,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ....arrays import unique_integers
 from ...errors import MeshInputError
 
 __all__ = ["SharpTags", "check_tags", "mesh_edge_keys"]
@@ -100,7 +101,7 @@ def mesh_edge_keys(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices
     nonempty = np.asarray(face_sizes) > 0
     nxt[offs[1:][nonempty] - 1] = offs[:-1][nonempty]
     a, b = face_vertices, face_vertices[nxt] if face_vertices.size else face_vertices
-    return np.unique(np.minimum(a, b) * n_vertices + np.maximum(a, b))
+    return unique_integers(np.minimum(a, b) * n_vertices + np.maximum(a, b))
 
 
 def check_tags(tags: SharpTags, face_sizes, face_vertices, n_vertices: int, path: str) -> None:
