@@ -440,6 +440,9 @@ def with_seams(adjacency: PatchAdjacency, seams: np.ndarray, same_direction: np.
     -------
     PatchAdjacency, canonical, with the seams' sides sharing an edge id and their end corners a corner id
     """
+    from scipy.sparse import coo_matrix  # the rare path (C0 creases in CAD files): not imported by every conversion
+    from scipy.sparse.csgraph import connected_components
+
     seams = np.asarray(seams, dtype=np.int64).reshape(-1, 2)
     if seams.size == 0:
         return adjacency

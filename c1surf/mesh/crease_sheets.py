@@ -29,10 +29,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
 
 from .halfedges import HalfEdgeMesh, build_halfedges
+
+
+def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(n,) int: connected components of the graph on 0..n-1 with edges (a, b) (scipy imported here: only
+    --exact-creases needs it, and a plain conversion does not import scipy's graph module)."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    return connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(n, n)), directed=False)[1]
 
 
 @dataclass(frozen=True)
@@ -95,8 +102,7 @@ def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
     h = np.arange(mesh.n_halfedges)
     turned = mesh.twin[mesh.prev]  # the next corner around origin[h], across the edge prev[h]
     join = (turned >= 0) & ~sharp[mesh.prev]
-    graph = coo_matrix((np.ones(join.sum()), (h[join], turned[join])), shape=(h.size, h.size))
-    return connected_components(graph, directed=False)[1]
+    return _components(h.size, h[join], turned[join])
 
 
 def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray):
@@ -158,7 +164,7 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     # and whose every vertex is exact (a boundary loop no crease reaches keeps the ghost layer's rule)
     seam = sharp | (mesh.twin < 0)
     a, b = mesh.origin[seam], mesh.dest[seam]
-    component = connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(n, n)), directed=False)[1]
+    component = _components(n, a, b)
     creased = np.zeros(component.max() + 1, dtype=bool)
     creased[component[mesh.origin[sharp]]] = True
     bad = np.zeros(component.max() + 1, dtype=bool)
