@@ -180,7 +180,11 @@ def _canonical(corner_labels: np.ndarray, edge_labels: np.ndarray, forward_key: 
     return PatchAdjacency(corners, edges, reversed_)
 
 
-def patch_adjacency(refined, frames: np.ndarray) -> PatchAdjacency:
+# Patches per block of ``patch_adjacency``'s gathers: block-sized temporaries instead of (P, 4) ones.
+_ADJACENCY_BLOCK = 1 << 16
+
+
+def patch_adjacency(refined, frames) -> PatchAdjacency:
     """Adjacency of the patches of a construction, from its refined mesh.
 
     Patches are dual to the refined mesh: a patch sits at a 4-valent refined
@@ -190,29 +194,98 @@ def patch_adjacency(refined, frames: np.ndarray) -> PatchAdjacency:
     Parameters
     ----------
     refined : HalfEdgeMesh, the twice-refined mesh
-    frames : (P, 4) int, half-edges e0..e3 of each patch, in patch order
+    frames : (P, 4) int, half-edges e0..e3 of each patch, in patch order; or a sequence of (p_k, 4) int
+        arrays standing for their concatenation (``(quad_frames, cubic_frames)``: no (P, 4) copy made)
 
     Returns
     -------
     PatchAdjacency (canonical numbering, see the module docstring)
+
+    Memory: the result ((P, 4) int32 corners and edges, (P, 4) bool) and one int32 table per label range
+    (refined faces, refined half-edges) besides blocks of ``_ADJACENCY_BLOCK`` patches: the labels are
+    gathered by blocks straight into the arrays that become the ids (renumbered in place), and the
+    direction of a side is kept as one bool, not as its (P, 4) int key.
     """
-    frames = np.asarray(frames).reshape(-1, 4)  # int32 for refined meshes that fit (doo_sabin.refined_halfedges)
+    parts = [np.asarray(f).reshape(-1, 4) for f in (frames if isinstance(frames, (list, tuple)) else [frames])]
     face, twin = np.asarray(refined.face), np.asarray(refined.twin)
+    n = 4 * sum(part.shape[0] for part in parts)
+    # int32 ids and labels while they fit (these arrays are the largest of the adjacency)
+    index = np.int32 if max(n, face.size, twin.size) < 2**31 else np.int64
+    corners = np.empty((n // 4, 4), dtype=index)
+    edges = np.empty((n // 4, 4), dtype=index)
+    forward = np.empty((n // 4, 4), dtype=bool)
+    low = 0
+    for a, block in _row_blocks(parts):
+        z = a + block.shape[0]
+        gathered = np.take(face, block)  # face(e2), face(e3), face(e0), face(e1): one take, then two copies
+        corners[a:z, :2], corners[a:z, 2:] = gathered[:, 2:], gathered[:, :2]
+        # side s, run in increasing parameter, goes from face(x) to face(twin x): x = twin e3, twin e0, e1, e2
+        x = np.empty(block.shape, dtype=index)
+        x[:, :2] = np.take(twin, block[:, [3, 0]])
+        x[:, 2:] = block[:, 1:3]
+        np.minimum(x, np.take(twin, x), out=edges[a:z])  # the edge's label: the lower of its two half-edges
+        np.equal(x, edges[a:z], out=forward[a:z])  # x is the label or its twin: the side's direction
+        low = min(low, int(edges[a:z].min()) if z > a else 0)
+    if low < 0:  # x or twin x is -1
+        raise ValueError("internal: a patch side crosses a boundary half-edge")
+    _renumber(corners.reshape(-1))
+    first = _renumber(edges.reshape(-1))
+    # a side is reversed when its direction differs from that of the edge's first side
+    first_forward = np.take(forward.reshape(-1), first)
+    del first
+    flat_edges, flat_forward = edges.reshape(-1), forward.reshape(-1)
+    for a in range(0, n, 4 * _ADJACENCY_BLOCK):
+        z = min(a + 4 * _ADJACENCY_BLOCK, n)
+        np.not_equal(flat_forward[a:z], np.take(first_forward, flat_edges[a:z]), out=flat_forward[a:z])
+    return PatchAdjacency(corners, edges, forward)
 
-    def corners():  # face(e2), face(e3), face(e0), face(e1): one take, several times faster than four gathers
-        return _first_appearance(np.take(face, frames)[:, [2, 3, 0, 1]])
 
-    def edges():  # side s, run in increasing parameter, goes from face(x) to face(twin x)
-        x = np.empty(frames.shape, dtype=np.result_type(frames, twin))
-        x[:, :2] = np.take(twin, frames[:, [3, 0]])  # x = twin e3, twin e0, e1, e2
-        x[:, 2:] = frames[:, 1:3]
-        label = np.minimum(x, np.take(twin, x))
-        if label.size and label.min() < 0:  # x or twin x is -1
-            raise ValueError("internal: a patch side crosses a boundary half-edge")
-        return _edge_ids(label, x)
+def _row_blocks(parts):
+    """Yield (first row, (b, 4) rows) of the concatenation of ``parts``, ``_ADJACENCY_BLOCK`` rows at most."""
+    start = 0
+    for part in parts:
+        for a in range(0, part.shape[0], _ADJACENCY_BLOCK):
+            yield start + a, part[a : a + _ADJACENCY_BLOCK]
+        start += part.shape[0]
 
-    corner_ids, (edge_ids, reversed_) = run_tasks([corners, edges])  # independent: two threads
-    return PatchAdjacency(corner_ids, edge_ids, reversed_)
+
+def _renumber(flat: np.ndarray) -> np.ndarray:
+    """Renumber the labels ``flat`` (n,) int in place, 0, 1, 2, ... in order of first appearance (as
+    ``_first_appearances``); return first (k,) int (``flat``'s dtype), the position where id i appears first
+    (increasing).
+
+    Labels that are not small non-negative integers (``_first_appearances``' sorting case) are renumbered
+    through it; others with a (max label + 1,) table of ``flat``'s dtype and an (n + 1,) bool one, every
+    pass by blocks (no temporary of n or k entries).
+    """
+    n = flat.size
+    if n == 0:
+        return np.zeros(0, dtype=flat.dtype)
+    if flat.min() < 0 or flat.max() >= 4 * n + 1024:
+        ids, first = _first_appearances(flat)
+        flat[:] = ids
+        return first
+    block = 4 * _ADJACENCY_BLOCK
+    first_at = np.full(int(flat.max()) + 1, n, dtype=flat.dtype)
+    for z in range(n, 0, -block):  # from the end, each block backwards: the lowest position is written last
+        a = max(0, z - block)
+        first_at[flat[a:z][::-1]] = np.arange(z - 1, a - 1, -1, dtype=flat.dtype)
+    is_first = np.zeros(n + 1, dtype=bool)
+    is_first[first_at] = True
+    first = np.empty(int(np.count_nonzero(is_first[:n])), dtype=flat.dtype)
+    at = 0
+    for a in range(0, n, block):
+        found = np.flatnonzero(is_first[a : min(a + block, n)])
+        first[at : at + found.size] = found + a
+        at += found.size
+    del is_first
+    new_id = first_at  # reused: only entries of labels that occur are read back
+    for a in range(0, first.size, block):
+        z = min(a + block, first.size)
+        new_id[np.take(flat, first[a:z])] = np.arange(a, z, dtype=flat.dtype)
+    for a in range(0, n, block):
+        flat[a : a + block] = np.take(new_id, flat[a : a + block])
+    return first
 
 
 # -- sides and corners of patch arrays --------------------------------------------------
