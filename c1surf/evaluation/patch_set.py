@@ -123,17 +123,24 @@ def source_names(kind: np.ndarray) -> np.ndarray:
     return np.array(SOURCE_KINDS)[np.asarray(kind, dtype=np.int64)]
 
 
-def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -> dict:
-    """Header of a Surface's patch file (everything but the patches)."""
+def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency,
+                   counts: tuple | None = None) -> dict:
+    """Header of a Surface's patch file (everything but the patches).
+
+    ``surface`` needs ``options``, ``n_input_vertices`` and ``n_input_faces`` (a ``Surface``, or
+    ``evaluation.stream.StreamedSurface``); ``counts``: (Nq, Nc), or None for the Surface's frames' counts.
+    """
+    if counts is None:  # the frames' counts: the patch arrays are not made for them (a streamed conversion)
+        counts = (surface.quad_frames.shape[0], surface.cubic_frames.shape[0])
     return {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "c1surf_version": __version__,
         "options": dataclasses.asdict(surface.options),  # every SurfaceOptions field, by name
         "input": {"path": input_path, "vertices": int(surface.n_input_vertices), "faces": int(surface.n_input_faces)},
-        "counts": {  # the frames' counts: the patch arrays are not made for them (a streamed conversion)
-            "biquadratic": int(surface.quad_frames.shape[0]),
-            "bicubic": int(surface.cubic_frames.shape[0]),
+        "counts": {
+            "biquadratic": int(counts[0]),
+            "bicubic": int(counts[1]),
             "corners": adjacency.n_corners,
             "edges": adjacency.n_edges,
         },
@@ -158,7 +165,8 @@ class PatchStream:
 
     patches : ``construction.patch_blocks.PatchSource``, the coefficients of any patches, bit for bit the arrays
     adjacency : PatchAdjacency, as ``PatchSet.adjacency``
-    source_kind : (P,) int, indices into SOURCE_KINDS; source_ids : (P, 2) int64, as ``PatchSet.source``
+    source_kind : (P,) int, indices into SOURCE_KINDS; source_ids : (P, 2) int (int64, or int32 where the
+        ids fit: ``integers`` gives int64 rows), as ``PatchSet.source``
     header : dict, as ``PatchSet.header``
     """
 
@@ -195,7 +203,7 @@ class PatchStream:
         if name == "source_kind":
             return source_names(self.source_kind[a:z])
         if name == "source":
-            return self.source_ids[a:z]
+            return self.source_ids[a:z].astype(np.int64)
         if name == "neighbours":
             if self._partners is None:
                 self._partners = self.adjacency.partners()  # (4 P,) int32: a quarter of neighbours()
