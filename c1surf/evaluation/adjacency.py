@@ -193,7 +193,7 @@ def patch_adjacency(refined, frames) -> PatchAdjacency:
 
     Parameters
     ----------
-    refined : HalfEdgeMesh, the twice-refined mesh
+    refined : HalfEdgeMesh, the twice-refined mesh (its ``face`` and ``twin`` are read)
     frames : (P, 4) int, half-edges e0..e3 of each patch, in patch order; or a sequence of (p_k, 4) int
         arrays standing for their concatenation (``(quad_frames, cubic_frames)``: no (P, 4) copy made)
 
@@ -203,22 +203,52 @@ def patch_adjacency(refined, frames) -> PatchAdjacency:
 
     Memory: the result ((P, 4) int32 corners and edges, (P, 4) bool) and one int32 table per label range
     (refined faces, refined half-edges) besides blocks of ``_ADJACENCY_BLOCK`` patches: the labels are
-    gathered by blocks straight into the arrays that become the ids (renumbered in place), and the
-    direction of a side is kept as one bool, not as its (P, 4) int key.
+    gathered by blocks (``corner_labels``, ``side_labels``) straight into the arrays that become the ids
+    (``adjacency_from_labels`` renumbers them in place). A caller that owns the refined mesh's arrays can
+    call the three itself and let each input go once read (``evaluation.stream.StreamedSurface``).
     """
-    parts = [np.asarray(f).reshape(-1, 4) for f in (frames if isinstance(frames, (list, tuple)) else [frames])]
-    face, twin = np.asarray(refined.face), np.asarray(refined.twin)
-    n = 4 * sum(part.shape[0] for part in parts)
-    # int32 ids and labels while they fit (these arrays are the largest of the adjacency)
-    index = np.int32 if max(n, face.size, twin.size) < 2**31 else np.int64
-    corners = np.empty((n // 4, 4), dtype=index)
-    edges = np.empty((n // 4, 4), dtype=index)
-    forward = np.empty((n // 4, 4), dtype=bool)
+    corners = corner_labels(refined.face, frames)
+    edges, forward = side_labels(refined.twin, frames)
+    return adjacency_from_labels(corners, edges, forward)
+
+
+def _frame_parts(frames) -> list:
+    """(p_k, 4) int arrays of ``patch_adjacency``'s ``frames``: the array, or each of a sequence."""
+    return [np.asarray(f).reshape(-1, 4) for f in (frames if isinstance(frames, (list, tuple)) else [frames])]
+
+
+def _label_type(parts, table: np.ndarray):
+    """int32 labels and ids while they fit (these (P, 4) arrays are the largest of the adjacency), else int64."""
+    return np.int32 if max(4 * sum(part.shape[0] for part in parts), table.size) < 2**31 else np.int64
+
+
+def corner_labels(face: np.ndarray, frames) -> np.ndarray:
+    """(P, 4) int: the refined face at each patch corner (``patch_adjacency``'s corner labels, before renumbering).
+
+    face : (H,) int, the refined mesh's ``face``; frames : as ``patch_adjacency``'s
+    """
+    face, parts = np.asarray(face), _frame_parts(frames)
+    corners = np.empty((sum(part.shape[0] for part in parts), 4), dtype=_label_type(parts, face))
+    for a, block in _row_blocks(parts):
+        gathered = np.take(face, block)  # face(e2), face(e3), face(e0), face(e1): one take, then two copies
+        corners[a : a + block.shape[0], :2], corners[a : a + block.shape[0], 2:] = gathered[:, 2:], gathered[:, :2]
+    return corners
+
+
+def side_labels(twin: np.ndarray, frames):
+    """(edges (P, 4) int, forward (P, 4) bool): the label of the refined edge under each patch side (the lower of
+    its two half-edges) and whether the side runs from that half-edge's face (``patch_adjacency``'s, before
+    renumbering).
+
+    twin : (H,) int, the refined mesh's ``twin``; frames : as ``patch_adjacency``'s
+    """
+    twin, parts = np.asarray(twin), _frame_parts(frames)
+    index = _label_type(parts, twin)
+    p = sum(part.shape[0] for part in parts)
+    edges, forward = np.empty((p, 4), dtype=index), np.empty((p, 4), dtype=bool)
     low = 0
     for a, block in _row_blocks(parts):
         z = a + block.shape[0]
-        gathered = np.take(face, block)  # face(e2), face(e3), face(e0), face(e1): one take, then two copies
-        corners[a:z, :2], corners[a:z, 2:] = gathered[:, 2:], gathered[:, :2]
         # side s, run in increasing parameter, goes from face(x) to face(twin x): x = twin e3, twin e0, e1, e2
         x = np.empty(block.shape, dtype=index)
         x[:, :2] = np.take(twin, block[:, [3, 0]])
@@ -228,14 +258,20 @@ def patch_adjacency(refined, frames) -> PatchAdjacency:
         low = min(low, int(edges[a:z].min()) if z > a else 0)
     if low < 0:  # x or twin x is -1
         raise ValueError("internal: a patch side crosses a boundary half-edge")
+    return edges, forward
+
+
+def adjacency_from_labels(corners: np.ndarray, edges: np.ndarray, forward: np.ndarray) -> PatchAdjacency:
+    """The PatchAdjacency of ``corner_labels`` and ``side_labels``' arrays, renumbered in place (they become its
+    corners, edges and reversed)."""
     _renumber(corners.reshape(-1))
     first = _renumber(edges.reshape(-1))
     # a side is reversed when its direction differs from that of the edge's first side
     first_forward = np.take(forward.reshape(-1), first)
     del first
     flat_edges, flat_forward = edges.reshape(-1), forward.reshape(-1)
-    for a in range(0, n, 4 * _ADJACENCY_BLOCK):
-        z = min(a + 4 * _ADJACENCY_BLOCK, n)
+    for a in range(0, flat_edges.size, 4 * _ADJACENCY_BLOCK):
+        z = min(a + 4 * _ADJACENCY_BLOCK, flat_edges.size)
         np.not_equal(flat_forward[a:z], np.take(first_forward, flat_edges[a:z]), out=flat_forward[a:z])
     return PatchAdjacency(corners, edges, forward)
 
@@ -497,5 +533,5 @@ def adjacency_from_geometry(patch_groups, tolerance: float = 1e-9, weights=None)
     return _canonical(matching.corners, matching.edges, matching.forward)
 
 
-__all__ = ["PatchAdjacency", "neighbour_rows", "patch_adjacency", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
+__all__ = ["PatchAdjacency", "neighbour_rows", "patch_adjacency", "corner_labels", "side_labels", "adjacency_from_labels", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
            "SIDE_CORNERS", "side_offsets", "side_polygons", "corner_points", "cluster_points"]
