@@ -81,20 +81,34 @@ class PatchAdjacency:
     def partners(self) -> np.ndarray:
         """(4 P,) int (int32 below 2^31 sides, else int64): the flat side (patch * 4 + side) across each flat
         side, -1 on a boundary or on an edge of more than two sides; ``neighbour_rows`` turns it into
-        ``neighbours()``, a block at a time if need be."""
+        ``neighbours()``, a block at a time if need be.
+
+        Made by blocks of sides: besides the result, two (n_edges,) tables of its type and two of bool.
+        """
         flat = self.edges.reshape(-1)
         sides = flat.size
-        out = np.full(sides, -1, dtype=np.int32 if sides < 2**31 else np.int64)
+        index = np.int32 if sides < 2**31 else np.int64
+        out = np.full(sides, -1, dtype=index)
         if sides == 0:
             return out
-        position = np.arange(sides, dtype=out.dtype)
-        first = np.empty(self.n_edges, dtype=out.dtype)
-        first[flat[::-1]] = position[::-1]  # the lowest position of each edge wins
-        last = np.empty(self.n_edges, dtype=out.dtype)
-        last[flat] = position  # the highest
-        pair = np.flatnonzero(np.bincount(flat, minlength=self.n_edges) == 2)
-        out[first[pair]] = last[pair]
-        out[last[pair]] = first[pair]
+        step = 4 * _ADJACENCY_BLOCK
+        first = np.full(self.n_edges, sides, dtype=index)  # the lowest position of each edge (none: sides)
+        last = np.full(self.n_edges, -1, dtype=index)  # the highest (none: -1)
+        for z in range(sides, 0, -step):  # from the end, each block backwards: the lowest is written last
+            a = max(0, z - step)
+            first[flat[a:z][::-1]] = np.arange(z - 1, a - 1, -1, dtype=index)
+        for a in range(0, sides, step):  # in order: the highest is written last
+            last[flat[a : a + step]] = np.arange(a, min(a + step, sides), dtype=index)
+        more = np.zeros(self.n_edges, dtype=bool)  # a side between the first and the last: more than two
+        for a in range(0, sides, step):
+            block, position = flat[a : a + step], np.arange(a, min(a + step, sides), dtype=index)
+            more[block[(np.take(first, block) != position) & (np.take(last, block) != position)]] = True
+        pair = (last > first) & ~more
+        del more
+        for a in range(0, self.n_edges, step):
+            both = np.flatnonzero(pair[a : a + step]) + a
+            out[first[both]] = last[both]
+            out[last[both]] = first[both]
         return out
 
     def validate(self, n_patches: int | None = None) -> None:

@@ -108,13 +108,21 @@ def surface_sources(surface):
     return source_names(kind), source
 
 
-def surface_source_ids(surface):
-    """(kind (P,) int, an index into SOURCE_KINDS; source (P, 2) int64) of a Surface's patches."""
+def surface_source_ids(surface, compact: bool = False):
+    """(kind (P,) int, an index into SOURCE_KINDS; source (P, 2) int64) of a Surface's patches.
+
+    ``surface``: a Surface or its ``SurfaceTopology`` (``patch_sources()``). ``compact``: source as int32 when
+    every input face and vertex id fits (a streamed conversion keeps it while writing; written as int64).
+    The ids are written into the one (P, 2) array, with no (P, 2) or (P,) int64 temporaries.
+    """
     kind, index, edge = surface.patch_sources()
     kind = np.asarray(kind)
-    source = np.stack([np.asarray(index, dtype=np.int64), np.full(len(index), -1, dtype=np.int64)], axis=1)
-    is_edge = kind == SOURCE_KINDS.index("edge")
-    source[is_edge] = np.asarray(edge, dtype=np.int64)[is_edge]
+    fits = compact and max(surface.n_input_vertices, surface.n_input_faces) < 2**31
+    source = np.empty((len(index), 2), dtype=np.int32 if fits else np.int64)
+    source[:, 0] = index
+    source[:, 1] = -1
+    is_edge = np.flatnonzero(kind == SOURCE_KINDS.index("edge"))
+    source[is_edge] = np.asarray(edge)[is_edge]
     return kind, source
 
 

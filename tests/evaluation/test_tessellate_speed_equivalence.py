@@ -281,3 +281,26 @@ def test_renumber_in_place(monkeypatch, high, block):
     ids, first = _first_appearances(labels)
     flat = labels.copy()
     assert np.array_equal(_renumber(flat), first) and np.array_equal(flat, ids)
+
+
+def reference_partners(adjacency: PatchAdjacency) -> np.ndarray:
+    flat = np.asarray(adjacency.edges).reshape(-1)
+    out = np.full(flat.size, -1, dtype=np.int64)
+    for edge in np.unique(flat):
+        sides = np.flatnonzero(flat == edge)
+        if sides.size == 2:
+            out[sides[0]], out[sides[1]] = sides[1], sides[0]
+    return out
+
+
+@pytest.mark.parametrize("block", [1, 3, 1 << 16])
+def test_partners_by_blocks(monkeypatch, block):
+    """Pairs, boundary sides, an edge of three sides and unused ids (a patch file's), at any block size."""
+    monkeypatch.setattr(adjacency_module, "_ADJACENCY_BLOCK", block)
+    for name in ("high_valence", "fan", "triangular_prism"):
+        a = patch_adjacency(surface(name).refined, surface(name).frames)
+        got = a.partners()
+        assert got.dtype == np.int32 and np.array_equal(got, reference_partners(a))
+    edges = np.array([[0, 1, 2, 3], [3, 4, 5, 0], [0, 7, 9, 9]])  # edge 0 thrice, 6 and 8 unused
+    odd = PatchAdjacency(edges, edges, np.zeros((3, 4), dtype=bool))
+    assert np.array_equal(odd.partners(), reference_partners(odd))

@@ -71,7 +71,7 @@ class StreamedSurface:
             topology, self._topology = self._topology, None
             return_freed_memory()  # the stages, if the caller dropped the Surface
             if self._keep_sources:
-                self._sources = _compact_sources(*surface_source_ids(topology))
+                self._sources = surface_source_ids(topology, compact=True)
             face, twin = topology.refined.face, topology.refined.twin
             frames = (topology.quad_frames, topology.cubic_frames)  # as parts: no (P, 4) concatenation
             del topology  # the refined meshes of both steps, the coarse mesh, ...: everything but these arrays
@@ -116,11 +116,3 @@ def return_freed_memory() -> None:
     except (OSError, AttributeError):  # not glibc
         return
     trim(0)
-
-
-def _compact_sources(kind: np.ndarray, source: np.ndarray) -> tuple:
-    """(kind (P,) int, source (P, 2) int32 where every id fits, else int64): ``surface_source_ids``' arrays in
-    half the memory (``PatchStream.integers`` gives int64 rows back)."""
-    if source.size and -(2**31) <= source.min() and source.max() < 2**31:
-        source = source.astype(np.int32)
-    return kind, source
