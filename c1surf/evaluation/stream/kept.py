@@ -78,6 +78,7 @@ class StreamedSurface:
             return_freed_memory()
             corners = corner_labels(face, frames)
             del face
+            return_freed_memory()
             edges, forward = side_labels(twin, frames)
             del twin, frames
             return_freed_memory()
