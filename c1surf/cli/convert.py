@@ -9,8 +9,7 @@ import click
 
 from ..mesh.errors import TopologyError
 from ..construction.surface import Surface, SurfaceOptions
-from ..evaluation.patch_set import surface_patch_stream
-from ..evaluation.stream import StreamedTessellation, UndefinedNormals
+from ..evaluation.stream import StreamedSurface, StreamedTessellation, UndefinedNormals
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.write import write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
@@ -120,13 +119,16 @@ PATCH_FILE_BYTES = {".json": 80, ".npz": 45, ".igs": 330, ".iges": 330, ".step":
 CURVATURE_BYTES = 19  # --curvature: kmax, K, H, quality as float, and a colour, per vertex
 
 
-def output_bytes(mesh_suffix: str, tess, float32: bool, curvature: bool, patch_suffixes, surface: Surface) -> list:
-    """[(suffix, estimated bytes)] of every file ``convert`` is about to write (``*_FILE_BYTES``)."""
+def output_bytes(mesh_suffix: str, tess, float32: bool, curvature: bool, patch_suffixes, surface) -> list:
+    """[(suffix, estimated bytes)] of every file ``convert`` is about to write (``*_FILE_BYTES``); ``surface``: a
+    Surface or the ``StreamedSurface`` a streamed conversion keeps of it."""
     per_vertex, per_triangle = MESH_FILE_BYTES[mesh_suffix]
     if float32 and mesh_suffix in (".ply", ".obj"):
         per_vertex //= 2
     per_vertex += CURVATURE_BYTES if curvature else 0
-    rows = 9 * surface.quad_frames.shape[0] + 16 * surface.cubic_frames.shape[0]
+    counts = surface.counts if isinstance(surface, StreamedSurface) else (surface.quad_frames.shape[0],
+                                                                         surface.cubic_frames.shape[0])
+    rows = 9 * counts[0] + 16 * counts[1]
     if isinstance(tess, StreamedTessellation):
         n_vertices, n_triangles = tess.n_vertices, tess.n_triangles
     else:
@@ -217,7 +219,9 @@ def convert(input_path, output, patches_paths, resolution, tolerance, units, no_
     surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet, weld_tolerance(weld, no_weld),
                                    lazy_patches=stream)
     if stream and surface.lazy_patches:  # polynomial: tessellated and written by blocks
-        write_streamed(input_path, output, mesh_suffix, surface, resolution, float32, force, progress,
+        kept = StreamedSurface(surface, sources=bool(patches_paths))
+        del surface, data  # only what `kept` holds is read from here on: the rest of the build is freed now
+        write_streamed(input_path, output, mesh_suffix, kept, resolution, float32, force, progress,
                        list(zip(patches_paths, patch_suffixes)))
         progress.done()
         return
@@ -264,10 +268,13 @@ def check_streamed_memory(needed: int, what: str, resolution: int, force: bool) 
                       "to try anyway")
 
 
-def write_streamed(input_path, output, mesh_suffix: str, surface: Surface, resolution: int, float32: bool,
+def write_streamed(input_path, output, mesh_suffix: str, surface, resolution: int, float32: bool,
                    force: bool, progress: Progress, patch_targets=()) -> None:
     """Tessellate and write ``output`` by blocks (``evaluation.stream``), never holding the patches or the mesh;
     then each (path, suffix) of ``patch_targets`` by blocks of patches (``evaluation.patch_set.PatchStream``).
+
+    ``surface``: the ``evaluation.stream.StreamedSurface`` of a polynomial Surface (or the Surface, which is
+    then held throughout): its adjacency is made first, and the Surface's topology let go with it.
 
     Memory is not the limit then, only the disk (``check_disk_space``), but for the sample matrices of one
     patch and, for STL, the positions on patch sides and corners. A sample without a normal
@@ -275,11 +282,13 @@ def write_streamed(input_path, output, mesh_suffix: str, surface: Surface, resol
     tessellation: that file is written again in memory, with the same bytes the in-memory path writes.
     """
     check_streamed_memory(STREAMED_BYTES_PER_SAMPLE * resolution * resolution, "for one patch", resolution, force)
-    adjacency = patch_adjacency(surface.refined, surface.frames)
+    if not isinstance(surface, StreamedSurface):
+        surface = StreamedSurface(surface, sources=bool(patch_targets))
+    adjacency = surface.adjacency
     if mesh_suffix in HELD_POINTS:
         held = adjacency.n_corners + adjacency.n_edges * (resolution - 2)  # the vertex ids below the interiors
         check_streamed_memory(POINT_BYTES * held, "for the positions on patch sides", resolution, force)
-    tess = StreamedTessellation(surface.patch_source(), adjacency, resolution)
+    tess = StreamedTessellation(surface.source, adjacency, resolution)
     patch_paths, patch_suffixes = [path for path, _ in patch_targets], [suffix for _, suffix in patch_targets]
     sizes = output_bytes(mesh_suffix, tess, float32, False, patch_suffixes, surface)
     scratch = STREAM_SCRATCH_BYTES.get(mesh_suffix, 0) * tess.n_vertices
@@ -290,12 +299,12 @@ def write_streamed(input_path, output, mesh_suffix: str, surface: Surface, resol
             write_streamed_mesh(mesh_tmp, tess, mesh_suffix, float32)
         except UndefinedNormals:
             check_tessellation_size(surface.n_patches, resolution, force)
-            whole = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution)
+            whole = tessellate_patches(surface.whole_patches(), adjacency, resolution)
             write_mesh(mesh_tmp, mesh_suffix, whole, {}, None, float32)
             del whole
         del tess
         if patch_targets:
-            stream = surface_patch_stream(surface, str(input_path), adjacency)
+            stream = surface.patch_stream(str(input_path))
             with contextlib.ExitStack() as patch_files:  # all files appear together, or none
                 for path, suffix in patch_targets:
                     progress.phase(f"writing {path}")

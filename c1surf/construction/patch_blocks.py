@@ -113,6 +113,25 @@ class PatchSource:
         points += self.origin
         return points, rows[..., -1]
 
+    def arrays(self) -> tuple:
+        """(biquadratic (Nq, 3, 3, d), bicubic (Nc, 4, 4, d)) float, all patches at once: bit for bit
+        ``Surface.biquadratic`` / ``bicubic``, by the same calls (``stages.StackedStage.apply``: every layout's
+        ``apply`` into its rows, the centre added in the same pass). Polynomial surfaces only.
+
+        For a caller that kept only this source and finds it needs the whole surface after all (the
+        streamed conversion's fallback); ``Surface`` makes its own arrays.
+        """
+        if self.rational:
+            raise ValueError("a rational surface's whole patches come from the Surface")
+        d = self.refined.shape[1]
+        out = np.empty((sum(layout.shape[0] for layout in self.layouts), d))
+        start = 0
+        for layout in self.layouts:
+            layout.apply(self.refined, out=out[start : start + layout.shape[0]], offset=self.origin)
+            start += layout.shape[0]
+        n_quad = self.counts[0]
+        return out[: 9 * n_quad].reshape(n_quad, 3, 3, d), out[9 * n_quad :].reshape(-1, 4, 4, d)
+
     def blocks(self, size: int):
         """Yield ``PatchBlock``s of up to ``size`` patches: every biquadratic patch in order, then every bicubic."""
         offset = 0

@@ -78,20 +78,34 @@ class PatchAdjacency:
     def partners(self) -> np.ndarray:
         """(4 P,) int (int32 below 2^31 sides, else int64): the flat side (patch * 4 + side) across each flat
         side, -1 on a boundary or on an edge of more than two sides; ``neighbour_rows`` turns it into
-        ``neighbours()``, a block at a time if need be."""
+        ``neighbours()``, a block at a time if need be.
+
+        Made by blocks of sides: besides the result, two (n_edges,) tables of its type and two of bool.
+        """
         flat = self.edges.reshape(-1)
         sides = flat.size
-        out = np.full(sides, -1, dtype=np.int32 if sides < 2**31 else np.int64)
+        index = np.int32 if sides < 2**31 else np.int64
+        out = np.full(sides, -1, dtype=index)
         if sides == 0:
             return out
-        position = np.arange(sides, dtype=out.dtype)
-        first = np.empty(self.n_edges, dtype=out.dtype)
-        first[flat[::-1]] = position[::-1]  # the lowest position of each edge wins
-        last = np.empty(self.n_edges, dtype=out.dtype)
-        last[flat] = position  # the highest
-        pair = np.flatnonzero(np.bincount(flat, minlength=self.n_edges) == 2)
-        out[first[pair]] = last[pair]
-        out[last[pair]] = first[pair]
+        step = 4 * _ADJACENCY_BLOCK
+        first = np.full(self.n_edges, sides, dtype=index)  # the lowest position of each edge (none: sides)
+        last = np.full(self.n_edges, -1, dtype=index)  # the highest (none: -1)
+        for z in range(sides, 0, -step):  # from the end, each block backwards: the lowest is written last
+            a = max(0, z - step)
+            first[flat[a:z][::-1]] = np.arange(z - 1, a - 1, -1, dtype=index)
+        for a in range(0, sides, step):  # in order: the highest is written last
+            last[flat[a : a + step]] = np.arange(a, min(a + step, sides), dtype=index)
+        more = np.zeros(self.n_edges, dtype=bool)  # a side between the first and the last: more than two
+        for a in range(0, sides, step):
+            block, position = flat[a : a + step], np.arange(a, min(a + step, sides), dtype=index)
+            more[block[(np.take(first, block) != position) & (np.take(last, block) != position)]] = True
+        pair = (last > first) & ~more
+        del more
+        for a in range(0, self.n_edges, step):
+            both = np.flatnonzero(pair[a : a + step]) + a
+            out[first[both]] = last[both]
+            out[last[both]] = first[both]
         return out
 
     def validate(self, n_patches: int | None = None) -> None:
@@ -177,7 +191,11 @@ def _canonical(corner_labels: np.ndarray, edge_labels: np.ndarray, forward_key: 
     return PatchAdjacency(corners, edges, reversed_)
 
 
-def patch_adjacency(refined, frames: np.ndarray) -> PatchAdjacency:
+# Patches per block of ``patch_adjacency``'s gathers: block-sized temporaries instead of (P, 4) ones.
+_ADJACENCY_BLOCK = 1 << 16
+
+
+def patch_adjacency(refined, frames) -> PatchAdjacency:
     """Adjacency of the patches of a construction, from its refined mesh.
 
     Patches are dual to the refined mesh: a patch sits at a 4-valent refined
@@ -186,30 +204,135 @@ def patch_adjacency(refined, frames: np.ndarray) -> PatchAdjacency:
 
     Parameters
     ----------
-    refined : HalfEdgeMesh, the twice-refined mesh
-    frames : (P, 4) int, half-edges e0..e3 of each patch, in patch order
+    refined : HalfEdgeMesh, the twice-refined mesh (its ``face`` and ``twin`` are read)
+    frames : (P, 4) int, half-edges e0..e3 of each patch, in patch order; or a sequence of (p_k, 4) int
+        arrays standing for their concatenation (``(quad_frames, cubic_frames)``: no (P, 4) copy made)
 
     Returns
     -------
     PatchAdjacency (canonical numbering, see the module docstring)
+
+    Memory: the result ((P, 4) int32 corners and edges, (P, 4) bool) and one int32 table per label range
+    (refined faces, refined half-edges) besides blocks of ``_ADJACENCY_BLOCK`` patches: the labels are
+    gathered by blocks (``corner_labels``, ``side_labels``) straight into the arrays that become the ids
+    (``adjacency_from_labels`` renumbers them in place). A caller that owns the refined mesh's arrays can
+    call the three itself and let each input go once read (``evaluation.stream.StreamedSurface``).
     """
-    frames = np.asarray(frames).reshape(-1, 4)  # int32 for refined meshes that fit (doo_sabin.refined_halfedges)
-    face, twin = np.asarray(refined.face), np.asarray(refined.twin)
+    corners = corner_labels(refined.face, frames)
+    edges, forward = side_labels(refined.twin, frames)
+    return adjacency_from_labels(corners, edges, forward)
 
-    def corners():  # face(e2), face(e3), face(e0), face(e1): one take, several times faster than four gathers
-        return _first_appearance(np.take(face, frames)[:, [2, 3, 0, 1]])
 
-    def edges():  # side s, run in increasing parameter, goes from face(x) to face(twin x)
-        x = np.empty(frames.shape, dtype=np.result_type(frames, twin))
-        x[:, :2] = np.take(twin, frames[:, [3, 0]])  # x = twin e3, twin e0, e1, e2
-        x[:, 2:] = frames[:, 1:3]
-        label = np.minimum(x, np.take(twin, x))
-        if label.size and label.min() < 0:  # x or twin x is -1
-            raise ValueError("internal: a patch side crosses a boundary half-edge")
-        return _edge_ids(label, x)
+def _frame_parts(frames) -> list:
+    """(p_k, 4) int arrays of ``patch_adjacency``'s ``frames``: the array, or each of a sequence."""
+    return [np.asarray(f).reshape(-1, 4) for f in (frames if isinstance(frames, (list, tuple)) else [frames])]
 
-    corner_ids, (edge_ids, reversed_) = run_tasks([corners, edges])  # independent: two threads
-    return PatchAdjacency(corner_ids, edge_ids, reversed_)
+
+def _label_type(parts, table: np.ndarray):
+    """int32 labels and ids while they fit (these (P, 4) arrays are the largest of the adjacency), else int64."""
+    return np.int32 if max(4 * sum(part.shape[0] for part in parts), table.size) < 2**31 else np.int64
+
+
+def corner_labels(face: np.ndarray, frames) -> np.ndarray:
+    """(P, 4) int: the refined face at each patch corner (``patch_adjacency``'s corner labels, before renumbering).
+
+    face : (H,) int, the refined mesh's ``face``; frames : as ``patch_adjacency``'s
+    """
+    face, parts = np.asarray(face), _frame_parts(frames)
+    corners = np.empty((sum(part.shape[0] for part in parts), 4), dtype=_label_type(parts, face))
+    for a, block in _row_blocks(parts):
+        gathered = np.take(face, block)  # face(e2), face(e3), face(e0), face(e1): one take, then two copies
+        corners[a : a + block.shape[0], :2], corners[a : a + block.shape[0], 2:] = gathered[:, 2:], gathered[:, :2]
+    return corners
+
+
+def side_labels(twin: np.ndarray, frames):
+    """(edges (P, 4) int, forward (P, 4) bool): the label of the refined edge under each patch side (the lower of
+    its two half-edges) and whether the side runs from that half-edge's face (``patch_adjacency``'s, before
+    renumbering).
+
+    twin : (H,) int, the refined mesh's ``twin``; frames : as ``patch_adjacency``'s
+    """
+    twin, parts = np.asarray(twin), _frame_parts(frames)
+    index = _label_type(parts, twin)
+    p = sum(part.shape[0] for part in parts)
+    edges, forward = np.empty((p, 4), dtype=index), np.empty((p, 4), dtype=bool)
+    low = 0
+    for a, block in _row_blocks(parts):
+        z = a + block.shape[0]
+        # side s, run in increasing parameter, goes from face(x) to face(twin x): x = twin e3, twin e0, e1, e2
+        x = np.empty(block.shape, dtype=index)
+        x[:, :2] = np.take(twin, block[:, [3, 0]])
+        x[:, 2:] = block[:, 1:3]
+        np.minimum(x, np.take(twin, x), out=edges[a:z])  # the edge's label: the lower of its two half-edges
+        np.equal(x, edges[a:z], out=forward[a:z])  # x is the label or its twin: the side's direction
+        low = min(low, int(edges[a:z].min()) if z > a else 0)
+    if low < 0:  # x or twin x is -1
+        raise ValueError("internal: a patch side crosses a boundary half-edge")
+    return edges, forward
+
+
+def adjacency_from_labels(corners: np.ndarray, edges: np.ndarray, forward: np.ndarray) -> PatchAdjacency:
+    """The PatchAdjacency of ``corner_labels`` and ``side_labels``' arrays, renumbered in place (they become its
+    corners, edges and reversed)."""
+    _renumber(corners.reshape(-1))
+    first = _renumber(edges.reshape(-1))
+    # a side is reversed when its direction differs from that of the edge's first side
+    first_forward = np.take(forward.reshape(-1), first)
+    del first
+    flat_edges, flat_forward = edges.reshape(-1), forward.reshape(-1)
+    for a in range(0, flat_edges.size, 4 * _ADJACENCY_BLOCK):
+        z = min(a + 4 * _ADJACENCY_BLOCK, flat_edges.size)
+        np.not_equal(flat_forward[a:z], np.take(first_forward, flat_edges[a:z]), out=flat_forward[a:z])
+    return PatchAdjacency(corners, edges, forward)
+
+
+def _row_blocks(parts):
+    """Yield (first row, (b, 4) rows) of the concatenation of ``parts``, ``_ADJACENCY_BLOCK`` rows at most."""
+    start = 0
+    for part in parts:
+        for a in range(0, part.shape[0], _ADJACENCY_BLOCK):
+            yield start + a, part[a : a + _ADJACENCY_BLOCK]
+        start += part.shape[0]
+
+
+def _renumber(flat: np.ndarray) -> np.ndarray:
+    """Renumber the labels ``flat`` (n,) int in place, 0, 1, 2, ... in order of first appearance (as
+    ``_first_appearances``); return first (k,) int (``flat``'s dtype), the position where id i appears first
+    (increasing).
+
+    Labels that are not small non-negative integers (``_first_appearances``' sorting case) are renumbered
+    through it; others with a (max label + 1,) table of ``flat``'s dtype and an (n + 1,) bool one, every
+    pass by blocks (no temporary of n or k entries).
+    """
+    n = flat.size
+    if n == 0:
+        return np.zeros(0, dtype=flat.dtype)
+    if flat.min() < 0 or flat.max() >= 4 * n + 1024:
+        ids, first = _first_appearances(flat)
+        flat[:] = ids
+        return first
+    block = 4 * _ADJACENCY_BLOCK
+    first_at = np.full(int(flat.max()) + 1, n, dtype=flat.dtype)
+    for z in range(n, 0, -block):  # from the end, each block backwards: the lowest position is written last
+        a = max(0, z - block)
+        first_at[flat[a:z][::-1]] = np.arange(z - 1, a - 1, -1, dtype=flat.dtype)
+    is_first = np.zeros(n + 1, dtype=bool)
+    is_first[first_at] = True
+    first = np.empty(int(np.count_nonzero(is_first[:n])), dtype=flat.dtype)
+    at = 0
+    for a in range(0, n, block):
+        found = np.flatnonzero(is_first[a : min(a + block, n)])
+        first[at : at + found.size] = found + a
+        at += found.size
+    del is_first
+    new_id = first_at  # reused: only entries of labels that occur are read back
+    for a in range(0, first.size, block):
+        z = min(a + block, first.size)
+        new_id[np.take(flat, first[a:z])] = np.arange(a, z, dtype=flat.dtype)
+    for a in range(0, n, block):
+        flat[a : a + block] = np.take(new_id, flat[a : a + block])
+    return first
 
 
 # -- sides and corners of patch arrays --------------------------------------------------
@@ -461,5 +584,5 @@ def with_seams(adjacency: PatchAdjacency, seams: np.ndarray, same_direction: np.
     return _canonical(corner_labels, edge_labels, start)
 
 
-__all__ = ["PatchAdjacency", "with_seams", "neighbour_rows", "patch_adjacency", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
+__all__ = ["PatchAdjacency", "with_seams", "neighbour_rows", "patch_adjacency", "corner_labels", "side_labels", "adjacency_from_labels", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
            "SIDE_CORNERS", "side_offsets", "side_polygons", "corner_points", "cluster_points"]

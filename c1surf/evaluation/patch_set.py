@@ -118,13 +118,21 @@ def surface_sources(surface):
     return source_names(kind), source
 
 
-def surface_source_ids(surface):
-    """(kind (P,) int, an index into SOURCE_KINDS; source (P, 2) int64) of a Surface's patches."""
+def surface_source_ids(surface, compact: bool = False):
+    """(kind (P,) int, an index into SOURCE_KINDS; source (P, 2) int64) of a Surface's patches.
+
+    ``surface``: a Surface or its ``SurfaceTopology`` (``patch_sources()``). ``compact``: source as int32 when
+    every input face and vertex id fits (a streamed conversion keeps it while writing; written as int64).
+    The ids are written into the one (P, 2) array, with no (P, 2) or (P,) int64 temporaries.
+    """
     kind, index, edge = surface.patch_sources()
     kind = np.asarray(kind)
-    source = np.stack([np.asarray(index, dtype=np.int64), np.full(len(index), -1, dtype=np.int64)], axis=1)
-    is_edge = kind == SOURCE_KINDS.index("edge")
-    source[is_edge] = np.asarray(edge, dtype=np.int64)[is_edge]
+    fits = compact and max(surface.n_input_vertices, surface.n_input_faces) < 2**31
+    source = np.empty((len(index), 2), dtype=np.int32 if fits else np.int64)
+    source[:, 0] = index
+    source[:, 1] = -1
+    is_edge = np.flatnonzero(kind == SOURCE_KINDS.index("edge"))
+    source[is_edge] = np.asarray(edge)[is_edge]
     return kind, source
 
 
@@ -133,17 +141,24 @@ def source_names(kind: np.ndarray) -> np.ndarray:
     return np.array(SOURCE_KINDS)[np.asarray(kind, dtype=np.int64)]
 
 
-def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency) -> dict:
-    """Header of a Surface's patch file (everything but the patches); "crease_sides" only with C0 creases."""
+def surface_header(surface, input_path: str | None, adjacency: PatchAdjacency,
+                   counts: tuple | None = None) -> dict:
+    """Header of a Surface's patch file (everything but the patches); "crease_sides" only with C0 creases.
+
+    ``surface`` needs ``options``, ``n_input_vertices`` and ``n_input_faces`` (a ``Surface``, or
+    ``evaluation.stream.StreamedSurface``); ``counts``: (Nq, Nc), or None for the Surface's frames' counts.
+    """
+    if counts is None:  # the frames' counts: the patch arrays are not made for them (a streamed conversion)
+        counts = (surface.quad_frames.shape[0], surface.cubic_frames.shape[0])
     header = {
         "format": FORMAT_NAME,
         "version": FORMAT_VERSION,
         "c1surf_version": __version__,
         "options": dataclasses.asdict(surface.options),  # every SurfaceOptions field, by name
         "input": {"path": input_path, "vertices": int(surface.n_input_vertices), "faces": int(surface.n_input_faces)},
-        "counts": {  # the frames' counts: the patch arrays are not made for them (a streamed conversion)
-            "biquadratic": int(surface.quad_frames.shape[0]),
-            "bicubic": int(surface.cubic_frames.shape[0]),
+        "counts": {
+            "biquadratic": int(counts[0]),
+            "bicubic": int(counts[1]),
             "corners": adjacency.n_corners,
             "edges": adjacency.n_edges,
         },
@@ -172,7 +187,8 @@ class PatchStream:
 
     patches : ``construction.patch_blocks.PatchSource``, the coefficients of any patches, bit for bit the arrays
     adjacency : PatchAdjacency, as ``PatchSet.adjacency``
-    source_kind : (P,) int, indices into SOURCE_KINDS; source_ids : (P, 2) int64, as ``PatchSet.source``
+    source_kind : (P,) int, indices into SOURCE_KINDS; source_ids : (P, 2) int (int64, or int32 where the
+        ids fit: ``integers`` gives int64 rows), as ``PatchSet.source``
     header : dict, as ``PatchSet.header``
     """
 
@@ -209,7 +225,7 @@ class PatchStream:
         if name == "source_kind":
             return source_names(self.source_kind[a:z])
         if name == "source":
-            return self.source_ids[a:z]
+            return self.source_ids[a:z].astype(np.int64)
         if name == "neighbours":
             if self._partners is None:
                 self._partners = self.adjacency.partners()  # (4 P,) int32: a quarter of neighbours()

@@ -262,8 +262,9 @@ _GRID_BLOCK_SAMPLES = 1 << 18  # grid samples per block of patches (int32 ids an
 class _Welding:
     """The numbering of ``welded_grid_from_ids`` with its gaps closed, and who evaluates each vertex.
 
-    corners, edges : (P, 4) int64 compact ids; reversed : (P, 4) bool
-    corner_owner, edge_owner : (n_corners,), (n_edges,) int64, the last flat position (patch * 4 + slot)
+    corners, edges : (P, 4) int compact ids (the adjacency's arrays, int32 from the construction: not copied);
+        reversed : (P, 4) bool
+    corner_owner, edge_owner : (n_corners,), (n_edges,) int (int32 below 2^31 sides), the last flat position (patch * 4 + slot)
         holding each id: writing all patches in order would leave that patch's value (edge_owner is None
         when there are no edge samples)
     dense : bool, no id was unused (then each vertex is evaluated once, from its owner)
@@ -279,7 +280,7 @@ class _Welding:
 
     @staticmethod
     def of(adjacency: PatchAdjacency, n: int) -> "_Welding":
-        corners, edges = np.asarray(adjacency.corners, dtype=np.int64), np.asarray(adjacency.edges, dtype=np.int64)
+        corners, edges = np.asarray(adjacency.corners), np.asarray(adjacency.edges)
         corner_owner = _last_owner(corners, adjacency.n_corners)
         corners, corner_owner, dense = _close_gaps(corners, corner_owner)
         edge_owner = None
@@ -326,9 +327,12 @@ class _Welding:
 
 
 def _last_owner(ids: np.ndarray, count: int) -> np.ndarray:
-    """(count,) int64: the last position in the flat ``ids`` holding each id 0..count-1; -1 if none."""
-    owner = np.full(count, -1, dtype=np.int64)
-    owner[ids.reshape(-1)] = np.arange(ids.size)  # in order, so the last patch writing an id wins
+    """(count,) int (int32 below 2^31 positions): the last position in the flat ``ids`` holding each id 0..count-1;
+    -1 if none."""
+    flat, index = ids.reshape(-1), np.int32 if ids.size < 2**31 else np.int64
+    owner = np.full(count, -1, dtype=index)
+    for a in range(0, flat.size, _GRID_BLOCK_SAMPLES):  # in order, so the last patch writing an id wins
+        owner[flat[a : a + _GRID_BLOCK_SAMPLES]] = np.arange(a, min(a + _GRID_BLOCK_SAMPLES, flat.size), dtype=index)
     return owner
 
 
@@ -353,7 +357,7 @@ def _grid_block(welding: _Welding, a: int, z: int, grid: np.ndarray, alone: bool
     if inner <= 0:
         return
     # sample k of side s is sample k of its edge, or inner-1-k when the side runs against the edge
-    first = welding.edges[a:z] * inner + welding.n_corners  # (z-a, 4)
+    first = welding.edges[a:z].astype(grid.dtype) * inner + welding.n_corners  # (z-a, 4), in the ids' type
     k = np.arange(inner)
     pattern, back = np.stack([k, inner - 1 - k]), welding.reversed[a:z].view(np.uint8)
     # sides: v = 0 and v = 1 with u increasing, u = 1 and u = 0 with v increasing

@@ -130,15 +130,21 @@ def test_a_sample_without_normal_is_written_in_memory_with_the_same_bytes(monkey
 
 
 def _spy_patch_arrays(monkeypatch) -> list:
-    """A list that gets, each time a Surface makes its patch arrays, whether they were made then."""
+    """A list that gets, each time a Surface makes its patch arrays, whether they were made then; and True
+    each time a PatchSource makes them all at once (the streamed conversion's fallback, which keeps no Surface)."""
     made = []
-    original = Surface._patch_arrays
+    original, whole = Surface._patch_arrays, patch_blocks.PatchSource.arrays
 
     def spy(self):
         made.append(self._patches is None)
         return original(self)
 
+    def spy_whole(self):
+        made.append(True)
+        return whole(self)
+
     monkeypatch.setattr(Surface, "_patch_arrays", spy)
+    monkeypatch.setattr(patch_blocks.PatchSource, "arrays", spy_whole)
     return made
 
 

@@ -88,3 +88,23 @@ def test_update_points_follows_in_blocks_and_lazy_arrays():
     assert np.array_equal(source.coefficients(0, np.arange(len(eager.biquadratic)))[0], eager.biquadratic)
     assert np.array_equal(lazy.bicubic, eager.bicubic)
     assert "apply patches" in lazy.timings
+
+
+@pytest.mark.parametrize("name", MESHES)
+def test_whole_arrays_from_the_source_are_the_surfaces(name):
+    eager, lazy = _surfaces(name)
+    biquadratic, bicubic = lazy.patch_source().arrays()
+    assert lazy._patches is None
+    assert np.array_equal(biquadratic, eager.biquadratic) and np.array_equal(bicubic, eager.bicubic)
+    assert biquadratic.shape == eager.biquadratic.shape and bicubic.shape == eager.bicubic.shape
+
+
+def test_whole_arrays_of_an_open_mesh_keep_only_the_kept_patches():
+    path = ROOT.parent / "shared" / "meshes" / "pmp-library" / "hole_capsule.obj"
+    if not path.exists():
+        pytest.skip(f"{path} is not here")
+    m = read_mesh(path)
+    eager = Surface(m.face_sizes, m.face_vertices, m.points)
+    lazy = Surface(m.face_sizes, m.face_vertices, m.points, lazy_patches=True)
+    biquadratic, bicubic = lazy.patch_source().arrays()
+    assert np.array_equal(biquadratic, eager.biquadratic) and np.array_equal(bicubic, eager.bicubic)

@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 import c1surf.evaluation.tessellate as tessellate_module
-from c1surf.evaluation.adjacency import PatchAdjacency, _first_appearance, _first_appearances, patch_adjacency
+import c1surf.evaluation.adjacency as adjacency_module
+from c1surf.evaluation.adjacency import PatchAdjacency, _first_appearance, _first_appearances, _renumber, patch_adjacency
 from c1surf.evaluation.bezier import bernstein_basis
 from c1surf.evaluation.rational import evaluate_rational, homogeneous
 from c1surf.construction.surface import Surface
@@ -259,3 +260,47 @@ def test_patch_adjacency_matches_reference(name):
     assert got == reference_patch_adjacency(s.refined, s.frames)
     # ids are int32 while 4 P < 2^31 (half the memory of the largest arrays), else int64
     assert got.corners.dtype == np.int32 and got.edges.dtype == np.int32 and got.reversed.dtype == bool
+
+
+@pytest.mark.parametrize("name", ["high_valence", "triangular_prism", "fan"])
+def test_patch_adjacency_by_tiny_blocks_and_parts(monkeypatch, name):
+    """Blocks of a few patches (cutting through both kinds) and the frames given as (quad, cubic) parts
+    change nothing: the same ids, and no (P, 4) copy of the frames is needed."""
+    s = surface(name)
+    expected = reference_patch_adjacency(s.refined, s.frames)
+    monkeypatch.setattr(adjacency_module, "_ADJACENCY_BLOCK", 3)
+    assert patch_adjacency(s.refined, s.frames) == expected
+    assert patch_adjacency(s.refined, (s.quad_frames, s.cubic_frames)) == expected
+
+
+@pytest.mark.parametrize("high", [7, 1000, 10**12])  # dense labels, and sparse ones (sorted path)
+@pytest.mark.parametrize("block", [1, 5, 1 << 16])
+def test_renumber_in_place(monkeypatch, high, block):
+    monkeypatch.setattr(adjacency_module, "_ADJACENCY_BLOCK", block)
+    labels = np.random.default_rng(high % 1000).integers(0, high, 2001)
+    ids, first = _first_appearances(labels)
+    flat = labels.copy()
+    assert np.array_equal(_renumber(flat), first) and np.array_equal(flat, ids)
+
+
+def reference_partners(adjacency: PatchAdjacency) -> np.ndarray:
+    flat = np.asarray(adjacency.edges).reshape(-1)
+    out = np.full(flat.size, -1, dtype=np.int64)
+    for edge in np.unique(flat):
+        sides = np.flatnonzero(flat == edge)
+        if sides.size == 2:
+            out[sides[0]], out[sides[1]] = sides[1], sides[0]
+    return out
+
+
+@pytest.mark.parametrize("block", [1, 3, 1 << 16])
+def test_partners_by_blocks(monkeypatch, block):
+    """Pairs, boundary sides, an edge of three sides and unused ids (a patch file's), at any block size."""
+    monkeypatch.setattr(adjacency_module, "_ADJACENCY_BLOCK", block)
+    for name in ("high_valence", "fan", "triangular_prism"):
+        a = patch_adjacency(surface(name).refined, surface(name).frames)
+        got = a.partners()
+        assert got.dtype == np.int32 and np.array_equal(got, reference_partners(a))
+    edges = np.array([[0, 1, 2, 3], [3, 4, 5, 0], [0, 7, 9, 9]])  # edge 0 thrice, 6 and 8 unused
+    odd = PatchAdjacency(edges, edges, np.zeros((3, 4), dtype=bool))
+    assert np.array_equal(odd.partners(), reference_partners(odd))
