@@ -31,7 +31,6 @@ a corner vertex's V-cell is a corner.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import csr_matrix
 
 from ...mesh.halfedges import HalfEdgeMesh
 
@@ -43,7 +42,7 @@ def crease_weight(sharpness: np.ndarray, step: int) -> np.ndarray:
 
 
 def crease_correction(mesh: HalfEdgeMesh, ratio: np.ndarray, chaikin_ratio: np.ndarray, halfedge_sharpness: np.ndarray,
-                      vertex_sharpness: np.ndarray, step: int) -> csr_matrix | None:
+                      vertex_sharpness: np.ndarray, step: int):
     """The change creases and corners make to one Doo-Sabin step, as a sparse matrix.
 
     Parameters
@@ -88,6 +87,8 @@ def crease_correction(mesh: HalfEdgeMesh, ratio: np.ndarray, chaikin_ratio: np.n
     rows += [h, np.repeat(h, size)]
     cols += [mesh.origin[h], mesh.origin[members]]
     vals += [-weight * (1.0 - a), np.repeat(-weight * a / size, size)]
+    from scipy.sparse import csr_matrix  # sharp features only
+
     correction = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                             shape=(mesh.n_halfedges, mesh.n_vertices))
     correction.sum_duplicates()
