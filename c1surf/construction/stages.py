@@ -21,10 +21,9 @@ In order (``STAGE_BUILDERS``; a builder returns None where its step does not app
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
-from scipy.sparse import csr_matrix, vstack
 
 from ..mesh.ghost_layer import ghost_points_matrix, reflex_corners
 from .extensions.interpolation import normal_constraint, vertex_interpolation_step
@@ -33,10 +32,13 @@ from .stencils.bicubic import bicubic_layout
 from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_corner_ratios
 from .stencils.creases import crease_correction, mirror_perturbation, mirror_rows, refined_sharpness
-from .stencils.doo_sabin import DooSabinStep, doo_sabin_matrix
+from .stencils.doo_sabin import DooSabinStep, FirstDooSabinStep, doo_sabin_matrix
 from .stencils.hole_rules import HoleRules
 from .stencils.perturbation import perturbation_matrix
 from .topology import SurfaceTopology
+
+if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is made: a closed mesh's conversion makes none (0.2 s)
+    from scipy.sparse import csr_matrix
 
 
 @runtime_checkable
@@ -86,19 +88,20 @@ class PlacementStage:
     (convex or reflex single-face corners, ``mesh.ghost_layer``): ``follow``
     classifies the corners again for new points and rebuilds the matrix when
     the classification changed, so moved points give what a fresh Surface gives.
+    A closed mesh's stage is a selection of rows, applied without its matrix.
     """
 
     name = "place"
     mixes_coordinates = False
 
     def __init__(self, topology: SurfaceTopology, points: np.ndarray):
-        self._select = topology.select_matrix()
+        self._topology = topology
         self._layer = topology.ghost
         self._source = topology.vertex_source
         self.reflex = None  # (k,) bool per ghost corner, or None (closed input)
-        self._matrix = self._select
+        self._matrix = None  # made when asked for (closed input) or by ``follow`` (open input)
         self.follow(points)
-        self.shape = self._matrix.shape
+        self.shape = (topology.input.n_vertices, topology.n_input_vertices)
 
     def follow(self, points: np.ndarray) -> bool:
         """Classify the ghost corners for input ``points`` (V, d); True if the matrix changed."""
@@ -108,13 +111,17 @@ class PlacementStage:
         if self.reflex is not None and np.array_equal(reflex, self.reflex):
             return False
         self.reflex = reflex
-        self._matrix = ghost_points_matrix(self._layer, reflex) @ self._select
+        self._matrix = ghost_points_matrix(self._layer, reflex) @ self._topology.select_matrix()
         return True
 
     def apply(self, points: np.ndarray) -> np.ndarray:
+        if self._matrix is None:  # the selection's product adds each row's one point to 0.0 (-0.0 becomes 0.0)
+            return np.take(points, self._source, axis=0) + 0.0
         return self._matrix @ points
 
     def matrix(self) -> csr_matrix:
+        if self._matrix is None:
+            self._matrix = self._topology.select_matrix()
         return self._matrix
 
 
@@ -149,6 +156,8 @@ class StackedStage:
 
     def matrix(self) -> csr_matrix:
         if self._matrix is None:
+            from scipy.sparse import vstack
+
             self._matrix = vstack([part.matrix() for part in self.parts], format="csr")
         return self._matrix
 
@@ -177,12 +186,15 @@ def placement_stage(topology: SurfaceTopology, inputs: StageInputs) -> Placement
     return PlacementStage(topology, inputs.points)
 
 
-def first_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:
+def first_step_stage(topology: SurfaceTopology, inputs: StageInputs):
     """A1's first Doo-Sabin step; with A1a every V-cell gets its input vertex as centroid."""
     if topology.refinements == 0:
         return None
-    step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
     sharp = topology.sharpness
+    plain = sharp is None and not inputs.interpolate_vertices and topology.crease_sheets is None
+    if plain:  # the plain step: its matrix's map, without the matrix
+        return FirstDooSabinStep(topology.input, inputs.corner_ratio)
+    step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
     if sharp is not None:  # creases and corners pull their points towards the crease polygon (stencils.creases)
         correction = crease_correction(topology.input, inputs.corner_ratio, inputs.corner_ratio, sharp.halfedge,
                                        sharp.vertex, step=1)

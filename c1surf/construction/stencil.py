@@ -13,8 +13,12 @@ Two cases leave that plain form:
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import numpy as np
-from scipy.sparse import csr_matrix, diags, identity, kron
+
+if TYPE_CHECKING:  # scipy.sparse is imported where a stencil is made: a conversion makes none
+    from scipy.sparse import csr_matrix
 
 
 def row_stencil(stages, weights: np.ndarray | None = None) -> csr_matrix:
@@ -43,6 +47,8 @@ def compose(stages) -> csr_matrix:
 
 def euclidean(total: csr_matrix, weights: np.ndarray) -> csr_matrix:
     """diag(1 / (S w)) S diag(w): Euclidean coefficients from Euclidean points, for fixed weights w."""
+    from scipy.sparse import diags
+
     return (diags(1.0 / (total @ weights)) @ total @ diags(weights)).tocsr()
 
 
@@ -61,6 +67,8 @@ def flat_stencil(stages, columns: int, weights: np.ndarray | None = None) -> csr
     columns : int, d, the columns of the (Euclidean) points
     weights : (V,) float or None, the fixed homogeneous weights of a rational surface
     """
+    from scipy.sparse import diags, identity, kron
+
     width = columns + (weights is not None)
     rows = None  # product of the row stages so far, unflattened
     flat = None  # flattened product, from the first stage that mixes coordinates on

@@ -24,7 +24,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import csr_matrix
 
 from ..arrays import unique_integers
 from .halfedges import HalfEdgeMesh, build_halfedges
@@ -110,7 +109,7 @@ def reflex_corners(layer: GhostLayer, points: np.ndarray) -> np.ndarray:
     return turn < 0
 
 
-def ghost_points_matrix(layer: GhostLayer, reflex: np.ndarray) -> csr_matrix:
+def ghost_points_matrix(layer: GhostLayer, reflex: np.ndarray):
     """(V + G, V) matrix: real points unchanged, ghost a' = 2 a - m(a).
 
     m(a) is the mean of the neighbours of a along interior edges. A vertex in a
@@ -124,6 +123,8 @@ def ghost_points_matrix(layer: GhostLayer, reflex: np.ndarray) -> csr_matrix:
     layer : GhostLayer
     reflex : (k,) bool, which of ``layer.corners`` are reflex (``reflex_corners``)
     """
+    from scipy.sparse import csr_matrix  # open meshes only: a closed mesh's conversion imports no scipy.sparse
+
     mesh, ghost, boundary_vertices = layer.open_mesh, layer.ghost, layer.boundary_vertices
     n, g = mesh.n_vertices, boundary_vertices.size
     interior = mesh.twin >= 0

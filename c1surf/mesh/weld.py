@@ -19,7 +19,6 @@ vertices or faces.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix
 
 from ..arrays import unique_integers
 
@@ -133,7 +132,8 @@ def _near_labels(points: np.ndarray, keys: np.ndarray, tolerance: float) -> np.n
     -------
     (m,) int
     """
-    # only for a welding tolerance: scipy.spatial and csgraph take 0.3 s to import
+    # only for a welding tolerance: scipy.sparse, csgraph and scipy.spatial take 0.5 s to import
+    from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
     from scipy.spatial import cKDTree
 
@@ -231,7 +231,8 @@ def regroup_by_fans(face_sizes: np.ndarray, welded: np.ndarray, original: np.nda
     (H,) int, vertex of each corner: ``welded`` except at suspect vertices, where each
     group of corners gets the lowest file vertex among its corners
     """
-    from scipy.sparse.csgraph import connected_components  # only where welding glued surfaces (0.2 s to import)
+    from scipy.sparse import coo_matrix  # only where welding glued surfaces (0.4 s to import)
+    from scipy.sparse.csgraph import connected_components
 
     h = welded.size
     following = _next_corner(face_sizes)

@@ -199,3 +199,19 @@ def test_every_stage_is_its_matrix(mesh, options, kwargs):
     assert surface.stage("patches") is surface.stages[-1]
     with pytest.raises(KeyError):
         surface.stage("no such stage")
+
+
+@pytest.mark.parametrize("name", ["twisted", "high_valence", "hexagon_six_valent", "triangular_prism"])
+def test_first_stages_without_their_matrices_give_the_matrices_bits(name):
+    """The placement (a closed mesh's) and the plain first Doo-Sabin step are applied without scipy.sparse;
+    they give the bits of their matrices' products, -0.0 turned into 0.0 as those products turn it."""
+    mesh = read_obj(SAMPLES / f"{name}.obj")
+    points = np.array(mesh.points)
+    points[::3, 0] = -0.0
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, points, SurfaceOptions(blend=0.3))
+    x = points
+    for stage in surface.stages[:2]:
+        assert stage.name in ("place", "doo_sabin_1") and stage._matrix is None
+        y = stage.apply(x)
+        assert y.tobytes() == (stage.matrix() @ x).tobytes()
+        x = y

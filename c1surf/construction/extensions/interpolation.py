@@ -29,7 +29,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.sparse import csr_matrix, identity
 
 from ...arrays import unique_integers
 from ...mesh.halfedges import HalfEdgeMesh
@@ -37,7 +36,7 @@ from ..refine.doo_sabin import FACE_FROM_VERTEX, RefinedFaces
 from ..refine.holes import cell_neighbourhood
 
 
-def vertex_interpolation_step(step1: csr_matrix, coarse: HalfEdgeMesh, faces1: RefinedFaces) -> csr_matrix:
+def vertex_interpolation_step(step1, coarse: HalfEdgeMesh, faces1: RefinedFaces):
     """First Doo-Sabin step followed by A1a's move: every V-cell gets its vertex as centroid.
 
     Parameters
@@ -50,6 +49,8 @@ def vertex_interpolation_step(step1: csr_matrix, coarse: HalfEdgeMesh, faces1: R
     -------
     (H, V) csr_matrix ``(I - G) step1 + E``
     """
+    from scipy.sparse import csr_matrix, identity  # A1a only: the usual conversion imports no scipy.sparse
+
     offsets = np.concatenate([[0], np.cumsum(faces1.face_sizes)])
     rows, cols, vals = [], [], []
     sel_rows = []
@@ -155,7 +156,7 @@ class NormalConstraint:
             x[g.C, :3] += t[..., None] * g.normals[:, None, :]
         return x
 
-    def matrix(self, columns: int = 3, weights: np.ndarray | None = None) -> csr_matrix:
+    def matrix(self, columns: int = 3, weights: np.ndarray | None = None):
         """(N columns, N columns) csr_matrix M with ``apply(x).ravel() == M @ x.ravel()``.
 
         Parameters
@@ -169,6 +170,8 @@ class NormalConstraint:
             raise ValueError("a rational surface's normal constraint is linear for fixed weights: pass them")
         if not self.rational and columns in self._matrices:
             return self._matrices[columns]
+        from scipy.sparse import identity
+
         size = self.n_points * columns
         matrix = identity(size, format="csr")
         for g in self.groups:
@@ -178,13 +181,15 @@ class NormalConstraint:
         return matrix
 
 
-def _moves_matrix(g: _CellGroup, columns: int, weights: np.ndarray | None, size: int) -> csr_matrix:
+def _moves_matrix(g: _CellGroup, columns: int, weights: np.ndarray | None, size: int):
     """The corners' moves of one cell group as a sparse matrix on the flattened points.
 
     With q = Q x[local] the tangent datum, depth_m = n . q_m (minus (n . s) q_m,w with
     s the centre over its weight, rational), and the moves t = coef @ depth along n,
     where coef[l, m] = (2 / n) Re(-e^{i theta (m - l)} / factor) (see ``apply``).
     """
+    from scipy.sparse import csr_matrix
+
     phase = g.phases()
     coef = (2.0 / g.n) * np.real(-(np.conj(phase)[:, None] * phase[None, :]) / g.factor())  # (n, n)
     local, Q = g.local_points(), g.datum_weights()  # (k, m), (n, m)

@@ -31,7 +31,6 @@ a corner vertex's V-cell is a corner.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import csr_matrix, diags, vstack
 
 from ...mesh.halfedges import HalfEdgeMesh
 
@@ -43,7 +42,7 @@ def crease_weight(sharpness: np.ndarray, step: int) -> np.ndarray:
 
 
 def crease_correction(mesh: HalfEdgeMesh, ratio: np.ndarray, chaikin_ratio: np.ndarray, halfedge_sharpness: np.ndarray,
-                      vertex_sharpness: np.ndarray, step: int) -> csr_matrix | None:
+                      vertex_sharpness: np.ndarray, step: int):
     """The change creases and corners make to one Doo-Sabin step, as a sparse matrix.
 
     Parameters
@@ -88,6 +87,8 @@ def crease_correction(mesh: HalfEdgeMesh, ratio: np.ndarray, chaikin_ratio: np.n
     rows += [h, np.repeat(h, size)]
     cols += [mesh.origin[h], mesh.origin[members]]
     vals += [-weight * (1.0 - a), np.repeat(-weight * a / size, size)]
+    from scipy.sparse import csr_matrix  # sharp features only
+
     correction = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                             shape=(mesh.n_halfedges, mesh.n_vertices))
     correction.sum_duplicates()
@@ -168,6 +169,8 @@ def mirror_rows(step: csr_matrix, mesh: HalfEdgeMesh, sheets, corner_ratio: np.n
     -------
     (H, V) csr_matrix, ``step`` with the ghost rows replaced (still affine: every row sums to 1)
     """
+    from scipy.sparse import csr_matrix, diags, vstack  # C0 creases only: a plain conversion imports no scipy
+
     n_rows, n_cols = step.shape
     real, ghost = sheets.mirror_real, sheets.mirror_ghost
     v, w, b = mesh.origin[real], sheets.mirror_toward, corner_ratio[real] / 2
@@ -207,6 +210,8 @@ def mirror_perturbation(matrix: csr_matrix, refined: HalfEdgeMesh, real_vertex: 
     refined : HalfEdgeMesh, the twice-refined mesh
     real_vertex : (Vr,) bool, refined points whose patches are kept (the ghost quads' are not)
     """
+    from scipy.sparse import csr_matrix, diags
+
     crossing = real_vertex[refined.origin] & ~real_vertex[refined.dest]
     ghost, real = refined.dest[crossing], refined.origin[crossing]
     ghost, first = np.unique(ghost, return_index=True)

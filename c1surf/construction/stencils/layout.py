@@ -9,7 +9,6 @@ as a sparse matrix (``gathered_matrix``) is built only when asked for.
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import csr_matrix, vstack
 
 from ...parallel import for_each_range, ranges_of
 
@@ -120,7 +119,7 @@ class _ProductWork:
         return self._index
 
 
-def gathered_matrix(slots: np.ndarray, weights: np.ndarray, n_points: int) -> csr_matrix:
+def gathered_matrix(slots: np.ndarray, weights: np.ndarray, n_points: int):
     """The map of ``gathered_products`` as a (k r, n_points) csr_matrix: row ``r p + i`` is coefficient i of patch p.
 
     Written straight into CSR arrays (every patch has the same pattern of non-zero weights).
@@ -131,6 +130,8 @@ def gathered_matrix(slots: np.ndarray, weights: np.ndarray, n_points: int) -> cs
     weights : (r, m) float
     n_points : int
     """
+    from scipy.sparse import csr_matrix  # scipy.sparse is imported where a matrix is made: the usual conversion needs none (0.2 s)
+
     slots = np.asarray(slots)  # a table made by blocks, whole
     k = slots.shape[1]
     i, j = np.nonzero(weights)  # row by row, so each patch's entries are in row order
@@ -204,9 +205,11 @@ class PatchLayout:
             self._kept = np.flatnonzero(self.keep)
         return self._kept
 
-    def matrix(self) -> csr_matrix:
+    def matrix(self):
         """(rows, n_points) csr_matrix, built on the first call and kept."""
         if self._matrix is None:
+            from scipy.sparse import csr_matrix, vstack
+
             parts = [gathered_matrix(slots, weights, self.n_points) for slots, weights in self.groups]
             matrix = vstack(parts, format="csr") if parts else csr_matrix((0, self.n_points))
             if self.keep is not None:

@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 import numpy as np
-from scipy.sparse import coo_matrix, csr_matrix, identity
 
 from ...arrays import unique_integers
 from ...mesh.halfedges import HalfEdgeMesh
@@ -35,6 +34,8 @@ def perturbation_matrix(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
         count += k
     if count == 0:
         return None
+    from scipy.sparse import coo_matrix, identity  # even holes only
+
     constraints = coo_matrix(
         (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(count, mesh.n_vertices)
     ).tocsr()
@@ -43,7 +44,7 @@ def perturbation_matrix(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
     return (identity(mesh.n_vertices, format="csr") - constraints.T @ (inverse_gram @ constraints)).tocsr()
 
 
-def block_diagonal_inverse(matrix: coo_matrix) -> csr_matrix:
+def block_diagonal_inverse(matrix):
     """Inverse of a sparse symmetric matrix made of small diagonal blocks.
 
     Even holes couple only where they share B points, so A A^T splits into
@@ -57,7 +58,8 @@ def block_diagonal_inverse(matrix: coo_matrix) -> csr_matrix:
     -------
     (m, m) csr_matrix
     """
-    from scipy.sparse.csgraph import connected_components  # only for even holes (0.2 s to import)
+    from scipy.sparse import csr_matrix  # only for even holes (0.4 s to import)
+    from scipy.sparse.csgraph import connected_components
 
     m = matrix.shape[0]
     _, label = connected_components(matrix, directed=False)
