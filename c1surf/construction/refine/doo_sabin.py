@@ -104,9 +104,9 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     - V-face of a vertex: h -> rotate(h) at H + 4E + (h's place in the ring);
       twin in the E-face of ``prev[h]``'s edge.
 
-    Boundary half-edges (the coarse edge or vertex has no E- or V-face) get -1.
-    The F-faces repeat the coarse faces, so their part of ``face``, ``next`` and
-    ``prev`` is the coarse mesh's; the E-faces are quads in a row.
+    Boundary half-edges (the coarse edge or vertex has no E- or V-face) get -1. The F-faces' part of
+    ``face`` and ``next`` is the coarse mesh's, the E-faces are quads in a row; ``prev`` is made from
+    ``next`` when first read (``HalfEdgeMesh.prev``).
 
     Parameters
     ----------
@@ -126,7 +126,7 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     n_fine = faces.face_vertices.size
     offsets = np.zeros(faces.face_sizes.size + 1, dtype=np.int64)
     np.cumsum(faces.face_sizes, out=offsets[1:])
-    face, nxt, prv = _refined_cycles(mesh, offsets, n_edges, n_fine, index)
+    face, nxt = _refined_cycles(mesh, offsets, n_edges, n_fine, index)
     # twins: F-face half-edge h and its E-face side (0 for rep, 2 for t) ...
     twin = np.full(n_fine, -1, dtype=index)
     side = np.arange(n_half, ring_start, 4, dtype=index)
@@ -147,38 +147,33 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     ends *= -2
     ends += across
     ends += 3  # across + 3 - 2 ((across - H) & 3)
-    return HalfEdgeMesh(int(n_half), faces.face_sizes, offsets, faces.face_vertices, face, nxt, prv, twin)
+    return HalfEdgeMesh(int(n_half), faces.face_sizes, offsets, faces.face_vertices, face, nxt, None, twin)  # prev: later
 
 
 def _refined_cycles(mesh: HalfEdgeMesh, offsets: np.ndarray, n_edges: int, n_fine: int, index):
-    """``face``, ``next``, ``prev`` (n_fine,) of the refined mesh (``refined_halfedges``): the F-faces' are the
-    coarse mesh's, the E-faces are quads in a row, the V-faces cycles of their sizes (``_cycles``)."""
+    """``face``, ``next`` (n_fine,) of the refined mesh (``refined_halfedges``): the F-faces' are the coarse
+    mesh's, the E-faces are quads in a row, the V-faces cycles of their sizes (``_cycles``)."""
     n_half, n_faces = mesh.n_halfedges, mesh.n_faces
     ring_start = n_half + 4 * n_edges
-    face, nxt, prv = (np.empty(n_fine, dtype=index) for _ in range(3))
-    for whole, coarse in ((face, mesh.face), (nxt, mesh.next), (prv, mesh.prev)):
-        whole[:n_half] = coarse
+    face, nxt = np.empty(n_fine, dtype=index), np.empty(n_fine, dtype=index)
+    face[:n_half], nxt[:n_half] = mesh.face, mesh.next
     # E-faces: long runs of arange, then every fourth entry wrapped (broadcasting over rows of 4 runs
     # inner loops of 4 and is 3x slower)
-    e_face, e_next, e_prev = face[n_half:ring_start], nxt[n_half:ring_start], prv[n_half:ring_start]
+    e_face, e_next = face[n_half:ring_start], nxt[n_half:ring_start]
     np.right_shift(np.arange(4 * n_edges, dtype=index), 2, out=e_face)
     e_face += n_faces
     e_next[:] = np.arange(n_half + 1, ring_start + 1, dtype=index)
     e_next[3::4] -= 4
-    e_prev[:] = np.arange(n_half - 1, ring_start - 1, dtype=index)
-    e_prev[::4] += 4
-    _cycles(offsets[n_faces + n_edges :], n_faces + n_edges, face[ring_start:], nxt[ring_start:], prv[ring_start:])
-    return face, nxt, prv
+    _cycles(offsets[n_faces + n_edges :], n_faces + n_edges, face[ring_start:], nxt[ring_start:])
+    return face, nxt
 
 
-def _cycles(offsets: np.ndarray, first_face: int, face: np.ndarray, nxt: np.ndarray, prv: np.ndarray) -> None:
-    """Fill ``face``, ``nxt``, ``prv`` (n,) of the faces whose half-edges start at ``offsets`` (k + 1,), numbered
+def _cycles(offsets: np.ndarray, first_face: int, face: np.ndarray, nxt: np.ndarray) -> None:
+    """Fill ``face``, ``nxt`` (n,) of the faces whose half-edges start at ``offsets`` (k + 1,), numbered
     from ``first_face``: each face's half-edges in a cycle (``halfedges.face_cycles``, shifted)."""
     start = int(offsets[0])
     sizes = np.diff(offsets)
     face[:] = np.repeat(np.arange(first_face, first_face + sizes.size, dtype=face.dtype), sizes)
     nxt[:] = np.arange(start + 1, start + nxt.size + 1, dtype=nxt.dtype)
-    prv[:] = np.arange(start - 1, start + prv.size - 1, dtype=prv.dtype)
     if sizes.size:
         nxt[offsets[1:] - 1 - start] = offsets[:-1]
-        prv[offsets[:-1] - start] = offsets[1:] - 1

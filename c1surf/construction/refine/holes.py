@@ -61,7 +61,7 @@ def cell_neighbourhood(mesh: HalfEdgeMesh, h: np.ndarray):
     t = mesh.twin[h]  # C_{i+1} -> C_i in the quad beside edge i
     to_b2 = mesh.next[t]  # C_i -> B_{i,2}
     back = mesh.twin[to_b2]  # B_{i,2} -> C_i in the corner quad
-    A = mesh.origin[mesh.prev[back]]
+    A = mesh.origin[mesh.next[mesh.next[mesh.next[back]]]]  # prev in a corner quad, without the mesh's prev
     B1 = mesh.origin[mesh.next[mesh.next[back]]]
     return A, B1, mesh.dest[to_b2], mesh.origin[h], mesh.face[back], mesh.face[t]
 
@@ -101,7 +101,7 @@ def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:
     (k, 4) int
     """
     frames = np.empty((first.size, 4), dtype=np.result_type(first, mesh.twin))
-    twin, prev = mesh.twin, mesh.prev
+    twin, nxt = mesh.twin, mesh.next
 
     def fill(start: int, stop: int) -> bool:  # rotations by blocks that stay in cache, on the thread pool
         ok = True
@@ -109,11 +109,15 @@ def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:
             b = min(stop, a + (1 << 16))
             block, e = frames[a:b], first[a:b]
             block[:, 0] = e
-            for i in range(1, 5):  # rotate: twin[prev[e]]; a -1 (boundary) is in the block or breaks the cycle
-                e = np.take(twin, np.take(prev, e, mode="clip"), mode="clip")
-                if i < 4:
+            # clockwise, e3, e2, e1 and back to e0: next[twin[e]] undoes rotate (twin[prev[e]]) and needs
+            # no prev (a refined mesh makes its prev only when read); twin -1 is a boundary
+            for i in (3, 2, 1, 0):
+                t = np.take(twin, e, mode="clip")
+                ok = ok and not np.any(t < 0)
+                e = np.take(nxt, t, mode="clip")
+                if i:
                     block[:, i] = e
-            ok = ok and not (np.any(block < 0) or np.any(e != first[a:b]))
+            ok = ok and not np.any(e != first[a:b])
         return ok
 
     if not all(run_tasks([partial(fill, a, b) for a, b in zip(*_pairs(ranges_of(first.size, 1 << 17)))])):
