@@ -91,6 +91,13 @@ class GridSlots:
             self._whole = biquadratic_grid(self.mesh, self.frames)
         return self._whole
 
+    def __getitem__(self, key):
+        """Indexing as the (9, Nq) array's: a slice of patches ([:, a:b], [j, a:b]) is made alone, else the whole."""
+        if isinstance(key, tuple) and len(key) == 2 and isinstance(key[1], slice) and key[1].step in (None, 1):
+            start, stop, _ = key[1].indices(self.shape[1])
+            return self.block(start, max(start, stop))[key[0]]
+        return np.asarray(self)[key]
+
     def __array__(self, dtype=None, copy=None):
         whole = self._whole if self._whole is not None else biquadratic_grid(self.mesh, self.frames)
         return whole if dtype is None else whole.astype(dtype)
