@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...arrays import unique_integers
 from ...parallel import blas_on_one_thread, thread_count
 from .. import tessellate
 from ..tessellate import (_Bases, _corner_block, _grid_block, _interior_block, _owned_block, _side_block, _Welding,
@@ -175,7 +176,7 @@ class StreamedTessellation:
         for k in range(2):
             mine = patch[(patch >= self.starts[k]) & (patch < self.starts[k + 1])] - self.starts[k]
             if mine.size:
-                unique = np.unique(mine)
+                unique = unique_integers(mine)  # np.unique's hash table is ~20x slower on these keys
                 fetched[k] = (unique, self.source.coefficients(k, unique)[0].reshape(-1, self.dim))
 
         def evaluate(k, local, slot, points, normals):
