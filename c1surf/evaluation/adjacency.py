@@ -35,6 +35,7 @@ from functools import cached_property
 
 import numpy as np
 
+from ..mesh.halfedges import component_roots
 from ..parallel import run_tasks
 from .bezier import bernstein_basis
 from .rational import dehomogenize, homogeneous
@@ -563,9 +564,6 @@ def with_seams(adjacency: PatchAdjacency, seams: np.ndarray, same_direction: np.
     -------
     PatchAdjacency, canonical, with the seams' sides sharing an edge id and their end corners a corner id
     """
-    from scipy.sparse import coo_matrix  # the rare path (C0 creases in CAD files): not imported by every conversion
-    from scipy.sparse.csgraph import connected_components
-
     seams = np.asarray(seams, dtype=np.int64).reshape(-1, 2)
     if seams.size == 0:
         return adjacency
@@ -573,10 +571,7 @@ def with_seams(adjacency: PatchAdjacency, seams: np.ndarray, same_direction: np.
     ends = lambda curve: corners.reshape(-1)[4 * (curve // 4)[:, None] + SIDE_CORNERS[curve % 4]]  # (k, 2) start, end
     a, b = ends(seams[:, 0]), ends(seams[:, 1])
     b = np.where(same_direction[:, None], b, b[:, ::-1])
-    n = adjacency.n_corners
-    graph = coo_matrix((np.ones(2 * len(seams)), (a.ravel(), b.ravel())), shape=(n, n))
-    merged = connected_components(graph, directed=False)[1]
-    corner_labels = merged[corners]
+    corner_labels = component_roots(adjacency.n_corners, a.ravel(), b.ravel())[corners]  # the seam ends made one
     edge_labels = np.asarray(adjacency.edges, dtype=np.int64).copy()
     flat = edge_labels.reshape(-1)
     flat[seams[:, 1]] = flat[seams[:, 0]]

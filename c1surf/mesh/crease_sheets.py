@@ -30,16 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .halfedges import HalfEdgeMesh, build_halfedges
-
-
-def _components(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(n,) int: connected components of the graph on 0..n-1 with edges (a, b) (scipy imported here: only
-    --exact-creases needs it, and a plain conversion does not import scipy's graph module)."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-
-    return connected_components(coo_matrix((np.ones(a.size), (a, b)), shape=(n, n)), directed=False)[1]
+from .halfedges import HalfEdgeMesh, build_halfedges, component_roots, orbit_labels, vertex_valences
 
 
 @dataclass(frozen=True)
@@ -99,10 +90,9 @@ def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
     mesh : HalfEdgeMesh
     sharp : (H,) bool, half-edges on a sharp edge (both half-edges of an edge alike)
     """
-    h = np.arange(mesh.n_halfedges)
     turned = mesh.twin[mesh.prev]  # the next corner around origin[h], across the edge prev[h]
-    join = (turned >= 0) & ~sharp[mesh.prev]
-    return _components(h.size, h[join], turned[join])
+    successor = np.where((turned >= 0) & ~sharp[mesh.prev], turned, -1)
+    return orbit_labels(successor, int(vertex_valences(mesh).max(initial=0)))
 
 
 def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray):
@@ -164,7 +154,7 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     # and whose every vertex is exact (a boundary loop no crease reaches keeps the ghost layer's rule)
     seam = sharp | (mesh.twin < 0)
     a, b = mesh.origin[seam], mesh.dest[seam]
-    component = _components(n, a, b)
+    component = component_roots(n, a, b)  # the smallest vertex of each component names it
     creased = np.zeros(component.max() + 1, dtype=bool)
     creased[component[mesh.origin[sharp]]] = True
     bad = np.zeros(component.max() + 1, dtype=bool)

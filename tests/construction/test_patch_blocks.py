@@ -51,14 +51,20 @@ def test_blocks_cover_every_patch_once_in_order(name):
     assert np.array_equal(lazy.refined_points, eager.refined_points)
 
 
-def test_open_mesh_blocks_keep_only_the_kept_patches():
-    """An open mesh keeps only the bicubic patches at real corners (PatchLayout.keep)."""
+@pytest.fixture(scope="module")
+def open_mesh_surfaces():
+    """(eager, lazy) Surfaces of an open mesh, whose bicubic patches are kept at real corners only."""
     path = ROOT.parent / "shared" / "meshes" / "pmp-library" / "hole_capsule.obj"
     if not path.exists():
         pytest.skip(f"{path} is not here")
     m = read_mesh(path)
-    eager = Surface(m.face_sizes, m.face_vertices, m.points)
-    lazy = Surface(m.face_sizes, m.face_vertices, m.points, lazy_patches=True)
+    return (Surface(m.face_sizes, m.face_vertices, m.points),
+            Surface(m.face_sizes, m.face_vertices, m.points, lazy_patches=True))
+
+
+def test_open_mesh_blocks_keep_only_the_kept_patches(open_mesh_surfaces):
+    """An open mesh keeps only the bicubic patches at real corners (PatchLayout.keep)."""
+    eager, lazy = open_mesh_surfaces
     assert lazy.stages[-1].parts[1].keep is not None
     source = lazy.patch_source(cache_bytes=1)
     assert source.counts == (len(eager.biquadratic), len(eager.bicubic))
@@ -99,12 +105,7 @@ def test_whole_arrays_from_the_source_are_the_surfaces(name):
     assert biquadratic.shape == eager.biquadratic.shape and bicubic.shape == eager.bicubic.shape
 
 
-def test_whole_arrays_of_an_open_mesh_keep_only_the_kept_patches():
-    path = ROOT.parent / "shared" / "meshes" / "pmp-library" / "hole_capsule.obj"
-    if not path.exists():
-        pytest.skip(f"{path} is not here")
-    m = read_mesh(path)
-    eager = Surface(m.face_sizes, m.face_vertices, m.points)
-    lazy = Surface(m.face_sizes, m.face_vertices, m.points, lazy_patches=True)
+def test_whole_arrays_of_an_open_mesh_keep_only_the_kept_patches(open_mesh_surfaces):
+    eager, lazy = open_mesh_surfaces
     biquadratic, bicubic = lazy.patch_source().arrays()
     assert np.array_equal(biquadratic, eager.biquadratic) and np.array_equal(bicubic, eager.bicubic)
