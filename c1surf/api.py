@@ -44,7 +44,7 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
         options["interpolate_vertices"] = True
     data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes,
                         creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags)
-    mesh, data = prepare_surface_input(mesh, data, weld)
+    mesh, data = prepare_surface_input(mesh, data, weld, options.get("exact_creases", False))
     surface = Surface(mesh.face_sizes, mesh.face_vertices, data.points, SurfaceOptions(**options), **data.surface_kwargs())
     return surface, mesh
 

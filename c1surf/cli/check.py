@@ -29,7 +29,7 @@ def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
         return load_patch_set(path)
     mesh = read_mesh(path)
     options, data = extension_setup(mesh, None, **shape)
-    mesh, data = prepare_surface_input(mesh, data, weld)
+    mesh, data = prepare_surface_input(mesh, data, weld, options.exact_creases)
     surface = build_or_fail(mesh, options, data)
     for note in data.feature_notes + crease_notes(surface) + file_notes(mesh) + weld_notes(mesh.weld) + dissolve_notes(mesh):
         click.echo(f"c1surf: note: {note}", err=True)

@@ -86,7 +86,8 @@ def seam_notes(exact_creases: bool, features, topology) -> list[str]:
     """``crease_notes`` of a surface's parts: the option, its SharpFeatures and its SurfaceTopology."""
     if not exact_creases or features is None or topology is None:
         return []
-    sharp = int(np.count_nonzero(features.crease_sharpness >= INFINITELY_SHARP))
+    sharp = int(np.unique(np.sort(features.crease_edges[features.crease_sharpness >= INFINITELY_SHARP], axis=1),
+                          axis=0).shape[0])  # an edge tagged twice counts once
     corners = np.unique(features.corner_vertices[features.corner_sharpness >= INFINITELY_SHARP])
     if sharp == 0 and corners.size == 0:
         return []
@@ -98,6 +99,12 @@ def seam_notes(exact_creases: bool, features, topology) -> list[str]:
     if lone.size:
         notes.append(f"{lone.size} infinitely sharp corners are not on a C0 seam and stay the sharpest G1 corner "
                      f"(vertices {', '.join(map(str, lone[:8].tolist()))}{' ...' if lone.size > 8 else ''}, 0-based)")
+    darts = 0 if sheets is None or sheets.dart_edges is None else len(sheets.dart_edges)
+    if darts:
+        notes.append(f"{darts} infinitely sharp crease edges lie on crease lines that end inside the surface (darts): "
+                     "they stay the sharpest G1 crease, which fades out at the dart as in OpenSubdiv; the rest of "
+                     "their crease is a C0 seam")
+        kept -= darts
     if kept:
         named = [] if sheets is None else sheets.inexact_vertices.tolist()
         at = f" (at vertices {', '.join(map(str, named[:8]))}{' ...' if len(named) > 8 else ''}, 0-based)" if named else ""
@@ -108,11 +115,19 @@ def seam_notes(exact_creases: bool, features, topology) -> list[str]:
 
 
 def dissolve_notes(mesh_file) -> list[str]:
-    """The notes on repeated faces dropped and interior valence-2 vertices dissolved (``mesh.valence_two``)."""
+    """The notes on repeated faces dropped, crease sectors merged (``mesh.creases.sectors``) and interior valence-2
+    vertices dissolved (``mesh.valence_two``)."""
     notes = []
     if getattr(mesh_file, "repeated_faces", 0):
         notes.append(f"dropped {mesh_file.repeated_faces} faces that repeat an earlier face (the same cycle again, or "
                      "its reversal where the two make a closed two-sided card)")
+    merge = getattr(mesh_file, "sector_merge", None)
+    if merge is not None:
+        faces, polygons, at = merge
+        shown = ", ".join(str(int(v)) for v in at[:8]) + (", ..." if len(at) > 8 else "")
+        notes.append(f"--exact-creases: merged {faces} faces into {polygons} polygons around {len(at)} crease vertices "
+                     f"(vertices {shown}, 0-based), so that every crease sector has at most two faces (one at a "
+                     "corner), which the exact C0 crease needs (docs/sharp-features.md)")
     dissolved = getattr(mesh_file, "dissolved_vertices", ())
     if not len(dissolved):
         return notes

@@ -338,7 +338,7 @@ def read_and_build(input_path, mesh_suffix: str | None, shape: dict, progress: P
     progress.phase(f"reading {input_path}")
     mesh = read_mesh(input_path)
     options, data = extension_setup(mesh, mesh_suffix, **shape)
-    mesh, data = prepare_surface_input(mesh, data, weld)
+    mesh, data = prepare_surface_input(mesh, data, weld, options.exact_creases)
     progress.phase(f"building the surface of {mesh.n_faces} faces")
     surface = build_or_fail(mesh, options, data, lazy_patches)
     echo_repair_notes(surface, mesh, quiet, data)

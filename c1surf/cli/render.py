@@ -66,7 +66,7 @@ def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Pro
         mesh = read_mesh(input_path)
         features, notes = sharp_features(mesh, exact_creases=options.exact_creases)  # the file's own creases, corners and holes
         mesh, data = prepare_surface_input(mesh, SurfaceData(points=mesh.points, features=features, feature_notes=notes),
-                                           weld)
+                                           weld, options.exact_creases)
         progress.phase(f"building the surface of {mesh.n_faces} faces")
         surface = build_or_fail(mesh, options, data)
         echo_repair_notes(surface, mesh, quiet, data)

@@ -1,4 +1,4 @@
-"""The patch sides on either side of a C0 crease, paired (``mesh.crease_sheets``; integers only).
+"""The patch sides on either side of a C0 crease, paired (``mesh.creases.sheets``; integers only).
 
 A crease side of a kept patch is the side dual to a refined edge from a real point to a ghost point:
 an edge that *crosses* the crease. Both sheets have one such crossing for every place the crease is

@@ -42,7 +42,7 @@ class SurfaceOptions:
     refinements : 2 (the paper's A1), 0 or 1 (closed meshes that already satisfy R1-R3 after
         that many steps, Prop. 1.3.1), or "auto" (the fewest that work; ``refine.fewer_steps``)
     exact_creases : bool, infinitely sharp creases become C0 seams where the construction makes
-        them exact (``mesh.crease_sheets``; the others stay the sharpest G1 crease). The library's
+        them exact (``mesh.creases.sheets``; the others stay the sharpest G1 crease). The library's
         construction only, for now: the command line, the patch files and the checks do not yet mark
         crease sides (docs/sharp-features.md)
     """

@@ -18,7 +18,7 @@ from ..mesh.errors import TopologyError
 from ..mesh.ghost_layer import GhostLayer, add_ghost_layer
 from ..mesh.halfedges import HalfEdgeMesh
 from ..mesh.repair import check_valence, prepare_topology
-from ..mesh.crease_sheets import CreaseSheets, cut_crease_sheets
+from ..mesh.creases.sheets import CreaseSheets, cut_crease_sheets
 from .features import INFINITELY_SHARP, CoarseSharpness, SharpFeatures, coarse_sharpness
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_VERTEX, RefinedFaces, refine_doo_sabin, refined_halfedges
 from .refine.fewer_steps import check_refinements, fewer_refinement_sources, refinements_needed
@@ -54,7 +54,7 @@ class SurfaceTopology:
         not cut into sheets)
     hole_faces : (k,) int, input faces tagged as holes (no patches)
     crease_sheets : CreaseSheets or None, the C0 creases: the mesh cut along them, ghost quads
-        across them (``mesh.crease_sheets``; ``exact_creases``)
+        across them (``mesh.creases.sheets``; ``exact_creases``)
     """
 
     n_input_vertices: int
@@ -147,18 +147,18 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     features : SharpFeatures or None: hole faces lose their patches; creases and corners
         are mapped onto the coarse mesh for the refinement stages
     exact_creases : bool, cut the mesh along its infinitely sharp creases where that is exact
-        (``mesh.crease_sheets``): C0 creases instead of the sharpest G1 ones
+        (``mesh.creases.sheets``): C0 creases instead of the sharpest G1 ones
     """
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     prepared, vertex_source, repairs = prepare_topology(face_sizes, np.asarray(face_vertices, dtype=np.int64), n_vertices)
     # A non-orientable input comes back as its orientation double cover:
     # both sheets are refined, the patches of the second are dropped.
     second_sheet = repairs.pop("second_sheet")
-    check_valence(prepared, vertex_source)
     sheets = crease_sheets(prepared, vertex_source, features) if exact_creases and features is not None else None
     if sheets is not None:  # the sheets and their ghost quads, which are open along the ghost strips
         prepared, vertex_source = sheets.mesh, vertex_source[sheets.vertex_source]
         second_sheet = np.r_[second_sheet, np.zeros(sheets.ghost_faces.size, bool)]
+    check_valence(prepared, vertex_source)  # after the cut: a seam vertex in two faces has four in its sheets
     ghost = add_ghost_layer(prepared) if repairs["boundary_edges"] or sheets is not None else None
     coarse = prepared if ghost is None else ghost.mesh
     real_face = np.ones(coarse.n_faces, bool) if ghost is None else ghost.real_face.copy()
@@ -187,7 +187,7 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
 
 
 def crease_sheets(prepared: HalfEdgeMesh, vertex_source: np.ndarray, features: SharpFeatures) -> CreaseSheets | None:
-    """``mesh.crease_sheets.cut_crease_sheets`` of the infinitely sharp edges and corners, or None."""
+    """``mesh.creases.sheets.cut_crease_sheets`` of the infinitely sharp edges and corners, or None."""
     sharp = coarse_sharpness(prepared, vertex_source, features)
     if sharp is None or not np.any(sharp.halfedge >= INFINITELY_SHARP):
         return None

@@ -78,7 +78,7 @@ def inspection(path, resolution: int, refinements, exact_creases: bool = False) 
     built = mesh
     if refusal is None:
         try:  # welded and with its valence-2 vertices dissolved, as convert builds it
-            built, data = prepare_surface_input(mesh, data, 0.0)
+            built, data = prepare_surface_input(mesh, data, 0.0, exact_creases)
         except MeshInputError as e:
             refusal = str(e)
     if refusal is None:

@@ -126,7 +126,7 @@ def refined_sharpness(coarse: HalfEdgeMesh, level1: HalfEdgeMesh, halfedge_sharp
 def crease_corner_ratios(corner_ratio: np.ndarray, mesh: HalfEdgeMesh, crease_vertex: np.ndarray) -> np.ndarray:
     """(H,) float: ``corner_ratio`` with every corner at a cut crease vertex given that vertex's smallest ratio.
 
-    Both sheets of a C0 crease (``mesh.crease_sheets``) then refine their cells along it alike, so the
+    Both sheets of a C0 crease (``mesh.creases.sheets``) then refine their cells along it alike, so the
     mirrored pairs stay mirrored about the same crease points in the second step.
 
     Parameters
@@ -162,7 +162,7 @@ def mirror_rows(step: csr_matrix, mesh: HalfEdgeMesh, sheets, corner_ratio: np.n
     ----------
     step : (H, V) csr_matrix, the first step (coarse points to once-refined points)
     mesh : HalfEdgeMesh, the coarse mesh (``sheets.mesh``, possibly closed by an outer ghost layer)
-    sheets : ``mesh.crease_sheets.CreaseSheets``
+    sheets : ``mesh.creases.sheets.CreaseSheets``
     corner_ratio : (H,) float, ``crease_corner_ratios`` of the step's ratios
 
     Returns

@@ -7,6 +7,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ...arrays import unique_integers
+from ...mesh.creases.sectors import merge_crease_sectors
 from ...mesh.duplicate_faces import repeated_faces
 from ...mesh.valence_two import dissolve_valence_two
 from ...mesh.weld import collapse_repeated_corners, weld_vertices
@@ -69,6 +70,9 @@ class MeshFile:
         Interior valence-2 vertices taken out of their faces (``dissolve_mesh_file``).
     repeated_faces : int
         Faces dropped as later copies of another face (``drop_repeated_faces``, ``mesh.duplicate_faces``).
+    sector_merge : tuple (merged faces, polygons, seam vertices (k,) int) or None
+        Crease sectors merged into polygons for exact C0 creases (``merge_sector_faces``,
+        ``mesh.creases.sectors``); None when nothing was merged.
     reader_notes : list of str
         One line each on input the reader ignored or dropped (OBJ ``l``/``p``
         records, ``vt``/``vn`` indices that name no record, degenerate PLY
@@ -94,6 +98,7 @@ class MeshFile:
     reader_notes: list[str] = field(default_factory=list)
     dissolved_vertices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     repeated_faces: int = 0
+    sector_merge: tuple | None = None
 
     @property
     def n_vertices(self) -> int:
@@ -178,6 +183,23 @@ def dissolve_mesh_file(mesh: MeshFile):
                              "are back-to-back pairs (each face listed with both orientations), which enclose nothing "
                              "to smooth")
     return _keep_faces(mesh, kept, vertices, sizes, dissolved_vertices=dissolved), kept
+
+
+def merge_sector_faces(mesh: MeshFile, sharp_edges: np.ndarray, tagged_corners: np.ndarray,
+                       face_keys: np.ndarray | None = None, protected_edges: np.ndarray | None = None):
+    """The mesh with the faces of too large crease sectors merged (``mesh.creases.sectors.merge_crease_sectors``).
+
+    Returns
+    -------
+    mesh : MeshFile with ``sector_merge`` set (per-face data of the merged polygons: their lowest face's)
+    kept_faces : (F,) bool, which faces remain (None: nothing was merged)
+    """
+    merge = merge_crease_sectors(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices, sharp_edges, tagged_corners,
+                                 face_keys, protected_edges)
+    if merge is None:
+        return mesh, None
+    report = (merge.merged_faces, merge.polygons, merge.vertices)
+    return _keep_faces(mesh, merge.kept, merge.face_vertices, merge.face_sizes, sector_merge=report), merge.kept
 
 
 def weld_mesh_file(mesh: MeshFile, tolerance: float = 0.0, keys: np.ndarray | None = None):

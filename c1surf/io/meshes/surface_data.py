@@ -27,9 +27,9 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import MeshInputError
-from ...construction.features import SharpFeatures
+from ...construction.features import INFINITELY_SHARP, SharpFeatures
 from ...mesh.weld import coincident_representatives
-from .mesh_file import MeshFile, dissolve_mesh_file, drop_repeated_faces, weld_mesh_file
+from .mesh_file import MeshFile, dissolve_mesh_file, drop_repeated_faces, merge_sector_faces, weld_mesh_file
 from .tags.features import read_sidecar_json, sharp_features
 from .tags.record import mesh_edge_keys
 
@@ -207,11 +207,38 @@ def weld_surface_input(mesh: MeshFile, data: SurfaceData | None, tolerance: floa
     return welded, data
 
 
-def prepare_surface_input(mesh: MeshFile, data: SurfaceData | None, weld: float | None):
+def prepare_surface_input(mesh: MeshFile, data: SurfaceData | None, weld: float | None, exact_creases: bool = False):
     """``mesh`` and ``data`` as the construction takes them: welded (``weld_surface_input``), without
     repeated faces (``drop_repeated_surface_faces``), with its interior valence-2 vertices dissolved
-    (``dissolve_surface_input``)."""
-    return dissolve_surface_input(*drop_repeated_surface_faces(*weld_surface_input(mesh, data, weld)))
+    (``dissolve_surface_input``) and, with ``exact_creases``, the faces of crease sectors too large for
+    an exact C0 crease merged (``merge_surface_sectors``)."""
+    prepared = dissolve_surface_input(*drop_repeated_surface_faces(*weld_surface_input(mesh, data, weld)))
+    return merge_surface_sectors(*prepared) if exact_creases else prepared
+
+
+def merge_surface_sectors(mesh: MeshFile, data: SurfaceData | None):
+    """Merge the faces of crease sectors too large for an exact C0 crease (``mesh.creases.sectors``).
+
+    Faces with different blend ratios, hole tags or other per-face data are not merged, nor edges
+    tagged with any sharpness; per-face data and holes follow the merged polygon's lowest face.
+    """
+    f = None if data is None else data.features
+    if f is None or not np.any(f.crease_sharpness >= INFINITELY_SHARP):
+        return mesh, data
+    sharp = f.crease_sharpness >= INFINITELY_SHARP
+    corners = f.corner_vertices[f.corner_sharpness >= INFINITELY_SHARP]
+    columns = [np.isin(np.arange(mesh.n_faces), f.hole_faces).astype(np.float64)]
+    if data.face_blend is not None:
+        columns.append(np.where(np.isnan(data.face_blend), -1.0, data.face_blend))
+    columns += [np.asarray(v, dtype=np.float64) for v in mesh.face_attributes.values()]
+    if mesh.face_groups is not None:
+        columns.append(mesh.face_groups.astype(np.float64))
+    keys = np.unique(np.stack(columns, axis=1), axis=0, return_inverse=True)[1].ravel()
+    semi_sharp = f.crease_edges[~sharp & (f.crease_sharpness > 0)]
+    merged, kept = merge_sector_faces(mesh, f.crease_edges[sharp], corners, keys, semi_sharp)
+    if kept is None:
+        return mesh, data
+    return merged, _faces_kept(data, kept)
 
 
 def drop_repeated_surface_faces(mesh: MeshFile, data: SurfaceData | None):
@@ -389,4 +416,4 @@ def _attribute_columns(mesh: MeshFile):
     return np.where(used[:, None], extra, 0.0), names, colour_scale
 
 
-__all__ = ["SurfaceData", "surface_data", "weld_surface_input", "dissolve_surface_input", "prepare_surface_input", "read_blend_file", "COLOUR_NAMES"]
+__all__ = ["SurfaceData", "surface_data", "weld_surface_input", "dissolve_surface_input", "merge_surface_sectors", "prepare_surface_input", "read_blend_file", "COLOUR_NAMES"]

@@ -30,7 +30,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .halfedges import HalfEdgeMesh, build_halfedges, component_roots, orbit_labels, vertex_valences
+from ..halfedges import HalfEdgeMesh, build_halfedges, component_roots, orbit_labels, vertex_valences
 
 
 @dataclass(frozen=True)
@@ -58,7 +58,8 @@ class CreaseSheets:
     cut_edges : (E, 2) int, the crease edges cut (vertex pairs, in ``names`` numbering)
     open_edges : (B, 2) int, the boundary edges cut with them (vertex pairs of the uncut mesh): their
         ghost quads are mirrored too, but they have one side
-    kept_edges : (K, 2) int, crease edges left uncut (in components that are not exact; ``names``)
+    kept_edges : (K, 2) int, crease edges left uncut (dart chains, and components that are not exact; ``names``)
+    dart_edges : (k, 2) int, of those, the edges of dart chains (``dart_chains``; ``names``)
     inexact_vertices : (k,) int, vertices that keep their components from being cut (``names``)
     """
 
@@ -78,6 +79,7 @@ class CreaseSheets:
     open_edges: np.ndarray
     kept_edges: np.ndarray
     inexact_vertices: np.ndarray
+    dart_edges: np.ndarray = None
 
 
 def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
@@ -93,6 +95,61 @@ def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
     turned = mesh.twin[mesh.prev]  # the next corner around origin[h], across the edge prev[h]
     successor = np.where((turned >= 0) & ~sharp[mesh.prev], turned, -1)
     return orbit_labels(successor, int(vertex_valences(mesh).max(initial=0)))
+
+
+def dart_chains(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray, rounds: int = 32) -> np.ndarray:
+    """(H,) bool: half-edges of the crease chains that end at a dart (a crease end inside the surface).
+
+    A chain runs along sharp edges through interior vertices on exactly two of them (not tagged corners);
+    it is a dart chain when one of its ends is an interior vertex on one sharp edge. The C0 seam cannot
+    end inside the surface (the cut would end at a vertex that is not split), so these chains keep the
+    sharpest G1 crease, which fades out at the dart as OpenSubdiv's does, while the rest of their crease
+    component becomes a C0 seam. Peeling a chain may leave a dart at the junction it hung from: rounds
+    repeat (a tree of branches: ``rounds`` levels at most).
+
+    Parameters
+    ----------
+    mesh : HalfEdgeMesh
+    sharp : (H,) bool, half-edges on infinitely sharp edges
+    tagged_corner : (V,) bool
+    """
+    n, h = mesh.n_vertices, np.arange(mesh.n_halfedges)
+    boundary = np.zeros(n, dtype=bool)
+    boundary[mesh.origin[mesh.twin < 0]] = True
+    once = np.flatnonzero(sharp & ((mesh.twin < 0) | (h < mesh.twin)))
+    a, b = mesh.origin[once], mesh.dest[once]
+    alive = np.ones(once.size, dtype=bool)
+    for _ in range(rounds):
+        degree = np.bincount(np.r_[a[alive], b[alive]], minlength=n)
+        dart = (degree == 1) & ~boundary & ~tagged_corner
+        if not dart.any():
+            break
+        link = (degree == 2) & ~boundary & ~tagged_corner  # chains continue through these
+        edge = np.flatnonzero(alive)
+        ends = np.r_[a[edge], b[edge]]
+        joins = np.tile(np.arange(edge.size), 2)[link[ends]]
+        chain = component_roots(edge.size + n, joins, edge.size + ends[link[ends]])[: edge.size]
+        doomed = np.zeros(edge.size + n, dtype=bool)
+        doomed[chain[dart[a[edge]] | dart[b[edge]]]] = True
+        alive[edge[doomed[chain]]] = False
+    peeled = np.zeros(mesh.n_halfedges, dtype=bool)
+    peeled[once[~alive]] = True
+    peeled[mesh.twin[once[~alive]][mesh.twin[once[~alive]] >= 0]] = True
+    return peeled
+
+
+def seam_corners(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray):
+    """(sharp edges of the C0 seams, corners): ``sharp`` less the dart chains (``dart_chains``), and
+    ``tagged_corner`` with every vertex that was on three or more sharp or boundary edges before them
+    (OpenSubdiv's corner rule counts the edges whatever becomes of them)."""
+    peeled = dart_chains(mesh, sharp, tagged_corner)
+    if not peeled.any():
+        return sharp, tagged_corner
+    h = np.arange(mesh.n_halfedges)
+    seam = sharp | (mesh.twin < 0)
+    once = seam & ((mesh.twin < 0) | (h < mesh.twin))
+    edges = np.bincount(np.r_[mesh.origin[once], mesh.dest[once]], minlength=mesh.n_vertices)
+    return sharp & ~peeled, tagged_corner | (edges >= 3)
 
 
 def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray):
@@ -149,6 +206,8 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     share their index arrays; split up they would pass a dozen arrays between them.
     """
     n, h_all = mesh.n_vertices, np.arange(mesh.n_halfedges)
+    all_sharp = sharp
+    sharp, tagged_corner = seam_corners(mesh, sharp, tagged_corner)  # dart chains stay G1 creases
     on_seam, exact, corner = exact_crease_vertices(mesh, sharp, tagged_corner)
     # seam components: vertices joined by sharp or boundary edges; cut those that hold a sharp edge
     # and whose every vertex is exact (a boundary loop no crease reaches keeps the ghost layer's rule)
@@ -216,10 +275,10 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
         diagonal_ghost=diagonal_ghost, diagonal_real=real_of[single],
         diagonal_mirrors=np.stack([ghost_at_out[single], ghost_at_in[single]], axis=1),
         diagonal_corner=corner[copy_source[single]],
-        cut_edges=edges(cut & sharp), kept_edges=edges(sharp & ~cut),
+        cut_edges=edges(cut & sharp), kept_edges=edges(all_sharp & ~cut), dart_edges=edges(all_sharp & ~sharp),
         open_edges=np.sort(np.stack([mesh.origin[cut & (mesh.twin < 0)], mesh.dest[cut & (mesh.twin < 0)]], axis=1), axis=1),
         inexact_vertices=np.unique(names[on_crease & ~exact]),
     )
 
 
-__all__ = ["CreaseSheets", "corner_sectors", "exact_crease_vertices", "cut_crease_sheets"]
+__all__ = ["CreaseSheets", "corner_sectors", "dart_chains", "seam_corners", "exact_crease_vertices", "cut_crease_sheets"]

@@ -1,0 +1,90 @@
+"""A CAD-like triangle mesh (a box with a filleted cylindrical boss, tests/cad_meshes.py) converted with
+``--crease-angle 40 --exact-creases``: C0 along exactly the detected feature lines, G1 elsewhere, one
+valid closed solid in STEP."""
+from __future__ import annotations
+
+import re
+
+import numpy as np
+import pytest
+from click.testing import CliRunner
+
+from c1surf.cli.main import main
+from c1surf.mesh.feature_edges import feature_edges
+
+from cad_meshes import boss_box, write_obj
+
+
+def run(*args):
+    return CliRunner().invoke(main, [str(a) for a in args], catch_exceptions=False)
+
+
+@pytest.fixture(scope="module", params=[(4, 0), (3, 1)], ids=["m4", "m3"])
+def converted(request, tmp_path_factory):
+    m, seed = request.param
+    d = tmp_path_factory.mktemp(f"boss{m}")
+    mesh = boss_box(m, seed)
+    write_obj(d / "part.obj", *mesh)
+    result = run("convert", d / "part.obj", "-o", d / "part.ply", "-r", 3, "--crease-angle", 40, "--exact-creases",
+                 "--patches", d / "part.json", "--patches", d / "part.step")
+    assert result.exit_code == 0, result.output
+    return d, mesh, m, result
+
+
+def test_the_feature_lines_are_c0_seams_and_the_rest_is_g1(converted):
+    d, (sizes, corners, points), m, result = converted
+    detected = feature_edges(sizes, corners, points, 40.0)
+    assert len(detected) == 12 * m + 4 * m  # the box's 12 edges and the boss's top rim
+    assert f"--exact-creases: {len(detected)} of {len(detected)} infinitely sharp crease edges are C0 seams" in result.stderr
+    assert "merged" in result.stderr and "crease vertices" in result.stderr
+    check = run("check", d / "part.json")
+    assert check.exit_code == 0, check.output
+    listed = re.search(r"crease edges: +(\d+) of (\d+) listed, max gap \S+ \((\S+) of the bounding box\)", check.output)
+    # four pieces of crease curve along every crease edge (a pair of patch sides each), all listed and met
+    assert listed[1] == listed[2] == str(4 * len(detected))
+    assert float(listed[3]) <= 1e-12  # the gap, relative to the bounding box
+    jump = re.search(r"max normal jump: +(\S+) rad", check.output)
+    assert float(jump[1]) <= 1e-10  # every other shared side is G1
+    assert "G1: yes" in check.output
+
+
+def test_the_crease_sides_lie_on_the_detected_edges(converted):
+    # every crease side runs along a box edge (two coordinates at the box's extremes) or along the
+    # boss's top rim: the top plane, between the wall's radius and its polygon's smallest inradius (the
+    # rim's vertices sit at the angles of points spaced evenly along the square: widest gap 2 atan(1/m);
+    # the mesh's positions are rounded to 1e-10)
+    from c1surf.api import surface_from_file
+    from c1surf.evaluation.bezier import raise_degree
+    from c1surf.evaluation.smoothness import side_frames
+
+    d, _, m, _ = converted
+    surface, _ = surface_from_file(d / "part.obj", crease_angle=40, exact_creases=True)
+    cubic = np.concatenate([raise_degree(surface.biquadratic, 3, 3), surface.bicubic])
+    sides = np.asarray(surface.crease_sides)
+    assert len(sides) == 4 * (12 * m + 4 * m)
+    points, _ = side_frames(cubic, sides.ravel(), np.linspace(0, 1, 5))
+    points = points.reshape(-1, 3)
+    x, y, z = np.abs(points[:, 0]), np.abs(points[:, 1]), points[:, 2]
+    extremes = (np.abs(x - 1) <= 1e-12).astype(int) + (np.abs(y - 1) <= 1e-12) + (np.abs(z) <= 1e-12) + (np.abs(z + 0.6) <= 1e-12)
+    radius = np.hypot(points[:, 0], points[:, 1])
+    on_rim = (np.abs(z - 0.4) <= 1e-12) & (radius <= 0.45 + 1e-12) & (radius >= 0.45 * m / np.hypot(m, 1) - 1e-9)
+    assert np.all((extremes >= 2) | on_rim), points[(extremes < 2) & ~on_rim][:5]
+    assert on_rim.any() and (extremes >= 2).any()
+
+
+def test_the_step_file_is_one_valid_closed_solid(converted):
+    pytest.importorskip("OCP")
+    from OCP.BRepCheck import BRepCheck_Analyzer
+    from OCP.STEPControl import STEPControl_Reader
+    from OCP.TopAbs import TopAbs_SOLID
+    from OCP.TopExp import TopExp_Explorer
+
+    d, *_ = converted
+    reader = STEPControl_Reader()
+    reader.ReadFile(str(d / "part.step"))
+    reader.TransferRoots()
+    shape = reader.OneShape()
+    explorer, solids = TopExp_Explorer(shape, TopAbs_SOLID), 0
+    while explorer.More():
+        solids, _ = solids + 1, explorer.Next()
+    assert solids == 1 and BRepCheck_Analyzer(shape).IsValid()
