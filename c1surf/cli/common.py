@@ -86,9 +86,11 @@ def seam_notes(exact_creases: bool, features, topology) -> list[str]:
     """``crease_notes`` of a surface's parts: the option, its SharpFeatures and its SurfaceTopology."""
     if not exact_creases or features is None or topology is None:
         return []
-    sharp = int(np.unique(np.sort(features.crease_edges[features.crease_sharpness >= INFINITELY_SHARP], axis=1),
-                          axis=0).shape[0])  # an edge tagged twice counts once
-    corners = np.unique(features.corner_vertices[features.corner_sharpness >= INFINITELY_SHARP])
+    # by the vertices' identities (copies of one vertex in non-manifold sheets are one); an edge tagged twice counts once
+    name = (lambda v: v) if features.vertex_identity is None else (lambda v: features.vertex_identity[v])
+    sharp = int(np.unique(np.sort(name(features.crease_edges[features.crease_sharpness >= INFINITELY_SHARP]), axis=1),
+                          axis=0).shape[0])
+    corners = np.unique(name(features.corner_vertices[features.corner_sharpness >= INFINITELY_SHARP]))
     if sharp == 0 and corners.size == 0:
         return []
     sheets = topology.crease_sheets
@@ -121,6 +123,11 @@ def dissolve_notes(mesh_file) -> list[str]:
     if getattr(mesh_file, "repeated_faces", 0):
         notes.append(f"dropped {mesh_file.repeated_faces} faces that repeat an earlier face (the same cycle again, or "
                      "its reversal where the two make a closed two-sided card)")
+    sheets = getattr(mesh_file, "non_manifold_edges", None)
+    if sheets is not None:
+        shown = ", ".join(f"{a}-{b}" for a, b in sheets[:6].tolist()) + (", ..." if len(sheets) > 6 else "")
+        notes.append(f"--exact-creases: cut {len(sheets)} edges in more than two faces (vertices {shown}, 0-based) into "
+                     "manifold sheets that meet along one C0 crease each (docs/sharp-features.md)")
     merge = getattr(mesh_file, "sector_merge", None)
     if merge is not None:
         faces, polygons, at = merge

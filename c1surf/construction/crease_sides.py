@@ -25,7 +25,8 @@ def crease_side_pairs(topology) -> np.ndarray:
 
     Returns
     -------
-    (k, 2) int64, in the order of the first side's curve id; (0, 2) without C0 creases.
+    (k, 2) int64, in the order of the first side's curve id; (0, 2) without C0 creases. A piece shared by
+    more than two sheets (a non-manifold edge cut into sheets) gives one pair for each side but its first.
     """
     sheets = topology.crease_sheets
     if sheets is None:
@@ -45,7 +46,7 @@ def crease_side_pairs(topology) -> np.ndarray:
     cell = level1.face[near]
     kind, parent = faces1.kind[cell], faces1.parent[cell]
     source = np.full(coarse.n_vertices, -1, dtype=np.int64)
-    source[: sheets.vertex_source.size] = sheets.vertex_source
+    source[: sheets.vertex_name.size] = sheets.vertex_name  # copies of one vertex in several sheets: one name
     near_corner, far_corner = level1.origin[near], level1.origin[far]  # coarse half-edges (corners)
     vertex = source[coarse.origin[near_corner]]  # the crease vertex the crossing is next to
     # the crease edge: an E-cell's own edge; in a V-cell, the edge the ghost corner's quad lies across
@@ -57,15 +58,23 @@ def crease_side_pairs(topology) -> np.ndarray:
         raise ValueError("internal: a crease crossing in a face cell")
     keys = np.stack([kind.astype(np.int64), vertex, np.minimum(a, b), np.maximum(a, b)], axis=1)
     width = int(source.max(initial=0)) + 1
-    on_boundary = np.isin(keys[:, 2] * width + keys[:, 3], sheets.open_edges[:, 0] * width + sheets.open_edges[:, 1])
+    open_keys, open_count = np.unique(sheets.open_edges[:, 0] * width + sheets.open_edges[:, 1], return_counts=True)
+    boundary_keys = open_keys[open_count == 1]  # an edge cut in several sheets is a non-manifold crease
+    on_boundary = np.isin(keys[:, 2] * width + keys[:, 3], boundary_keys)
     keys, patch, side = keys[~on_boundary], patch[~on_boundary], side[~on_boundary]  # one side: a boundary
+    if keys.shape[0] == 0:
+        return np.zeros((0, 2), dtype=np.int64)
     order = np.lexsort(keys.T[::-1])
     keys, curves = keys[order], (4 * patch + side)[order]
-    same = np.all(keys[1:] == keys[:-1], axis=1)
-    if keys.shape[0] % 2 or not np.all(same[::2]) or (same.size > 1 and np.any(same[1::2])):
-        raise ValueError("internal: a crease side without exactly one partner")
-    pairs = np.sort(curves.reshape(-1, 2), axis=1)
-    return pairs[np.argsort(pairs[:, 0])]
+    start = np.r_[True, np.any(keys[1:] != keys[:-1], axis=1)]
+    group = np.cumsum(start) - 1
+    size = np.bincount(group)
+    if np.any(size < 2):
+        raise ValueError("internal: a crease side without a partner")
+    # a piece of k sides (k sheets) is listed as k - 1 pairs, each with the piece's first side
+    first = curves[np.flatnonzero(start)][group]
+    pairs = np.sort(np.stack([first, curves], axis=1)[~start], axis=1)
+    return pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
 
 
 __all__ = ["crease_side_pairs"]

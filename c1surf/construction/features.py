@@ -47,6 +47,9 @@ class SharpFeatures:
     corner_vertices : (C,) int
     corner_sharpness : (C,) float >= 0
     hole_faces : (H,) int
+    vertex_identity : (V,) int or None, the vertex each vertex stands for where several copies of one
+        vertex meet along non-manifold edges cut into sheets (``mesh.creases.non_manifold``): the C0
+        crease names its crease pieces by these, so the sheets' pieces pair up; None: every vertex itself
     """
 
     crease_edges: np.ndarray = field(default_factory=lambda: _ints((0, 2)))
@@ -54,6 +57,7 @@ class SharpFeatures:
     corner_vertices: np.ndarray = field(default_factory=_ints)
     corner_sharpness: np.ndarray = field(default_factory=lambda: np.zeros(0))
     hole_faces: np.ndarray = field(default_factory=_ints)
+    vertex_identity: np.ndarray | None = None
 
     def __post_init__(self):
         for name, kind, shape in (("crease_edges", np.int64, (-1, 2)), ("crease_sharpness", np.float64, (-1,)),
@@ -77,6 +81,8 @@ class SharpFeatures:
             bad = values[(values < 0) | (values >= count)]
             if bad.size:
                 raise ValueError(f"{what} {int(bad.flat[0])} is not in 0..{count - 1}")
+        if self.vertex_identity is not None and len(self.vertex_identity) != n_vertices:
+            raise ValueError(f"{len(self.vertex_identity)} vertex identities for {n_vertices} vertices")
         for what, values in (("crease", self.crease_sharpness), ("corner", self.corner_sharpness)):
             if not np.all(np.isfinite(values) & (values >= 0)):
                 raise ValueError(f"{what} sharpness must be a number >= 0 (0 smooth, 10 or more infinitely sharp)")
@@ -88,7 +94,8 @@ class SharpFeatures:
                              np.concatenate([self.crease_sharpness, other.crease_sharpness]),
                              np.concatenate([self.corner_vertices, other.corner_vertices]),
                              np.concatenate([self.corner_sharpness, other.corner_sharpness]),
-                             np.unique(np.concatenate([self.hole_faces, other.hole_faces])))
+                             np.unique(np.concatenate([self.hole_faces, other.hole_faces])),
+                             self.vertex_identity if self.vertex_identity is not None else other.vertex_identity)
 
 
 @dataclass(frozen=True)

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..mesh.ghost_layer import ghost_points_matrix, reflex_corners
 from .extensions.interpolation import normal_constraint, vertex_interpolation_step
+from .features import INFINITELY_SHARP
 from .refine.doo_sabin import FACE_FROM_VERTEX
 from .stencils.bicubic import bicubic_layout
 from .stencils.biquadratic import biquadratic_layout
@@ -191,6 +192,10 @@ def first_step_stage(topology: SurfaceTopology, inputs: StageInputs):
     if topology.refinements == 0:
         return None
     sharp = topology.sharpness
+    # infinitely sharp corners off the C0 seams: the surface passes through them (A1a at those vertices;
+    # beta moves the cell centres off them, so not with beta)
+    corners = None if sharp is None or inputs.hole_rules.beta != 0 else sharp.vertex >= INFINITELY_SHARP
+    corners = corners if corners is not None and corners.any() else None
     plain = sharp is None and not inputs.interpolate_vertices and topology.crease_sheets is None
     if plain:  # the plain step: its matrix's map, without the matrix
         return FirstDooSabinStep(topology.input, inputs.corner_ratio)
@@ -199,8 +204,9 @@ def first_step_stage(topology: SurfaceTopology, inputs: StageInputs):
         correction = crease_correction(topology.input, inputs.corner_ratio, inputs.corner_ratio, sharp.halfedge,
                                        sharp.vertex, step=1)
         step = step if correction is None else (step + correction).tocsr()
-    if inputs.interpolate_vertices:
-        step = vertex_interpolation_step(step, topology.input, topology.faces1)
+    if inputs.interpolate_vertices or corners is not None:
+        step = vertex_interpolation_step(step, topology.input, topology.faces1,
+                                         None if inputs.interpolate_vertices else corners)
     if topology.crease_sheets is not None:  # C0 creases: ghost points mirror the real ones (stencils.creases)
         step = mirror_rows(step, topology.input, topology.crease_sheets, inputs.corner_ratio)
     return MatrixStage("doo_sabin_1", step)

@@ -193,7 +193,8 @@ def crease_sheets(prepared: HalfEdgeMesh, vertex_source: np.ndarray, features: S
         return None
     tagged = np.zeros(int(max(vertex_source.max(initial=-1), features.corner_vertices.max(initial=-1))) + 1, dtype=bool)
     tagged[features.corner_vertices[features.corner_sharpness >= INFINITELY_SHARP]] = True
-    return cut_crease_sheets(prepared, sharp.halfedge >= INFINITELY_SHARP, tagged[vertex_source], names=vertex_source)
+    names = vertex_source if features.vertex_identity is None else features.vertex_identity[vertex_source]
+    return cut_crease_sheets(prepared, sharp.halfedge >= INFINITELY_SHARP, tagged[vertex_source], names=names)
 
 
 def pulled_sharpness(coarse: HalfEdgeMesh, vertex_source: np.ndarray, features: SharpFeatures | None,

@@ -482,6 +482,12 @@ class SideMatching:
         flat, count, usable = self._counts
         return int(np.unique(flat[(count > 2) & usable]).size)
 
+    @property
+    def overshared_sides(self) -> np.ndarray:
+        """(m,) int, the sides (``4 * patch + side``) of the edges found in more than two sides."""
+        flat, count, usable = self._counts
+        return np.flatnonzero((count > 2) & usable)
+
 
 def _match(corners: np.ndarray, samples: np.ndarray, tolerance: float) -> SideMatching:
     """SideMatching of corners (P, 4, 3) and side points (P, 4, 3, 3), absolute ``tolerance``."""

@@ -145,6 +145,7 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     gap = np.linalg.norm(xa - xb, axis=1)
     angle = normal_angles(na, nb, unoriented)
     gap, angle, creases = _set_creases_apart(gap, angle, first, second, crease_sides, samples)
+    overshared = _sheet_creases(creases, sides, patches, crease_sides, t, weights is not None, tolerance * diagonal)
     worst = int(np.argmax(angle))
     return SmoothnessReport(
         shared_edges=int(first.size),
@@ -173,6 +174,28 @@ def _set_creases_apart(gap: np.ndarray, angle: np.ndarray, first, second, crease
     creases = {"crease_edges": int(crease.sum()), "max_crease_gap": float(gap[on_crease].max(initial=0.0)),
                "unpaired_crease_sides": unpaired}
     return np.where(on_crease, 0.0, gap), np.where(on_crease, 0.0, angle), creases
+
+
+def _sheet_creases(creases: dict, sides, patches, crease_sides, t, rational: bool, tolerance: float) -> int:
+    """Measure the listed crease pieces on edges in more than two sides (non-manifold edges cut into
+    sheets that meet along one crease: ``mesh.creases.non_manifold``) side against side, into
+    ``creases``; return the edges in more than two sides that no listed piece accounts for."""
+    over = sides.overshared_sides
+    if crease_sides is None or len(crease_sides) == 0 or over.size == 0:
+        return sides.overshared
+    pairs = np.asarray(crease_sides, dtype=np.int64).reshape(-1, 2)
+    direct = pairs[np.isin(pairs, over).all(axis=1)]
+    if len(direct):
+        forward = sides.forward.ravel()
+        xa, _ = side_frames(patches, direct[:, 0], t, rational=rational)
+        xb, _ = side_frames(patches, direct[:, 1], t, forward[direct[:, 0]] != forward[direct[:, 1]], rational=rational)
+        gap = np.linalg.norm(xa - xb, axis=1).reshape(len(direct), -1).max(axis=1)
+        creases["crease_edges"] += len(direct)
+        creases["max_crease_gap"] = max(creases["max_crease_gap"], float(gap.max()))
+        creases["unpaired_crease_sides"] += int(np.count_nonzero(gap > tolerance)) - len(direct)
+    labels = sides.edges.ravel()
+    unlisted = over[~np.isin(over, direct)]
+    return int(np.unique(labels[unlisted]).size)
 
 
 def _crease_edges(first: np.ndarray, second: np.ndarray, crease_sides) -> tuple:

@@ -36,7 +36,7 @@ from ..refine.doo_sabin import FACE_FROM_VERTEX, RefinedFaces
 from ..refine.holes import cell_neighbourhood
 
 
-def vertex_interpolation_step(step1, coarse: HalfEdgeMesh, faces1: RefinedFaces):
+def vertex_interpolation_step(step1, coarse: HalfEdgeMesh, faces1: RefinedFaces, only: np.ndarray | None = None):
     """First Doo-Sabin step followed by A1a's move: every V-cell gets its vertex as centroid.
 
     Parameters
@@ -44,6 +44,8 @@ def vertex_interpolation_step(step1, coarse: HalfEdgeMesh, faces1: RefinedFaces)
     step1 : (H, V) csr_matrix, the first refinement step (``doo_sabin_matrix``)
     coarse : HalfEdgeMesh with V vertices and H half-edges
     faces1 : RefinedFaces of ``coarse``
+    only : (V,) bool or None, the vertices to interpolate (None: all; sharp corners use it,
+        ``stages.first_step_stage``)
 
     Returns
     -------
@@ -54,8 +56,11 @@ def vertex_interpolation_step(step1, coarse: HalfEdgeMesh, faces1: RefinedFaces)
     offsets = np.concatenate([[0], np.cumsum(faces1.face_sizes)])
     rows, cols, vals = [], [], []
     sel_rows = []
-    for n in unique_integers(faces1.face_sizes[faces1.kind == FACE_FROM_VERTEX]):
-        cells = np.flatnonzero((faces1.kind == FACE_FROM_VERTEX) & (faces1.face_sizes == n))
+    chosen = faces1.kind == FACE_FROM_VERTEX
+    if only is not None:
+        chosen &= only[np.where(chosen, faces1.parent, 0)]
+    for n in unique_integers(faces1.face_sizes[chosen]):
+        cells = np.flatnonzero(chosen & (faces1.face_sizes == n))
         corners = faces1.face_vertices[offsets[cells][:, None] + np.arange(n)]  # (k, n) once-refined vertices
         rows.append(np.repeat(corners, n, axis=1).ravel())
         cols.append(np.tile(corners, (1, n)).ravel())

@@ -70,6 +70,9 @@ class MeshFile:
         Interior valence-2 vertices taken out of their faces (``dissolve_mesh_file``).
     repeated_faces : int
         Faces dropped as later copies of another face (``drop_repeated_faces``, ``mesh.duplicate_faces``).
+    non_manifold_edges : ndarray, shape (k, 2), int64, or None
+        Edges in more than two faces, cut into sheets with vertex copies appended to ``points``
+        (``io.meshes.surface_data.split_surface_sheets``, ``mesh.creases.non_manifold``).
     sector_merge : tuple (merged faces, polygons, seam vertices (k,) int) or None
         Crease sectors merged into polygons for exact C0 creases (``merge_sector_faces``,
         ``mesh.creases.sectors``); None when nothing was merged.
@@ -99,6 +102,7 @@ class MeshFile:
     dissolved_vertices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     repeated_faces: int = 0
     sector_merge: tuple | None = None
+    non_manifold_edges: np.ndarray | None = None
 
     @property
     def n_vertices(self) -> int:

@@ -28,6 +28,7 @@ import numpy as np
 
 from ..errors import MeshInputError
 from ...construction.features import INFINITELY_SHARP, SharpFeatures
+from ...mesh.creases.non_manifold import split_non_manifold_edges
 from ...mesh.weld import coincident_representatives
 from .mesh_file import MeshFile, dissolve_mesh_file, drop_repeated_faces, merge_sector_faces, weld_mesh_file
 from .tags.features import read_sidecar_json, sharp_features
@@ -213,7 +214,53 @@ def prepare_surface_input(mesh: MeshFile, data: SurfaceData | None, weld: float 
     (``dissolve_surface_input``) and, with ``exact_creases``, the faces of crease sectors too large for
     an exact C0 crease merged (``merge_surface_sectors``)."""
     prepared = dissolve_surface_input(*drop_repeated_surface_faces(*weld_surface_input(mesh, data, weld)))
-    return merge_surface_sectors(*prepared) if exact_creases else prepared
+    return merge_surface_sectors(*split_surface_sheets(*prepared)) if exact_creases else prepared
+
+
+def split_surface_sheets(mesh: MeshFile, data: SurfaceData | None):
+    """Cut the non-manifold edges of ``mesh`` into manifold sheets (``mesh.creases.non_manifold``) that
+    meet along one C0 crease each: the edges become infinitely sharp creases of every sheet, the ends and
+    branch points of their polylines corners, and every per-vertex value follows the vertex copies."""
+    split = split_non_manifold_edges(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices)
+    if split is None:
+        return mesh, data
+    source = split.vertex_source
+    extend = lambda values: None if values is None else np.asarray(values)[source]
+    mesh = replace(mesh, points=mesh.points[source], face_vertices=split.face_vertices,
+                   vertex_weights=extend(mesh.vertex_weights), vertex_normals=extend(mesh.vertex_normals),
+                   vertex_uvs=extend(mesh.vertex_uvs), vertex_attributes={k: v[source] for k, v in mesh.vertex_attributes.items()},
+                   non_manifold_edges=split.edges)
+    if data is None:
+        data = SurfaceData(points=mesh.points)
+    f = data.features if data.features is not None else SharpFeatures()
+    n = source.size
+    keys = mesh_edge_keys(mesh.face_sizes, mesh.face_vertices, n)
+    edges = np.stack([keys // n, keys % n], axis=1)  # every edge of the sheets, by its copies
+    key = lambda pairs: np.minimum(*pairs.T) * n + np.maximum(*pairs.T)  # of input vertex pairs
+    tagged = np.r_[key(f.crease_edges), key(split.edges)]
+    values = np.r_[f.crease_sharpness, np.full(len(split.edges), INFINITELY_SHARP)]
+    sharpness = _lookup(key(source[edges]), tagged, values)  # each copy of a tagged edge keeps its sharpness
+    creased = sharpness > 0
+    corners = np.r_[f.corner_vertices, split.corners]
+    corner_sharpness = np.r_[f.corner_sharpness, np.full(split.corners.size, INFINITELY_SHARP)]
+    copies = np.isin(source, corners)
+    features = SharpFeatures(edges[creased], sharpness[creased], np.flatnonzero(copies),
+                             _lookup(source[copies], corners, corner_sharpness), f.hole_faces, source)
+    points = data.points[source]
+    data = replace(data, points=points, vertex_blend=extend(data.vertex_blend), weights=extend(data.weights),
+                   vertex_normals=extend(data.vertex_normals), features=features)
+    return mesh, data
+
+
+def _lookup(keys: np.ndarray, table: np.ndarray, values: np.ndarray) -> np.ndarray:
+    """The largest of ``values`` whose ``table`` entry equals each key (0 where none)."""
+    order = np.argsort(table, kind="stable")
+    table, values = table[order], values[order]
+    unique, first = np.unique(table, return_index=True)
+    largest = np.maximum.reduceat(values, first) if first.size else np.zeros(0)
+    slot = np.clip(np.searchsorted(unique, keys), 0, max(unique.size - 1, 0))
+    hit = (unique.size > 0) & (unique[slot] == keys) if unique.size else np.zeros(len(keys), bool)
+    return np.where(hit, largest[slot] if largest.size else 0.0, 0.0)
 
 
 def merge_surface_sectors(mesh: MeshFile, data: SurfaceData | None):
@@ -258,8 +305,7 @@ def _faces_kept(data: SurfaceData | None, kept: np.ndarray) -> SurfaceData | Non
     f = data.features
     if f is not None and f.hole_faces.size:
         holes = f.hole_faces[kept[f.hole_faces]]
-        f = SharpFeatures(f.crease_edges, f.crease_sharpness, f.corner_vertices, f.corner_sharpness,
-                          (np.cumsum(kept) - 1)[holes])
+        f = replace(f, hole_faces=(np.cumsum(kept) - 1)[holes])
         data = replace(data, features=None if f.is_empty() else f)
     return data
 

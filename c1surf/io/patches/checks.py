@@ -83,7 +83,8 @@ def checked_piece(path, k: int, points, weights, knots_u, knots_v, patches, rota
 
 def check_crease_sides(path, header: dict, n_patches: int) -> None:
     """The header's "crease_sides" ([[patch, side, patch, side], ...], docs/patch-format.md), if any, must name
-    sides of this file's patches, each at most once."""
+    sides of this file's patches, each at most once (but the first side of a piece shared by more than two
+    sheets, once per other side)."""
     if "crease_sides" not in header:
         return
     try:
@@ -93,6 +94,8 @@ def check_crease_sides(path, header: dict, n_patches: int) -> None:
     patches, sides = rows[:, [0, 2]], rows[:, [1, 3]]
     if np.any((patches < 0) | (patches >= n_patches) | (sides < 0) | (sides > 3)):
         raise MeshInputError(str(path), f'"crease_sides" names a side that is not one of the {n_patches} patches\' sides 0..3')
-    curves = (4 * patches + sides).ravel()
-    if np.unique(curves).size != curves.size:
+    first, second = 4 * patches[:, 0] + sides[:, 0], 4 * patches[:, 1] + sides[:, 1]
+    # a piece of crease shared by k > 2 sheets (non-manifold edges) is k - 1 rows with the same first side;
+    # any other side is named once
+    if (np.unique(second).size != second.size or np.isin(second, first).any() or np.any(first == second)):
         raise MeshInputError(str(path), '"crease_sides" names a patch side twice')

@@ -56,8 +56,10 @@ class CreaseSheets:
     diagonal_mirrors : (D, 2) int, the two crease ghost quads' corners at the same vertex
     diagonal_corner : (D,) bool, the vertex is a corner (else a smooth crease vertex)
     cut_edges : (E, 2) int, the crease edges cut (vertex pairs, in ``names`` numbering)
-    open_edges : (B, 2) int, the boundary edges cut with them (vertex pairs of the uncut mesh): their
-        ghost quads are mirrored too, but they have one side
+    open_edges : (B, 2) int, the boundary edges cut with them (``names``): their ghost quads are mirrored
+        too, but they have one side; an edge listed more than once is a non-manifold edge cut into sheets
+        (``non_manifold``), whose sheets meet along it
+    vertex_name : (V',) int, ``names`` of every vertex of ``mesh`` (crease pieces are named by these)
     kept_edges : (K, 2) int, crease edges left uncut (dart chains, and components that are not exact; ``names``)
     dart_edges : (k, 2) int, of those, the edges of dart chains (``dart_chains``; ``names``)
     inexact_vertices : (k,) int, vertices that keep their components from being cut (``names``)
@@ -80,6 +82,7 @@ class CreaseSheets:
     kept_edges: np.ndarray
     inexact_vertices: np.ndarray
     dart_edges: np.ndarray = None
+    vertex_name: np.ndarray = None
 
 
 def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
@@ -222,7 +225,9 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     on_crease = on_seam & creased[component]
     once = (mesh.twin < 0) | (h_all < mesh.twin)
     names = np.arange(n) if names is None else np.asarray(names)
-    edges = lambda mask: np.sort(names[np.stack([mesh.origin[mask & once], mesh.dest[mask & once]], axis=1)], axis=1)
+    # edges by name, once: the copies of one non-manifold edge (one per sheet) share their names
+    edges = lambda mask: np.unique(np.sort(names[np.stack([mesh.origin[mask & once], mesh.dest[mask & once]], axis=1)],
+                                           axis=1).reshape(-1, 2), axis=0)
     if not cut.any():
         return None
     # one vertex per (vertex, sector) of the cut
@@ -276,7 +281,8 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
         diagonal_mirrors=np.stack([ghost_at_out[single], ghost_at_in[single]], axis=1),
         diagonal_corner=corner[copy_source[single]],
         cut_edges=edges(cut & sharp), kept_edges=edges(all_sharp & ~cut), dart_edges=edges(all_sharp & ~sharp),
-        open_edges=np.sort(np.stack([mesh.origin[cut & (mesh.twin < 0)], mesh.dest[cut & (mesh.twin < 0)]], axis=1), axis=1),
+        open_edges=np.sort(names[np.stack([mesh.origin[cut & (mesh.twin < 0)], mesh.dest[cut & (mesh.twin < 0)]], axis=1)], axis=1),
+        vertex_name=names[source],
         inexact_vertices=np.unique(names[on_crease & ~exact]),
     )
 
