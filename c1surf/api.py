@@ -33,7 +33,8 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
     crease_angle : degrees: edges with a larger dihedral angle become infinitely sharp creases
     ignore_tags : build the smooth surface, without the file's sharp-feature tags
     weld : welding tolerance relative to the bounding-box diagonal (0: equal positions), or None: the file's vertices
-    **options : SurfaceOptions fields (blend, alpha, beta, tangent_rule, interpolate_vertices, triangles)
+    **options : SurfaceOptions fields (blend, alpha, beta, tangent_rule, interpolate_vertices, triangles,
+        exact_creases: as ``convert``, C0 creases unless vertices are interpolated)
 
     Returns
     -------
@@ -42,6 +43,7 @@ def surface_from_file(path, blend_file=None, weights=None, normals: bool = False
     mesh = read_mesh(path)
     if normals:
         options["interpolate_vertices"] = True
+    options.setdefault("exact_creases", not options.get("interpolate_vertices", False))  # as convert
     data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes,
                         creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags)
     mesh, data = prepare_surface_input(mesh, data, weld, options.get("exact_creases", False))

@@ -96,7 +96,7 @@ def seam_notes(exact_creases: bool, features, topology) -> list[str]:
     sheets = topology.crease_sheets
     cut = 0 if sheets is None else len(sheets.cut_edges)
     kept = sharp - cut
-    notes = [f"--exact-creases: {cut} of {sharp} infinitely sharp crease edges are C0 seams"] if cut else []
+    notes = [f"C0 creases: {cut} of {sharp} infinitely sharp crease edges are C0 seams"] if cut else []
     lone = np.setdiff1d(corners, np.zeros(0, dtype=np.int64) if sheets is None else sheets.cut_edges.ravel())
     if lone.size:
         notes.append(f"{lone.size} infinitely sharp corners are not on a C0 seam and stay the sharpest G1 corner "
@@ -126,13 +126,13 @@ def dissolve_notes(mesh_file) -> list[str]:
     sheets = getattr(mesh_file, "non_manifold_edges", None)
     if sheets is not None:
         shown = ", ".join(f"{a}-{b}" for a, b in sheets[:6].tolist()) + (", ..." if len(sheets) > 6 else "")
-        notes.append(f"--exact-creases: cut {len(sheets)} edges in more than two faces (vertices {shown}, 0-based) into "
+        notes.append(f"C0 creases: cut {len(sheets)} edges in more than two faces (vertices {shown}, 0-based) into "
                      "manifold sheets that meet along one C0 crease each (docs/sharp-features.md)")
     merge = getattr(mesh_file, "sector_merge", None)
     if merge is not None:
         faces, polygons, at = merge
         shown = ", ".join(str(int(v)) for v in at[:8]) + (", ..." if len(at) > 8 else "")
-        notes.append(f"--exact-creases: merged {faces} faces into {polygons} polygons around {len(at)} crease vertices "
+        notes.append(f"C0 creases: merged {faces} faces into {polygons} polygons around {len(at)} crease vertices "
                      f"(vertices {shown}, 0-based), so that every crease sector has at most two faces (one at a "
                      "corner), which the exact C0 crease needs (docs/sharp-features.md)")
     dissolved = getattr(mesh_file, "dissolved_vertices", ())

@@ -19,7 +19,8 @@ from ..io.patches.iges_writer import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import prepare_surface_input, surface_data
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes, topology_failure
-from .options import extension_options, surface_options, tolerance_option, tolerance_value, weld_options, weld_tolerance
+from .options import (extension_options, resolve_exact_creases, surface_options, tolerance_option, tolerance_value,
+                      weld_options, weld_tolerance)
 
 # Imported where used, not here, since a streamed conversion (the usual one) needs none of them: merging
 # (evaluation.merge), --curvature (curvature_ply, which imports the renderer's colour maps) and --tolerance
@@ -77,7 +78,7 @@ def build_or_fail(mesh, options: SurfaceOptions, data=None, lazy_patches: bool =
 
 def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_rule, blend_file, interpolate_vertices,
                     interpolate_normals, weights, triangles, attributes, refinements="2", creases_file=None,
-                    crease_angle=None, ignore_tags=False, exact_creases=False):
+                    crease_angle=None, ignore_tags=False, exact_creases=None, non_manifold="sheets"):
     """SurfaceOptions and SurfaceData for the surface options and the extension options of a command.
 
     ``mesh_suffix``: of the tessellated output (``--attributes`` needs one that
@@ -92,6 +93,7 @@ def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_r
         raise click.BadParameter(f"--attributes needs an --output in {', '.join(MESH_WRITERS.holding('attributes'))}")
     if interpolate and exact_creases:
         raise click.BadParameter("--exact-creases does not work with --interpolate-vertices/--interpolate-normals yet")
+    exact_creases = resolve_exact_creases(exact_creases, interpolate)
     if interpolate and refinements == "0":
         raise click.BadParameter("--interpolate-vertices needs at least one refinement step (--refinements 1, 2 or auto)")
     options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
@@ -100,7 +102,7 @@ def extension_setup(mesh, mesh_suffix: str | None, blend, alpha, beta, tangent_r
                              exact_creases=exact_creases)
     data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=interpolate_normals, attributes=attributes,
                         creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags,
-                        exact_creases=exact_creases)
+                        exact_creases=exact_creases, non_manifold=non_manifold)
     return options, data
 
 

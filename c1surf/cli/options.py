@@ -63,12 +63,22 @@ def feature_options(command):
                           "sharp crease (for meshes without tags)."),
         click.option("--ignore-tags", is_flag=True,
                      help="Build the smooth surface: the file's crease, corner and hole tags are read but not used."),
-        click.option("--exact-creases", is_flag=True,
-                     help="Make infinitely sharp creases C0 seams where c1surf builds them exactly (closed crease lines "
-                          "through quad meshes, box corners; a note names the others, which stay the sharpest G1 "
-                          "crease). Patch files list the crease sides; check measures their gap (docs/sharp-features.md)."),
+        click.option("--exact-creases/--g1-creases", "exact_creases", default=None,
+                     help="Infinitely sharp creases as C0 seams (the default; sectors of three or more faces are merged "
+                          "first, edges in more than two faces cut into sheets; a note names what stays the sharpest "
+                          "G1 crease: crease ends inside the surface) or, with --g1-creases, all as the sharpest G1 "
+                          "crease (a narrow fillet). Patch files list the crease sides; check measures their gap "
+                          "(docs/sharp-features.md). --interpolate-vertices/--interpolate-normals imply --g1-creases."),
+        click.option("--non-manifold", type=click.Choice(["sheets", "refuse"]), default="sheets", show_default=True,
+                     help="Edges in more than two faces: cut into manifold sheets that meet along one C0 crease "
+                          "(a note names the edges), or refuse the mesh with the one-line error."),
     ]
     return with_options(command, options)
+
+
+def resolve_exact_creases(exact_creases: bool | None, interpolate: bool = False) -> bool:
+    """``--exact-creases/--g1-creases`` as given, else C0 creases unless vertices are interpolated (A1a)."""
+    return (not interpolate) if exact_creases is None else bool(exact_creases)
 
 
 def weld_options(command):

@@ -27,7 +27,7 @@ from ..io.meshes.surface_data import SurfaceData
 from ..io.meshes.tags.features import sharp_features
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes
 from .convert import available_memory, build_or_fail
-from .options import surface_options, weld_options, weld_tolerance
+from .options import resolve_exact_creases, surface_options, weld_options, weld_tolerance
 
 # EXR channels, in the order listed by `c1surf render --help` (the file sorts them by name).
 EXR_CHANNELS = ("R", "G", "B", "A") + CURVATURE_NAMES + GEOMETRY_NAMES
@@ -200,8 +200,9 @@ def write_atomically(path, input_path, progress: Progress, write) -> None:
                    "the hit is then moved onto the exact patch by Newton steps.")
 @surface_options
 @weld_options
-@click.option("--exact-creases", is_flag=True,
-              help="For a mesh INPUT: infinitely sharp creases as C0 seams where exact (as convert --exact-creases).")
+@click.option("--exact-creases/--g1-creases", "exact_creases", default=None,
+              help="For a mesh INPUT: infinitely sharp creases as C0 seams (the default) or the sharpest G1 crease, "
+                   "as convert.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bars (they only appear on a terminal anyway).")
 @friendly_errors
 def render_command(input_path, output, png_path, zebra_path, view, eye, target, up, size, projection, fov, zoom, atlas,
@@ -220,7 +221,8 @@ def render_command(input_path, output, png_path, zebra_path, view, eye, target, 
     if not atlas:
         check_image_size(width * height)
     progress = Progress(quiet)
-    options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule, exact_creases=exact_creases)
+    options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
+                             exact_creases=resolve_exact_creases(exact_creases))
     patches = load_patches(input_path, options, quiet, progress, weld_tolerance(weld, no_weld))
     if stripe_axis is not None and not np.linalg.norm(stripe_axis) > 0:
         raise click.BadParameter("--stripe-axis must not be the zero vector")

@@ -194,7 +194,30 @@ def crease_sheets(prepared: HalfEdgeMesh, vertex_source: np.ndarray, features: S
     tagged = np.zeros(int(max(vertex_source.max(initial=-1), features.corner_vertices.max(initial=-1))) + 1, dtype=bool)
     tagged[features.corner_vertices[features.corner_sharpness >= INFINITELY_SHARP]] = True
     names = vertex_source if features.vertex_identity is None else features.vertex_identity[vertex_source]
-    return cut_crease_sheets(prepared, sharp.halfedge >= INFINITELY_SHARP, tagged[vertex_source], names=names)
+    sheets = cut_crease_sheets(prepared, sharp.halfedge >= INFINITELY_SHARP, tagged[vertex_source], names=names)
+    if features.vertex_identity is not None:
+        check_sheets_meet(features, sheets)
+    return sheets
+
+
+def check_sheets_meet(features: SharpFeatures, sheets: CreaseSheets | None) -> None:
+    """Refuse non-manifold edges cut into sheets (``mesh.creases.non_manifold``) that one of the sheets cannot
+    cut exactly: the sheets would not meet there (a sheet that holds the end of the edge's polyline inside
+    it has a crease end, a dart, there)."""
+    identity = features.vertex_identity
+    pairs = np.sort(identity[features.crease_edges], axis=1)
+    unique, counts = np.unique(pairs, axis=0, return_counts=True)
+    shared = unique[counts > 1]  # an edge whose copies lie in several sheets
+    kept = np.zeros((0, 2), dtype=np.int64) if sheets is None else sheets.kept_edges
+    if sheets is None or len(kept):
+        width = int(identity.max(initial=0)) + 1
+        bad = shared[np.isin(shared[:, 0] * width + shared[:, 1], kept[:, 0] * width + kept[:, 1])] if sheets else shared
+        if len(bad):
+            raise TopologyError(
+                f"edge between vertices {{0}} and {{1}} is in more than two faces and its sheets cannot be made to meet "
+                f"exactly ({len(bad)} such edges): a sheet holds an end of its line of such edges inside it (a crease "
+                "end, which a C0 seam cannot take yet); split the mesh there, or convert with --non-manifold refuse to "
+                "see the plain error", vertices=list(bad[0]))
 
 
 def pulled_sharpness(coarse: HalfEdgeMesh, vertex_source: np.ndarray, features: SharpFeatures | None,

@@ -24,8 +24,8 @@ def check_edge_manifold(mesh: HalfEdgeMesh) -> None:
         e = bad[0]
         raise TopologyError(
             f"edge between vertices {{0}} and {{1}} is shared by {counts[e]} faces; the construction needs at most two "
-            f"faces per edge ({bad.size} such edges): split the mesh there (c1surf convert --exact-creases cuts such "
-            "edges into sheets that meet along one C0 crease)",
+            f"faces per edge ({bad.size} such edges): split the mesh there (c1surf convert cuts such edges into sheets "
+            "that meet along one C0 crease, but not with --non-manifold refuse or --g1-creases)",
             np.unique(mesh.face[edge_of == e]),
             edges[e],
         )

@@ -37,11 +37,13 @@ def main():
     broken_pair(HERE / "misprint_zebra.png")
     crease_strip(HERE / "crease_sharpness.png")
     c0_crease_pair(HERE / "c0_creases.png")
+    cad_part(HERE / "cad_creases.png")
     valence_two_diagram(HERE / "valence_two.png")
 
 
 def crease_strip(path):
-    """The sample cube with its 12 edges tagged as creases of sharpness 0, 0.5, 1, 2 and 10, side by side."""
+    """The sample cube with its 12 edges tagged as creases of sharpness 0, 0.5, 1, 2 and 10, side by side (the G1
+    rule of every sharpness, --g1-creases: by default sharpness 10 is a C0 seam, ``c0_crease_pair``)."""
     import tempfile
 
     cube = (ROOT / "sample_meshes" / "cube.obj").read_text()
@@ -53,7 +55,7 @@ def crease_strip(path):
             mesh = Path(tmp) / f"cube_{s}.obj"
             mesh.write_text(cube + "".join(f"t crease 2/1/0 {a} {b} {s}\n" for a, b in edges))
             png = Path(tmp) / f"cube_{s}.png"
-            c1surf("render", mesh, "--png", png, "--size", "220x200", "--range", "0", "8")
+            c1surf("render", mesh, "--png", png, "--size", "220x200", "--range", "0", "8", "--g1-creases")
             tiles.append((Image.open(png).convert("RGB"), f"sharpness {s:g}"))
     labelled_row(tiles, 220, path)
 
@@ -71,17 +73,38 @@ def labelled_row(tiles, step: int, path):
 
 def c0_crease_pair(path):
     """Reflection lines of the sample cube with every edge an infinitely sharp crease (--crease-angle 40):
-    the sharpest G1 crease (the default: narrow fillets) and the C0 seams of --exact-creases (the cube)."""
+    the sharpest G1 crease (--g1-creases: narrow fillets) and the C0 seams of the default (the cube)."""
     import tempfile
 
     tiles = []
     with tempfile.TemporaryDirectory() as tmp:
-        for label, extra in (("default: the sharpest G1 crease", ()), ("--exact-creases: C0 seams", ("--exact-creases",))):
+        for label, extra in (("--g1-creases: the sharpest G1 crease", ("--g1-creases",)), ("default: C0 seams", ())):
             patches, png = Path(tmp) / "p.json", Path(tmp) / "z.png"
             c1surf("convert", ROOT / "sample_meshes" / "cube.obj", "-o", Path(tmp) / "m.ply", "-r", "2",
                    "--crease-angle", "40", "--patches", patches, *extra)
             c1surf("render", patches, "--zebra", png, "--size", "300x280", "--stripes", "10", "--view", "iso")
             tiles.append((Image.open(png).convert("RGB"), label))
+    labelled_row(tiles, 310, path)
+
+
+def cad_part(path):
+    """A CAD-like triangle mesh (tests/cad_meshes.py: a box with a filleted boss) at --crease-angle 40: its
+    triangles, reflection lines with --g1-creases, and the default C0 seams (sectors merged first)."""
+    import tempfile
+
+    from cad_meshes import boss_box, write_obj
+
+    tiles = []
+    with tempfile.TemporaryDirectory() as tmp:
+        mesh = Path(tmp) / "part.obj"
+        write_obj(mesh, *boss_box(6, 0))
+        for label, extra in (("--g1-creases", ("--g1-creases",)), ("default: C0 seams", ())):
+            patches, png = Path(tmp) / "p.json", Path(tmp) / "z.png"
+            c1surf("convert", mesh, "-o", Path(tmp) / "m.ply", "-r", "2", "--crease-angle", "40", "--patches", patches,
+                   *extra)
+            c1surf("render", patches, "--zebra", png, "--size", "300x280", "--stripes", "14", "--eye", "2.2", "-2.8", "2.4",
+                   "--target", "0", "0", "0", "--up", "0", "0", "1")
+            tiles.append((Image.open(png).convert("RGB"), f"{label}: reflection lines"))
     labelled_row(tiles, 310, path)
 
 

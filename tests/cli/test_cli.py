@@ -97,10 +97,12 @@ def one_line_error(tmp_path, *args):
     return proc.returncode, proc.stderr.strip().splitlines()
 
 
-def test_non_manifold_edge_is_refused_with_lines(tmp_path):
+@pytest.mark.parametrize("option", ["--non-manifold=refuse", "--g1-creases"])
+def test_non_manifold_edge_is_refused_with_lines(tmp_path, option):
+    # by default such edges are cut into sheets (tests/construction/test_non_manifold_sheets.py)
     fan = shared_mesh("opensubdiv/catmark_fan.obj")
     out = tmp_path / "fan.obj"
-    code, lines = one_line_error(tmp_path, "convert", fan, "-o", out)
+    code, lines = one_line_error(tmp_path, "convert", fan, "-o", out, option)
     assert code == 1 and len(lines) == 1
     line = lines[0]
     assert line.startswith(f"c1surf: error: {fan}:")

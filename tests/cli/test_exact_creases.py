@@ -1,5 +1,5 @@
-"""convert/check --exact-creases: C0 creases in every output (patch files list the crease sides, check
-measures their gap, tessellations split normals along them, STEP/IGES solids close over them)."""
+"""convert/check with C0 creases (the default, --exact-creases): in every output (patch files list the
+crease sides, check measures their gap, tessellations split normals along them, STEP/IGES solids close over them)."""
 from __future__ import annotations
 
 import json
@@ -34,7 +34,7 @@ def sharp_cube(tmp_path_factory):
 
 def test_the_patch_files_list_the_crease_sides_and_check_measures_them(sharp_cube):
     d, result = sharp_cube
-    assert "--exact-creases: 12 of 12 infinitely sharp crease edges are C0 seams" in result.stderr
+    assert "C0 creases: 12 of 12 infinitely sharp crease edges are C0 seams" in result.stderr
     doc = json.loads((d / "cube.json").read_text())
     rows = np.array(doc["crease_sides"])
     assert rows.shape == (48, 4) and set(rows[:, [1, 3]].ravel()) <= {0, 1, 2, 3}
@@ -117,7 +117,7 @@ def test_malformed_crease_sides_are_one_line(sharp_cube, tmp_path):
 def test_crease_lines_that_are_not_exact_are_named(tmp_path):
     result = run("check", shared_mesh("opensubdiv/catmark_cubes_infsharp.obj"), "--exact-creases")
     assert result.exit_code == 0, result.output
-    assert "--exact-creases: 15 of 17 infinitely sharp crease edges are C0 seams" in result.stderr
+    assert "C0 creases: 15 of 17 infinitely sharp crease edges are C0 seams" in result.stderr
     assert "2 infinitely sharp crease edges lie on crease lines that end inside the surface (darts)" in result.stderr
     assert "1 infinitely sharp corners are not on a C0 seam" in result.stderr
     assert "crease edges:     60 of 60 listed" in result.output
@@ -138,7 +138,7 @@ def test_streamed_and_in_memory_files_are_identical(tmp_path):
 def test_inspect_plans_the_seams_that_convert_makes(tmp_path):
     path = shared_mesh("opensubdiv/catmark_cubes_infsharp.obj")
     report = json.loads(run("inspect", path, "--exact-creases", "--json").output)
-    assert "--exact-creases: 15 of 17 infinitely sharp crease edges are C0 seams" in report["notes"]
+    assert "C0 creases: 15 of 17 infinitely sharp crease edges are C0 seams" in report["notes"]
     result = run("convert", path, "-o", tmp_path / "x.ply", "--exact-creases", "--patches", tmp_path / "x.json")
     assert result.exit_code == 0, result.output
     counts = json.loads((tmp_path / "x.json").read_text())["counts"]

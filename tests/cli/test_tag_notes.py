@@ -19,8 +19,9 @@ TAGS = "t crease 5/1/0 0 1 2 3 0 10\nt corner 1/1/0 6 2\nt hole 1/0/0 1\nt inter
 NOTE = ("sharp-feature tags honoured: crease (4 edges), corner (1 vertex), hole (1 face); not honoured: "
         "interpolateboundary 1 (c1surf's boundary rule, a ghost layer, always ends the surface on a curve along the "
         "boundary polygon); creasemethod (1 tag: c1surf's own crease rule is used (stencils.creases))")
-SHARP = ("infinitely sharp creases and corners (sharpness >= 10) are built as the sharpest G1 crease (sharpness 10: a "
-         "narrow G1 fillet), not as a C0 edge (--exact-creases makes C0 seams where it can)")
+SHARP = "C0 creases: 4 of 4 infinitely sharp crease edges are C0 seams"  # the default (--exact-creases)
+G1_SHARP = ("infinitely sharp creases (sharpness >= 10) are built as the sharpest G1 crease (sharpness 10: a narrow G1 "
+            "fillet), not as a C0 edge (--g1-creases, or vertex interpolation, which C0 seams do not take yet)")
 IGNORED = ("sharp-feature tags ignored (--ignore-tags), the surface is smooth: crease (4 edges), corner (1 vertex), "
            "hole (1 face), interpolateboundary 1, creasemethod (1 tag)")
 
@@ -49,6 +50,12 @@ def test_convert_notes_the_tags_once(tmp_path, tagged):
     assert result.exit_code == 0, result.output
     assert notes(result) == expected(tagged)
     assert "sharp-feature" not in result.stdout
+
+
+def test_g1_creases_say_so(tmp_path, tagged):
+    result = run("convert", tagged, "-o", tmp_path / "out.obj", "-r", 2, "--g1-creases")
+    assert result.exit_code == 0, result.output
+    assert notes(result) == [f"c1surf: note: {tagged}: {NOTE}", f"c1surf: note: {G1_SHARP}"]
 
 
 def test_convert_is_silent_with_quiet_and_honours_the_tags(tmp_path, tagged):

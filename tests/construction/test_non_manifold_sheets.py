@@ -73,8 +73,8 @@ def test_non_manifold_corpus_files_meet_along_their_crease_curves(name, edges):
 def test_the_fan_converts_to_files_that_check_and_a_valid_step(tmp_path):
     path = shared_mesh("opensubdiv/catmark_fan.obj")
     run = lambda *a: CliRunner().invoke(main, [str(x) for x in a], catch_exceptions=False)
-    refused = run("convert", path, "-o", tmp_path / "no.ply")
-    assert refused.exit_code == 1 and "--exact-creases cuts such edges into sheets" in refused.stderr
+    refused = run("convert", path, "-o", tmp_path / "no.ply", "--non-manifold", "refuse")
+    assert refused.exit_code == 1 and "cuts such edges into sheets that meet along one C0 crease" in refused.stderr
     assert not (tmp_path / "no.ply").exists()
     result = run("convert", path, "--exact-creases", "-o", tmp_path / "fan.ply", "--patches", tmp_path / "fan.json",
                  "--patches", tmp_path / "fan.step")

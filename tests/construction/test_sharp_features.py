@@ -20,8 +20,7 @@ OPENSUBDIV = SHARED_MESHES / "opensubdiv"
 TAGGED = sorted(p.name for p in OPENSUBDIV.glob("*.obj") if any(line.startswith("t ") for line in p.open()))
 # Refused before any tag matters, for the reasons the corpus test documents (non-manifold edges: the
 # real-meshes issue; a face with fewer than 3 distinct vertices).
-REFUSED = {"catmark_fan.obj": "shared by 3 faces", "catmark_nonman_edge100.obj": "shared by 100 faces",
-           "catmark_nonman_edges.obj": "fewer than 3 distinct vertices"}
+REFUSED = {"catmark_nonman_edges.obj": "fewer than 3 distinct vertices"}  # fan, nonman_edge100: sheets
 
 
 def cube_edges(mesh) -> np.ndarray:
@@ -64,7 +63,8 @@ def test_tagged_opensubdiv_files_are_honoured_and_g1(name):
     tags = mesh.tags
     if np.any(tags.crease_sharpness > 0) or np.any(tags.corner_sharpness > 0) or tags.hole_faces.size:
         smooth, _ = surface_from_file(path, ignore_tags=True)
-        moved = smooth.n_patches != surface.n_patches or not np.allclose(coefficients(smooth), coefficients(surface))
+        a, b = coefficients(smooth), coefficients(surface)
+        moved = a.shape != b.shape or not np.allclose(a, b)
         assert moved, f"{name}: the tags changed nothing"
         if tags.hole_faces.size:
             assert surface.n_patches < smooth.n_patches

@@ -41,8 +41,9 @@ REPAIR_KEYS = ("flipped_faces", "split_vertices", "unused_vertices", "components
               help="The --resolution of the conversion the output sizes are estimated for.")
 @click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default="2", show_default=True,
               help="The --refinements of the conversion (the patch counts depend on it).")
-@click.option("--exact-creases", is_flag=True, help="Plan the C0 seams of `convert --exact-creases` (the notes say "
-              "which infinitely sharp creases become seams; the patch counts follow).")
+@click.option("--exact-creases/--g1-creases", "exact_creases", default=True, show_default=True,
+              help="Plan the C0 seams of `convert` (the default; the notes say which infinitely sharp creases become "
+                   "seams; the patch counts follow) or its --g1-creases surface.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (keys: README, \"Inspecting a mesh\").")
 @friendly_errors
 def inspect(input_path, resolution, refinements, exact_creases, as_json):

@@ -49,6 +49,7 @@ class SurfaceData:
     vertex_normals : (V, 3) float (NaN rows where unset) or None
     features : construction.features.SharpFeatures or None
     feature_notes : list of str, what was honoured or ignored of the sharp features (``tags.features``)
+    non_manifold : "sheets" (edges in more than two faces cut into sheets, with exact creases) or "refuse"
     """
 
     points: np.ndarray
@@ -60,6 +61,7 @@ class SurfaceData:
     vertex_normals: np.ndarray | None = None
     features: object = None
     feature_notes: list = field(default_factory=list)
+    non_manifold: str = "sheets"
 
     def surface_kwargs(self) -> dict:
         """Keyword arguments of ``Surface`` (besides points and options)."""
@@ -154,7 +156,7 @@ def _used_vertices(mesh: MeshFile) -> np.ndarray:
 
 def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = None, normals: bool = False,
                  attributes: bool = False, creases_file=None, crease_angle: float | None = None,
-                 ignore_tags: bool = False, exact_creases: bool = False) -> SurfaceData:
+                 ignore_tags: bool = False, exact_creases: bool = False, non_manifold: str = "sheets") -> SurfaceData:
     """Collect the extension data of ``mesh`` (see the module docstring).
 
     Parameters
@@ -165,12 +167,13 @@ def surface_data(mesh: MeshFile, blend_file=None, use_weights: bool | None = Non
     attributes : carry texture coordinates and colours as extra columns
     creases_file, crease_angle, ignore_tags : sharp features besides (or instead of) the
         file's tags (``tags.features.sharp_features``)
+    non_manifold : "sheets" or "refuse" (``SurfaceData.non_manifold``)
 
     Raises
     ------
     MeshInputError when requested data is missing or malformed.
     """
-    data = SurfaceData(points=np.asarray(mesh.points, dtype=np.float64))
+    data = SurfaceData(points=np.asarray(mesh.points, dtype=np.float64), non_manifold=non_manifold)
     data.face_blend, data.vertex_blend = _blend_ratios(mesh, blend_file)
     data.weights = _weights(mesh, use_weights)
     data.features, data.feature_notes = sharp_features(mesh, creases_file, crease_angle, ignore_tags, exact_creases)
@@ -214,7 +217,10 @@ def prepare_surface_input(mesh: MeshFile, data: SurfaceData | None, weld: float 
     (``dissolve_surface_input``) and, with ``exact_creases``, the faces of crease sectors too large for
     an exact C0 crease merged (``merge_surface_sectors``)."""
     prepared = dissolve_surface_input(*drop_repeated_surface_faces(*weld_surface_input(mesh, data, weld)))
-    return merge_surface_sectors(*split_surface_sheets(*prepared)) if exact_creases else prepared
+    if not exact_creases:
+        return prepared
+    sheets = data is None or data.non_manifold == "sheets"
+    return merge_surface_sectors(*(split_surface_sheets(*prepared) if sheets else prepared))
 
 
 def split_surface_sheets(mesh: MeshFile, data: SurfaceData | None):

@@ -53,6 +53,8 @@ def split_non_manifold_edges(face_sizes, face_vertices, n_vertices: int) -> Shee
     """
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     face_vertices = np.asarray(face_vertices, dtype=np.int64)
+    if _repeated_vertex_sets(face_sizes, face_vertices):
+        return None  # a face listed twice (with both orientations) is no sheet: the repair refuses it by its lines
     mesh = build_halfedges(face_sizes, face_vertices, n_vertices)
     a, b = mesh.origin, mesh.dest
     key = np.minimum(a, b) * n_vertices + np.maximum(a, b)
@@ -90,6 +92,16 @@ def split_non_manifold_edges(face_sizes, face_vertices, n_vertices: int) -> Shee
     source = np.r_[np.arange(n_vertices), owner[copies]]
     edges = np.stack([unique[counts > 2] // n_vertices, unique[counts > 2] % n_vertices], axis=1)
     return SheetSplit(vertices, source, edges, _sheet_corners(face_sizes, vertices, source, edges, n_vertices))
+
+
+def _repeated_vertex_sets(face_sizes: np.ndarray, face_vertices: np.ndarray) -> bool:
+    """True when two faces have the same vertices (in any order): one face listed twice."""
+    offsets = np.r_[0, np.cumsum(face_sizes)]
+    for k in np.unique(face_sizes):  # one sort per face size
+        rows = np.sort(face_vertices[offsets[:-1][face_sizes == k][:, None] + np.arange(k)], axis=1)
+        if np.unique(rows, axis=0).shape[0] < rows.shape[0]:
+            return True
+    return False
 
 
 def _sheet_corners(face_sizes, vertices, source, edges, n_vertices: int) -> np.ndarray:

@@ -66,8 +66,9 @@ def sharp_features(mesh, creases_file=None, crease_angle: float | None = None, i
         notes.append(f"--crease-angle {crease_angle:g}: {len(edges)} edges with a dihedral angle above it are creases")
     infinite = np.any(features.crease_sharpness >= INFINITELY_SHARP) or np.any(features.corner_sharpness >= INFINITELY_SHARP)
     if infinite and not exact_creases:
-        notes.append("infinitely sharp creases and corners (sharpness >= 10) are built as the sharpest G1 crease "
-                     "(sharpness 10: a narrow G1 fillet), not as a C0 edge (--exact-creases makes C0 seams where it can)")
+        notes.append("infinitely sharp creases (sharpness >= 10) are built as the sharpest G1 crease (sharpness 10: "
+                     "a narrow G1 fillet), not as a C0 edge (--g1-creases, or vertex interpolation, which C0 seams "
+                     "do not take yet)")
     return (None if features.is_empty() else features), notes
 
 
