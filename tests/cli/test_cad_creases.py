@@ -13,6 +13,7 @@ from c1surf.cli.main import main
 from c1surf.mesh.feature_edges import feature_edges
 
 from cad_meshes import boss_box, write_obj
+from conftest import ocp_shapes, read_step
 
 
 def run(*args):
@@ -75,16 +76,8 @@ def test_the_crease_sides_lie_on_the_detected_edges(converted):
 def test_the_step_file_is_one_valid_closed_solid(converted):
     pytest.importorskip("OCP")
     from OCP.BRepCheck import BRepCheck_Analyzer
-    from OCP.STEPControl import STEPControl_Reader
     from OCP.TopAbs import TopAbs_SOLID
-    from OCP.TopExp import TopExp_Explorer
 
     d, *_ = converted
-    reader = STEPControl_Reader()
-    reader.ReadFile(str(d / "part.step"))
-    reader.TransferRoots()
-    shape = reader.OneShape()
-    explorer, solids = TopExp_Explorer(shape, TopAbs_SOLID), 0
-    while explorer.More():
-        solids, _ = solids + 1, explorer.Next()
-    assert solids == 1 and BRepCheck_Analyzer(shape).IsValid()
+    shape = read_step(d / "part.step")
+    assert len(ocp_shapes(shape, TopAbs_SOLID)) == 1 and BRepCheck_Analyzer(shape).IsValid()

@@ -16,7 +16,7 @@ from c1surf.evaluation.bezier import raise_degree
 from c1surf.evaluation.smoothness import side_frames
 from c1surf.mesh.creases.non_manifold import split_non_manifold_edges
 
-from conftest import shared_mesh
+from conftest import ocp_shapes, read_step, shared_mesh
 
 BOOK = [[0, 1, 2, 3], [1, 0, 4, 5], [0, 1, 6, 7]]  # three pages on the edge 0 - 1
 
@@ -86,15 +86,7 @@ def test_the_fan_converts_to_files_that_check_and_a_valid_step(tmp_path):
     assert check.exit_code == 0 and "crease edges:     32 of 32 listed" in check.output, check.output
     pytest.importorskip("OCP")
     from OCP.BRepCheck import BRepCheck_Analyzer
-    from OCP.STEPControl import STEPControl_Reader
     from OCP.TopAbs import TopAbs_SHELL
-    from OCP.TopExp import TopExp_Explorer
 
-    reader = STEPControl_Reader()
-    reader.ReadFile(str(tmp_path / "fan.step"))
-    reader.TransferRoots()
-    shape = reader.OneShape()
-    explorer, shells = TopExp_Explorer(shape, TopAbs_SHELL), 0
-    while explorer.More():
-        shells, _ = shells + 1, explorer.Next()
-    assert shells == 3 and BRepCheck_Analyzer(shape).IsValid()  # the plate's sheet and two fins
+    shape = read_step(tmp_path / "fan.step")
+    assert len(ocp_shapes(shape, TopAbs_SHELL)) == 3 and BRepCheck_Analyzer(shape).IsValid()  # the plate and two fins
