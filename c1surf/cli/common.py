@@ -130,11 +130,16 @@ def dissolve_notes(mesh_file) -> list[str]:
                      "manifold sheets that meet along one C0 crease each (docs/sharp-features.md)")
     merge = getattr(mesh_file, "sector_merge", None)
     if merge is not None:
-        faces, polygons, at = merge
+        faces, polygons, at, lost = merge
         shown = ", ".join(str(int(v)) for v in at[:8]) + (", ..." if len(at) > 8 else "")
         notes.append(f"C0 creases: merged {faces} faces into {polygons} polygons around {len(at)} crease vertices "
                      f"(vertices {shown}, 0-based), so that every crease sector has at most two faces (one at a "
                      "corner), which the exact C0 crease needs (docs/sharp-features.md)")
+        if len(lost):
+            edges = ", ".join(f"{a}-{b}" for a, b in lost[:6].tolist()) + (", ..." if len(lost) > 6 else "")
+            notes.append(f"C0 creases: {len(lost)} crease edges that start a crease line ending inside the surface were "
+                         f"merged away inside a corner's sector (edges {edges}, 0-based): not used (the rest of "
+                         "each line stays the sharpest G1 crease)")
     dissolved = getattr(mesh_file, "dissolved_vertices", ())
     if not len(dissolved):
         return notes

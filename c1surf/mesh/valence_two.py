@@ -44,7 +44,8 @@ def valence_two_vertices(face_sizes: np.ndarray, face_vertices: np.ndarray, n_ve
     return np.flatnonzero((corners == 2) & (faces_at == 2) & ~on_boundary)
 
 
-def dissolve_valence_two(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices: int, rounds: int = 8):
+def dissolve_valence_two(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices: int, rounds: int = 8,
+                         keep: np.ndarray | None = None):
     """Take every interior valence-2 vertex out of its two faces (module docstring).
 
     Parameters
@@ -53,6 +54,8 @@ def dissolve_valence_two(face_sizes: np.ndarray, face_vertices: np.ndarray, n_ve
     face_vertices : (sum(face_sizes),) int
     n_vertices : int
     rounds : int, how many times to look again for vertices the removal left in two faces
+    keep : (V,) bool or None, vertices never dissolved (the C0 seams' after merging crease sectors: a seam
+        vertex in two faces has four in its sheets)
 
     Returns
     -------
@@ -69,6 +72,8 @@ def dissolve_valence_two(face_sizes: np.ndarray, face_vertices: np.ndarray, n_ve
         if sizes.size == 0:
             break
         two = valence_two_vertices(sizes, vertices, n_vertices)
+        if keep is not None:
+            two = two[~keep[two]]
         if two.size == 0:
             break
         dissolved.append(two)

@@ -210,11 +210,11 @@ def test_opensubdiv_files_with_infinitely_sharp_tags_meet_exactly_where_cut_and_
     cut = 0 if sheets is None else len(sheets.cut_edges)
     # cut: closed crease components, and those reaching the boundary, once too large sectors are merged
     # (fvar_project0: 1 | 3 sectors, inf_crease1: 2 | 4 and corner sectors of 2 and 3 faces); the dart
-    # chain 0 - 4 of inf_crease1 stays a G1 crease; inf_crease0's creases all reach the boundary, whose
-    # component holds a corner (vertex 16) with the dart chain 16 - 17 inside a sector: not exact
+    # chain 0 - 4 of inf_crease1 stays a G1 crease; in inf_crease0 the dart edge 16 - 17 lies inside a
+    # sector of the corner 16, which must be one face: merged away (a note), the other 10 edges cut
     assert cut == {"catmark_cube_creases2": 11, "catmark_cubes_infsharp": 15, "catmark_edgenone": 18,
                    "catmark_single_crease": 4, "catmark_val2_interior": 3, "catmark_fvar_project0": 4,
-                   "catmark_inf_crease1": 7}.get(name, 0)
+                   "catmark_inf_crease1": 7, "catmark_inf_crease0": 10}.get(name, 0)
 
 
 def test_a_crease_reaching_the_boundary_ends_at_a_corner_of_the_boundary_curve():

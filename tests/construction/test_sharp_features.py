@@ -55,12 +55,17 @@ def test_tagged_opensubdiv_files_are_honoured_and_g1(name):
         with pytest.raises((TopologyError, ValueError, C1SurfFileError), match=REFUSED[name]):
             surface_from_file(path)
         return
-    surface, mesh = surface_from_file(path)
+    surface, mesh = surface_from_file(path)  # as convert: infinitely sharp creases are C0 seams
     report = check_surface(surface)
-    assert report.overshared_edges == 0
-    assert report.max_normal_jump < 1e-10, (name, report)
-    assert report.relative_gap < 1e-12
+    assert report.overshared_edges == 0 and report.unpaired_crease_sides == 0
+    assert report.max_normal_jump < 1e-10, (name, report)  # every shared side but the C0 pieces
+    assert report.relative_gap < 1e-12 and report.relative_crease_gap < 1e-12
     tags = mesh.tags
+    # every infinitely sharp tagged corner is reached (on a seam, or interpolated off them)
+    corners = np.concatenate([surface.biquadratic[:, ::2, ::2].reshape(-1, 3), surface.bicubic[:, ::3, ::3].reshape(-1, 3)])
+    diagonal = np.linalg.norm(np.ptp(corners, axis=0))
+    for v in tags.corner_vertices[tags.corner_sharpness >= 10]:
+        assert np.linalg.norm(corners - mesh.points[v], axis=1).min() <= 1e-12 * diagonal, (name, v)
     if np.any(tags.crease_sharpness > 0) or np.any(tags.corner_sharpness > 0) or tags.hole_faces.size:
         smooth, _ = surface_from_file(path, ignore_tags=True)
         a, b = coefficients(smooth), coefficients(surface)

@@ -73,7 +73,7 @@ class MeshFile:
     non_manifold_edges : ndarray, shape (k, 2), int64, or None
         Edges in more than two faces, cut into sheets with vertex copies appended to ``points``
         (``io.meshes.surface_data.split_surface_sheets``, ``mesh.creases.non_manifold``).
-    sector_merge : tuple (merged faces, polygons, seam vertices (k,) int) or None
+    sector_merge : tuple (merged faces, polygons, seam vertices (k,) int, crease edges merged away (d, 2) int) or None
         Crease sectors merged into polygons for exact C0 creases (``merge_sector_faces``,
         ``mesh.creases.sectors``); None when nothing was merged.
     reader_notes : list of str
@@ -167,7 +167,7 @@ def _keep_faces(mesh: MeshFile, kept: np.ndarray, face_vertices: np.ndarray, fac
                    face_attributes={k: v[kept] for k, v in mesh.face_attributes.items()}, **fields)
 
 
-def dissolve_mesh_file(mesh: MeshFile):
+def dissolve_mesh_file(mesh: MeshFile, keep: np.ndarray | None = None):
     """The mesh with its interior valence-2 vertices dissolved (``mesh.valence_two.dissolve_valence_two``).
 
     Returns
@@ -179,13 +179,15 @@ def dissolve_mesh_file(mesh: MeshFile):
     ------
     MeshInputError when no face is left (back-to-back face pairs)
     """
-    sizes, vertices, kept, dissolved = dissolve_valence_two(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices)
+    sizes, vertices, kept, dissolved = dissolve_valence_two(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices,
+                                                            keep=keep)
     if dissolved.size == 0:
         return mesh, kept
     if sizes.size == 0:
         raise MeshInputError(mesh.path, f"every vertex is an interior vertex of valence 2 ({dissolved.size}): the faces "
                              "are back-to-back pairs (each face listed with both orientations), which enclose nothing "
                              "to smooth")
+    dissolved = np.union1d(mesh.dissolved_vertices, dissolved)  # a second pass (after merging sectors) adds its own
     return _keep_faces(mesh, kept, vertices, sizes, dissolved_vertices=dissolved), kept
 
 
@@ -202,7 +204,7 @@ def merge_sector_faces(mesh: MeshFile, sharp_edges: np.ndarray, tagged_corners: 
                                  face_keys, protected_edges)
     if merge is None:
         return mesh, None
-    report = (merge.merged_faces, merge.polygons, merge.vertices)
+    report = (merge.merged_faces, merge.polygons, merge.vertices, merge.lost_creases)
     return _keep_faces(mesh, merge.kept, merge.face_vertices, merge.face_sizes, sector_merge=report), merge.kept
 
 

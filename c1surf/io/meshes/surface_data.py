@@ -220,7 +220,15 @@ def prepare_surface_input(mesh: MeshFile, data: SurfaceData | None, weld: float 
     if not exact_creases:
         return prepared
     sheets = data is None or data.non_manifold == "sheets"
-    return merge_surface_sectors(*(split_surface_sheets(*prepared) if sheets else prepared))
+    merged = merge_surface_sectors(*(split_surface_sheets(*prepared) if sheets else prepared))
+    if merged[0].sector_merge is None:
+        return merged
+    # merging may leave an interior vertex next to a corner in two faces: dissolved too (not the seams')
+    f = merged[1].features
+    seam = np.zeros(merged[0].n_vertices, dtype=bool)
+    seam[f.crease_edges[f.crease_sharpness >= INFINITELY_SHARP].ravel()] = True
+    seam[f.corner_vertices] = True
+    return dissolve_surface_input(*merged, keep=seam)
 
 
 def split_surface_sheets(mesh: MeshFile, data: SurfaceData | None):
@@ -291,6 +299,12 @@ def merge_surface_sectors(mesh: MeshFile, data: SurfaceData | None):
     merged, kept = merge_sector_faces(mesh, f.crease_edges[sharp], corners, keys, semi_sharp)
     if kept is None:
         return mesh, data
+    lost = merged.sector_merge[3]  # dart chains' first edges, merged away (their own note)
+    if len(lost):
+        n = mesh.n_vertices
+        gone = np.isin(np.minimum(*f.crease_edges.T) * n + np.maximum(*f.crease_edges.T), lost[:, 0] * n + lost[:, 1])
+        f = replace(f, crease_edges=f.crease_edges[~gone], crease_sharpness=f.crease_sharpness[~gone])
+        data = replace(data, features=f)
     return merged, _faces_kept(data, kept)
 
 
@@ -316,14 +330,14 @@ def _faces_kept(data: SurfaceData | None, kept: np.ndarray) -> SurfaceData | Non
     return data
 
 
-def dissolve_surface_input(mesh: MeshFile, data: SurfaceData | None):
+def dissolve_surface_input(mesh: MeshFile, data: SurfaceData | None, keep: np.ndarray | None = None):
     """Dissolve the interior valence-2 vertices of ``mesh`` (``mesh_file.dissolve_mesh_file``); ``data`` follows.
 
     Per-face data follows the faces kept; a crease on either edge of a dissolved vertex
     becomes a crease of the edge that replaces them (the larger sharpness); a hole on a
     dropped face and a corner on a dissolved vertex are named in a note.
     """
-    dissolved, kept = dissolve_mesh_file(mesh)
+    dissolved, kept = dissolve_mesh_file(mesh, keep)
     if dissolved is mesh:
         return mesh, data
     if data is not None and data.face_blend is not None:
@@ -337,7 +351,7 @@ def _dissolved_features(data: SurfaceData, mesh: MeshFile, dissolved: MeshFile, 
     """``data``'s sharp features on the mesh without its dissolved vertices (``dissolve_surface_input``)."""
     f = data.features
     gone = np.zeros(mesh.n_vertices, dtype=bool)
-    gone[dissolved.dissolved_vertices] = True
+    gone[np.setdiff1d(dissolved.dissolved_vertices, mesh.dissolved_vertices)] = True  # this pass's
     edges, sharpness = f.crease_edges, f.crease_sharpness
     touched = gone[edges].any(axis=1)
     # a dissolved vertex's two edges a - v - b: replace each creased one by a - b
@@ -347,8 +361,9 @@ def _dissolved_features(data: SurfaceData, mesh: MeshFile, dissolved: MeshFile, 
     valid = (edges >= 0).all(axis=1)
     corners = ~gone[f.corner_vertices]
     holes = f.hole_faces[kept[f.hole_faces]]
-    features = SharpFeatures(edges[valid], sharpness[valid], f.corner_vertices[corners], f.corner_sharpness[corners],
-                             (np.cumsum(kept) - 1)[holes])
+    features = replace(f, crease_edges=edges[valid], crease_sharpness=sharpness[valid],
+                       corner_vertices=f.corner_vertices[corners], corner_sharpness=f.corner_sharpness[corners],
+                       hole_faces=(np.cumsum(kept) - 1)[holes])
     notes = list(data.feature_notes)
     lost = int((~corners).sum()), int(f.hole_faces.size - holes.size)
     if any(lost):

@@ -13,10 +13,13 @@ mesh: the construction takes any polygon, and the surface still interpolates eac
 (the merged one's now) and stays G1 inside each sheet. A planar region stays planar.
 
 Integers only: the points are untouched. An edge is not removed where that would leave an interior
-vertex in fewer than three faces, join faces with different per-face data (``face_keys``: hole tags,
-blend ratios), make a polygon that visits a vertex twice, or close a ring of faces; a crease
-component whose vertices cannot all be brought to the exact counts keeps its faces (and then the
-sharpest G1 crease, named in a note by the caller).
+vertex in fewer than two faces (one left in two is dissolved next, ``mesh.valence_two``), join faces
+with different per-face data (``face_keys``: hole tags, blend ratios), remove a tagged semi-sharp
+crease (``protected_edges``), make a polygon that visits a vertex twice, or close a ring of faces; a
+crease component whose vertices cannot all be brought to the exact counts keeps its faces (and then
+the sharpest G1 crease, named in a note by the caller). The one tagged edge that may go is the first
+edge of a dart chain (a crease line ending inside the surface, which stays a G1 crease) inside a
+corner's sector, which must be one face: the caller names those edges in a note.
 """
 from __future__ import annotations
 
@@ -37,6 +40,8 @@ class SectorMerge:
     merged_faces : int, input faces taken into merged polygons (the lowest of each polygon counted too)
     polygons : int, merged polygons made
     vertices : (k,) int, seam vertices whose sectors were merged
+    lost_creases : (d, 2) int, crease edges merged away: the first edges of dart chains (crease lines that
+        end inside the surface, ``sheets.dart_chains``) inside a corner's sector, which must be one face
     """
 
     face_sizes: np.ndarray
@@ -45,6 +50,7 @@ class SectorMerge:
     merged_faces: int
     polygons: int
     vertices: np.ndarray
+    lost_creases: np.ndarray
 
 
 def merge_crease_sectors(face_sizes, face_vertices, n_vertices: int, sharp_edges: np.ndarray,
@@ -77,9 +83,9 @@ def merge_crease_sectors(face_sizes, face_vertices, n_vertices: int, sharp_edges
         return None
     corner_tag = np.zeros(n_vertices, dtype=bool)
     corner_tag[np.asarray(tagged_corners, dtype=np.int64)] = True
-    sharp, corner_tag = seam_corners(mesh, _sharp_halfedges(mesh, sharp_edges), corner_tag)  # as the cut will see them
-    removed = _planned_removals(mesh, sharp, corner_tag, face_keys)
-    removed &= ~_sharp_halfedges(mesh, sharp_edges)  # a dart chain's edges stay (they keep their G1 crease)
+    tagged = _sharp_halfedges(mesh, sharp_edges)
+    sharp, corner_tag = seam_corners(mesh, tagged, corner_tag)  # as the cut will see them: dart chains left out
+    removed = _planned_removals(mesh, sharp, corner_tag, face_keys, tagged & ~sharp)
     if protected_edges is not None and len(protected_edges):
         removed &= ~_sharp_halfedges(mesh, np.asarray(protected_edges, dtype=np.int64).reshape(-1, 2))
     for _ in range(3):  # components that stay inexact give their removals back; that may free others
@@ -103,8 +109,10 @@ def merge_crease_sectors(face_sizes, face_vertices, n_vertices: int, sharp_edges
     at = np.unique(np.r_[mesh.origin[removed], mesh.dest[removed]])
     seam_vertex = np.zeros(n_vertices, dtype=bool)
     seam_vertex[mesh.origin[sharp | (mesh.twin < 0)]] = True
+    lost = removed & _sharp_halfedges(mesh, sharp_edges)
+    lost_edges = np.unique(np.sort(np.stack([mesh.origin[lost], mesh.dest[lost]], axis=1), axis=1), axis=0)
     return SectorMerge(sizes, vertices, kept, int(polygon_size[polygon_size > 1].sum()),
-                       int(np.count_nonzero(polygon_size > 1)), at[seam_vertex[at]])
+                       int(np.count_nonzero(polygon_size > 1)), at[seam_vertex[at]], lost_edges)
 
 
 def _oriented_manifold(mesh: HalfEdgeMesh) -> bool:
@@ -128,12 +136,14 @@ def _sharp_halfedges(mesh: HalfEdgeMesh, sharp_edges: np.ndarray) -> np.ndarray:
     return np.isin(key, np.minimum(*sharp_edges.T) * n + np.maximum(*sharp_edges.T))
 
 
-def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndarray, face_keys) -> np.ndarray:
+def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndarray, face_keys,
+                      dart: np.ndarray) -> np.ndarray:
     """(H,) bool: both half-edges of every interior edge to remove at a seam vertex whose sector is too large.
 
-    A sector of k faces around a smooth seam vertex keeps one interior edge (between its faces k // 2 - 1
-    and k // 2, counted from the seam edge it starts at), a corner's sector none. Only components that
-    the counts alone keep from being exact are touched (a dart, a lone corner: merging cannot help).
+    A sector of k faces around a smooth seam vertex keeps one interior edge (``_kept_interior_edges``), a
+    corner's sector none. Only components that the counts alone keep from being exact are touched (a lone
+    corner: merging cannot help). ``dart`` (H,) bool, the edges of dart chains: kept by a smooth vertex's
+    sector where it can, removed only in a corner's sector.
     """
     h = np.arange(mesh.n_halfedges)
     seam = sharp | (mesh.twin < 0)
@@ -155,7 +165,8 @@ def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndar
     target = np.where(corner[mesh.origin], 1, 2)
     remove = wanted[mesh.origin] & (size > target) & (successor >= 0)
     remove &= ~_kept_interior_edges(mesh, remove & (target == 2), sector, size, successor, on_seam,
-                                    remove & (target == 1))
+                                    remove & (target == 1), dart[mesh.prev])
+    remove &= ~dart[mesh.prev] | (target == 1)
     if face_keys is not None:
         keys = np.asarray(face_keys)
         remove &= keys[mesh.face] == keys[mesh.face[np.maximum(successor, 0)]]
@@ -167,18 +178,19 @@ def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndar
 
 
 def _kept_interior_edges(mesh: HalfEdgeMesh, candidate: np.ndarray, sector: np.ndarray, size: np.ndarray,
-                         successor: np.ndarray, on_seam: np.ndarray, certain: np.ndarray) -> np.ndarray:
+                         successor: np.ndarray, on_seam: np.ndarray, certain: np.ndarray, prefer: np.ndarray) -> np.ndarray:
     """(H,) bool: the one interior edge each smooth seam vertex's large sector keeps (its corner ``h``).
 
     ``candidate``: corners whose following interior edge (``prev[h]``) a two-face target could keep;
     ``certain``: corners whose edge goes anyway (corner sectors). The edge kept is the one whose far
     vertex can least spare a face (the fewest faces left over ``_least_faces`` once the certain edges
-    are gone), ties to the middle of the sector (``size // 2 - 1`` from its start).
+    are gone), ties to the middle of the sector (``size // 2 - 1`` from its start); ``prefer`` (H,) bool:
+    corners whose edge is kept before any other (a dart chain's).
     """
     far = mesh.origin[mesh.prev]  # prev[h] runs from the far vertex to h's vertex
     lost = np.bincount(far[certain], minlength=mesh.n_vertices)
     spare = vertex_valences(mesh) - _least_faces(mesh, on_seam) - lost
-    score = spare[far]
+    score = np.where(prefer, -(2**31), spare[far])
     h = np.flatnonzero(candidate)
     rank = _chain_ranks(successor, int(size.max(initial=0)))
     order = h[np.lexsort((np.abs(rank[h] - (size[h] // 2 - 1)), score[h], sector[h]))]
@@ -189,9 +201,10 @@ def _kept_interior_edges(mesh: HalfEdgeMesh, candidate: np.ndarray, sector: np.n
 
 
 def _least_faces(mesh: HalfEdgeMesh, on_seam: np.ndarray) -> np.ndarray:
-    """(V,) int: the fewest faces a vertex may be left in: 3 inside (valence 2 has no A3 filling), 1 on the
-    boundary and on a seam (a seam vertex's sectors keep a face each, and its cut copies have four)."""
-    least = np.full(mesh.n_vertices, 3, dtype=np.int64)
+    """(V,) int: the fewest faces a vertex may be left in: 2 inside (an interior vertex left in two faces is
+    dissolved next, ``mesh.valence_two``; in one it would be inside the polygon), 1 on the boundary and on a
+    seam (a seam vertex's sectors keep a face each, and its cut copies have four)."""
+    least = np.full(mesh.n_vertices, 2, dtype=np.int64)
     least[mesh.origin[mesh.twin < 0]] = 1
     least[on_seam] = 1
     return least
