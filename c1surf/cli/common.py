@@ -126,8 +126,10 @@ def dissolve_notes(mesh_file) -> list[str]:
     sheets = getattr(mesh_file, "non_manifold_edges", None)
     if sheets is not None:
         shown = ", ".join(f"{a}-{b}" for a, b in sheets[:6].tolist()) + (", ..." if len(sheets) > 6 else "")
+        seams = getattr(mesh_file, "non_manifold_seams", len(sheets))
+        touching = f"; {len(sheets) - seams} only touch there (every sheet holds them in two faces)" if seams < len(sheets) else ""
         notes.append(f"C0 creases: cut {len(sheets)} edges in more than two faces (vertices {shown}, 0-based) into "
-                     "manifold sheets that meet along one C0 crease each (docs/sharp-features.md)")
+                     f"manifold sheets: {seams} are a C0 crease the sheets meet along{touching} (docs/sharp-features.md)")
     merge = getattr(mesh_file, "sector_merge", None)
     if merge is not None:
         faces, polygons, at, lost = merge

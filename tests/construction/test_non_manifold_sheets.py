@@ -37,6 +37,25 @@ def test_a_book_of_three_pages_becomes_three_sheets():
     assert split_non_manifold_edges(np.array([4, 4]), np.concatenate(BOOK[:2]), 8) is None
 
 
+def test_two_closed_surfaces_that_share_an_edge_stay_apart(tmp_path):
+    # two cubes whose faces name the same two vertices for one edge (not welded: the file's own numbers):
+    # each sheet holds the edge in two faces, so they only touch there: two closed cubes, no crease
+    cube = [[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]]
+    first = [(0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (1, 1, 1), (0, 1, 1)]
+    second = [(1, -1, 0), (2, -1, 0), (2, 0, 0), (1, 0, 0), (1, -1, 1), (2, -1, 1), (2, 0, 1), (1, 0, 1)]
+    points = first + [p for p in second if p not in first]
+    number = {p: points.index(p) for p in points}
+    faces = cube + [[number[second[i]] for i in f] for f in cube]
+    path = tmp_path / "two_cubes.obj"
+    path.write_text("".join(f"v {x} {y} {z}\n" for x, y, z in points) + "".join(
+        "f " + " ".join(str(i + 1) for i in f) + "\n" for f in faces))
+    surface, mesh = surface_from_file(path, weld=None)
+    assert len(mesh.non_manifold_edges) == 1 and mesh.non_manifold_seams == 0
+    report = check_surface(surface)
+    assert report.boundary_edges == 0 and report.crease_edges == 0 and report.max_normal_jump <= 1e-10
+    assert surface.n_patches == 2 * 96
+
+
 def sheet_sides(surface):
     """(gap, k): the largest distance between the sides found in more than two patches (the sheets'
     common curves), sampled; k such sides."""
@@ -79,7 +98,8 @@ def test_the_fan_converts_to_files_that_check_and_a_valid_step(tmp_path):
     result = run("convert", path, "--exact-creases", "-o", tmp_path / "fan.ply", "--patches", tmp_path / "fan.json",
                  "--patches", tmp_path / "fan.step")
     assert result.exit_code == 0, result.output
-    assert "cut 4 edges in more than two faces (vertices 7-8, 8-9, 9-10, 10-11, 0-based)" in result.stderr
+    assert ("cut 4 edges in more than two faces (vertices 7-8, 8-9, 9-10, 10-11, 0-based) into manifold sheets: 4 are a "
+            "C0 crease the sheets meet along") in result.stderr
     rows = np.array(json.loads((tmp_path / "fan.json").read_text())["crease_sides"])
     assert len(rows) == 32  # 4 edges x 4 pieces x (3 sheets - 1)
     check = run("check", tmp_path / "fan.json")

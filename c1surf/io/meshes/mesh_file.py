@@ -73,6 +73,8 @@ class MeshFile:
     non_manifold_edges : ndarray, shape (k, 2), int64, or None
         Edges in more than two faces, cut into sheets with vertex copies appended to ``points``
         (``io.meshes.surface_data.split_surface_sheets``, ``mesh.creases.non_manifold``).
+    non_manifold_seams : int
+        Of those, the edges the sheets meet along (C0 seams); the others only touch.
     sector_merge : tuple (merged faces, polygons, seam vertices (k,) int, crease edges merged away (d, 2) int) or None
         Crease sectors merged into polygons for exact C0 creases (``merge_sector_faces``,
         ``mesh.creases.sectors``); None when nothing was merged.
@@ -103,6 +105,7 @@ class MeshFile:
     repeated_faces: int = 0
     sector_merge: tuple | None = None
     non_manifold_edges: np.ndarray | None = None
+    non_manifold_seams: int = 0
 
     @property
     def n_vertices(self) -> int:

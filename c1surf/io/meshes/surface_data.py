@@ -243,7 +243,7 @@ def split_surface_sheets(mesh: MeshFile, data: SurfaceData | None):
     mesh = replace(mesh, points=mesh.points[source], face_vertices=split.face_vertices,
                    vertex_weights=extend(mesh.vertex_weights), vertex_normals=extend(mesh.vertex_normals),
                    vertex_uvs=extend(mesh.vertex_uvs), vertex_attributes={k: v[source] for k, v in mesh.vertex_attributes.items()},
-                   non_manifold_edges=split.edges)
+                   non_manifold_edges=split.edges, non_manifold_seams=len(split.seams))
     if data is None:
         data = SurfaceData(points=mesh.points)
     f = data.features if data.features is not None else SharpFeatures()
@@ -251,8 +251,8 @@ def split_surface_sheets(mesh: MeshFile, data: SurfaceData | None):
     keys = mesh_edge_keys(mesh.face_sizes, mesh.face_vertices, n)
     edges = np.stack([keys // n, keys % n], axis=1)  # every edge of the sheets, by its copies
     key = lambda pairs: np.minimum(*pairs.T) * n + np.maximum(*pairs.T)  # of input vertex pairs
-    tagged = np.r_[key(f.crease_edges), key(split.edges)]
-    values = np.r_[f.crease_sharpness, np.full(len(split.edges), INFINITELY_SHARP)]
+    tagged = np.r_[key(f.crease_edges), key(split.seams)]
+    values = np.r_[f.crease_sharpness, np.full(len(split.seams), INFINITELY_SHARP)]
     sharpness = _lookup(key(source[edges]), tagged, values)  # each copy of a tagged edge keeps its sharpness
     creased = sharpness > 0
     corners = np.r_[f.corner_vertices, split.corners]

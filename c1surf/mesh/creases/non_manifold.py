@@ -5,7 +5,9 @@ of a book, ``catmark_fan``), c1surf gives every *sheet* its own copy of the edge
 vertex are grouped into fans across the edges they share with exactly one other face, and every fan
 but the first at a vertex on a non-manifold edge gets a copy of the vertex (same position, a new
 number). Each sheet is then an open manifold mesh whose boundary runs along the non-manifold edges.
-The caller makes those edges infinitely sharp creases of every sheet: the C0 crease cuts and mirrors
+Where every sheet holds the edge in two faces (two closed surfaces that share an edge's vertices) the
+sheets only touch there and stay apart. Otherwise the caller makes the edge an infinitely sharp crease
+of every sheet (``SheetSplit.seams``): the C0 crease cuts and mirrors
 a boundary that a crease reaches (``sheets``), so every sheet's boundary curve there is the same
 curve of the edge polyline alone, and the sheets meet along it exactly.
 
@@ -29,12 +31,15 @@ class SheetSplit:
     face_vertices : (H,) int, the faces' corners with the copies (face sizes unchanged)
     vertex_source : (V',) int, the vertex each vertex copies (``arange(V)`` first, then the copies')
     edges : (k, 2) int, the non-manifold edges (input numbering, smaller vertex first)
+    seams : (s, 2) int, of those, the edges some sheet holds in one face (its boundary): creases of every
+        sheet; the others are held by every sheet in two faces, sheets that only touch there
     corners : (c,) int, input vertices that are corners of the sheets' common curves
     """
 
     face_vertices: np.ndarray
     vertex_source: np.ndarray
     edges: np.ndarray
+    seams: np.ndarray
     corners: np.ndarray
 
 
@@ -91,7 +96,16 @@ def split_non_manifold_edges(face_sizes, face_vertices, n_vertices: int) -> Shee
     vertices[corners] = new_id[fan_slot]
     source = np.r_[np.arange(n_vertices), owner[copies]]
     edges = np.stack([unique[counts > 2] // n_vertices, unique[counts > 2] % n_vertices], axis=1)
-    return SheetSplit(vertices, source, edges, _sheet_corners(face_sizes, vertices, source, edges, n_vertices))
+    seams = edges[_held_once(face_sizes, vertices, source, edges, n_vertices)]
+    return SheetSplit(vertices, source, edges, seams, _sheet_corners(face_sizes, vertices, source, seams, n_vertices))
+
+
+def _held_once(face_sizes, vertices, source, edges, n_vertices: int) -> np.ndarray:
+    """(k,) bool: the non-manifold ``edges`` (input numbering) of which some copy lies in one face only."""
+    split = build_halfedges(face_sizes, vertices, source.size)
+    lone = split.twin < 0
+    a, b = source[split.origin[lone]], source[split.dest[lone]]
+    return np.isin(edges[:, 0] * n_vertices + edges[:, 1], np.minimum(a, b) * n_vertices + np.maximum(a, b))
 
 
 def _repeated_vertex_sets(face_sizes: np.ndarray, face_vertices: np.ndarray) -> bool:
