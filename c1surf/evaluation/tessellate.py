@@ -288,7 +288,9 @@ class _Welding:
             edge_owner = _last_owner(edges, adjacency.n_edges)
             edges, edge_owner, dense_edges = _close_gaps(edges, edge_owner)
             dense = dense and dense_edges
-        reversed_ = np.ascontiguousarray(adjacency.reversed, dtype=bool)  # read through flat views
+        reversed_ = adjacency.reversed  # None in a corners-only adjacency (n = 2: no side is evaluated)
+        if reversed_ is not None:
+            reversed_ = np.ascontiguousarray(reversed_, dtype=bool)  # read through flat views
         return _Welding(n, corners, edges, reversed_, corner_owner, edge_owner, dense)
 
     @property
