@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..parallel import blas_on_one_thread
-from .stencils.layout import PatchLayout, _ProductWork, product_block, product_blocks
+from .stencils.layout import PatchLayout, _ProductWork, block_product, product_block, product_blocks
 
 KINDS = ("biquadratic", "bicubic")
 DEFAULT_CACHE_BYTES = 64 << 20
@@ -154,25 +154,33 @@ class PatchSource:
             spans += [(g, b, int(bounds[b]), int(bounds[b + 1])) for b in range(bounds.size - 1) if bounds[b + 1] > bounds[b]]
         return spans
 
-    def span_coefficients(self, kind: int, g: int, b: int) -> np.ndarray:
-        """(c, k * k, d) float: the coefficient rows of the patches of product block b of group g (``product_spans``),
-        computed now (with BLAS as the block has it) and not kept: the bits of ``coefficients``. Polynomial
-        surfaces only. The rows live in work arrays of the calling thread, valid until its next call here
-        (blocks on a thread pool allocate nothing)."""
+    def span_rows(self, kind: int, g: int, b: int, rows: np.ndarray) -> np.ndarray:
+        """(rows.shape + (d,)) float: coefficient rows of the patches of product block b of group g (``product_spans``),
+        bit for bit those ``coefficients`` gives: ``rows`` int, patch * k * k + coefficient (i k + j), the patches
+        numbered from the span's first (p0). Polynomial surfaces only.
+
+        The block's product is made now (with BLAS as the block has it; not kept), in work arrays of the calling
+        thread (blocks on a thread pool allocate little), and only the rows asked for are copied out of it, the
+        centre added to them as ``product_block`` adds it to all.
+        """
         if self.rational:
             raise ValueError("internal: the rows of a rational surface are homogeneous")
         layout, group = self.layouts[kind], self._groups[kind][g]
         start, stop = int(group.starts[b]), int(group.starts[b + 1])
-        work, out = _thread_work(group.slots.shape[0], group.weights.shape[0], int(np.diff(group.starts).max()),
-                                 self.refined.shape[1])
-        out = out[: stop - start]
+        work = _thread_work(group.slots.shape[0], group.weights.shape[0], int(np.diff(group.starts).max()),
+                            self.refined.shape[1])
         with blas_on_one_thread(group.held):
-            product_block(self.refined, group.slots, group.weights, start, stop, out, self.origin, work)
-        rows = out.reshape(-1, layout.coefficients, self.refined.shape[1])
-        if layout.keep is None:
-            return rows
-        first = group.first + start * group.per_item
-        return rows[layout.keep[first : first + rows.shape[0]]]
+            product = block_product(self.refined, group.slots, group.weights, start, stop, work)
+        patch, coefficient = np.divmod(rows, layout.coefficients)
+        if layout.keep is not None:  # kept patches -> all patches of the block (from its first)
+            p0 = np.searchsorted(layout.kept_rows(), group.first + start * group.per_item)
+            patch = np.take(layout.kept_rows(), patch + p0) - (group.first + start * group.per_item)
+        item, within = np.divmod(patch, group.per_item)
+        # the product is (r, items, d): row (patch within its item) * k * k + coefficient, column item
+        out = np.take(product.reshape(-1, self.refined.shape[1]),
+                      (within * layout.coefficients + coefficient) * (stop - start) + item, axis=0)
+        out += self.origin
+        return out
 
     def blas_held(self, kind: int) -> bool:
         """Whether every product block of ``kind`` runs with BLAS on one thread (``product_blocks``' held), so that
@@ -203,13 +211,12 @@ class PatchSource:
 _local = threading.local()
 
 
-def _thread_work(m: int, r: int, items: int, d: int):
-    """(``_ProductWork``, out (items, r, d) float): the calling thread's work arrays for product blocks of up to
-    ``items`` items, made on first use and kept."""
+def _thread_work(m: int, r: int, items: int, d: int) -> _ProductWork:
+    """The calling thread's work arrays for product blocks of up to ``items`` items, made on first use and kept."""
     arrays = _local.__dict__.setdefault("products", {})
     key = (m, r, d)
-    if key not in arrays or arrays[key][1].shape[0] < items:
-        arrays[key] = (_ProductWork(m, r, items, d), np.empty((items, r, d)))
+    if key not in arrays or arrays[key].gathered.shape[1] < items:
+        arrays[key] = _ProductWork(m, r, items, d)
     return arrays[key]
 
 

@@ -146,9 +146,9 @@ class StreamedTessellation:
         owned = np.flatnonzero(np.take(self.welding.corner_owner, ids) == np.arange(4 * a, 4 * z))
         if owned.size == 0:
             return
-        control = self.source.span_coefficients(k, g, b).reshape(-1, self.dim)
         rows = _work("corner table rows", (owned.size, self.dim + 3))
-        _corner_block(control, bases, owned >> 2, owned & 3, rows[:, : self.dim], rows[:, self.dim :])
+        _corner_block(partial(self.source.span_rows, k, g, b), bases, owned >> 2, owned & 3, rows[:, : self.dim],
+                      rows[:, self.dim :])
         table[ids[owned]] = rows
 
     def triangle_point_blocks(self):
@@ -222,9 +222,6 @@ class StreamedTessellation:
         with blas_on_one_thread(self._hold):
             _owned_block(evaluate, self._groups, self.starts, owner, width, points, normals)
         return points, normals
-
-    def _corner(self, k, control, rows, local, slot, points, normals) -> None:
-        _corner_block(control, self.bases[k], rows, slot, points, normals)
 
     def _side(self, k, control, rows, local, slot, points, normals) -> None:
         flip = np.take(self.welding.reversed.reshape(-1), (local + self.starts[k]) * 4 + slot)
