@@ -182,6 +182,14 @@ class PatchSource:
         out += self.origin
         return out
 
+    def keep_slot_arrays(self) -> None:
+        """Let go of the topology the layouts' slots were made by blocks from, all but the arrays they read
+        (``biquadratic.GridSlots.keep_slot_arrays``), for a caller that holds only this source."""
+        for layout in self.layouts:
+            for slots, _ in layout.groups:
+                if hasattr(slots, "keep_slot_arrays"):
+                    slots.keep_slot_arrays()
+
     def blas_held(self, kind: int) -> bool:
         """Whether every product block of ``kind`` runs with BLAS on one thread (``product_blocks``' held), so that
         blocks may be computed on the thread pool (``parallel.run_tasks``) and give the same bits."""

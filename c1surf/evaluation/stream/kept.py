@@ -84,6 +84,7 @@ class StreamedSurface:
             return_freed_memory()
             corners = corner_labels(face, frames)
             del face
+            self.source.keep_slot_arrays()  # the refined mesh's face and twin, sizes and offsets go now or below
             return_freed_memory()
             if not self._sides:
                 del twin, frames
