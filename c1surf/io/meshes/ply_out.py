@@ -94,8 +94,11 @@ def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, tri
     with open(path, "wb") as f:
         f.write(_header([(name, dtype, None) for name, dtype in names], n_vertices, n_triangles, ("c1surf",)))
         for points, normals in vertex_blocks:
-            values = [points[:, 0], points[:, 1], points[:, 2], normals[:, 0], normals[:, 1], normals[:, 2]]
-            f.write(_vertex_bytes([(name, dtype, v) for (name, dtype), v in zip(names, values)]))
+            records = None if float32 else _records(points, normals)
+            if records is None:
+                values = [points[:, 0], points[:, 1], points[:, 2], normals[:, 0], normals[:, 1], normals[:, 2]]
+                records = _vertex_bytes([(name, dtype, v) for (name, dtype), v in zip(names, values)])
+            f.write(records)
             written[0] += points.shape[0]
         for triangles in triangle_blocks:
             f.write(_face_bytes(triangles))
@@ -109,6 +112,18 @@ def write_ply_stream(path, tessellation, float32: bool = False) -> None:
     """Write a tessellation by blocks (``evaluation.stream.StreamedTessellation``): the bytes of ``write_ply``."""
     write_ply_blocks(path, tessellation.n_vertices, tessellation.n_triangles, tessellation.vertex_blocks(),
                      tessellation.triangle_blocks(), float32)
+
+
+def _records(points: np.ndarray, normals: np.ndarray):
+    """The double records ``x y z nx ny nz`` of a block as they lie in memory, or None: when ``points`` (c, 3) and
+    ``normals`` (c, 3) are the two halves of the rows of one C-contiguous (c, 6) little-endian float64 array (the
+    streamed tessellation's corner table), its bytes are the file's, written without a copy."""
+    if points.shape[1:] != (3,) or points.dtype != np.dtype("<f8") or normals.dtype != np.dtype("<f8"):
+        return None
+    if not (points.strides == normals.strides == (48, 8) and normals.ctypes.data == points.ctypes.data + 24):
+        return None
+    rows = np.lib.stride_tricks.as_strided(points, shape=(points.shape[0], 6), strides=(48, 8), writeable=False)
+    return memoryview(rows.reshape(-1))
 
 
 def _vertex_bytes(columns) -> bytes:
