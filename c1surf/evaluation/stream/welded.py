@@ -129,7 +129,9 @@ class StreamedTessellation:
         bits do not depend on the corners evaluated beside it."""
         table = np.empty((self.welding.n_corners, self.dim + 3))
         bases = self.bases  # made here, not by two threads at once
-        tasks = [partial(self._corner_span, k, span, bases[k], table) for k in range(2)
+        owns = np.zeros(self.welding.corners.size, dtype=bool)  # flat corner (patch * 4 + slot) evaluating its id
+        owns[self.welding.corner_owner] = True
+        tasks = [partial(self._corner_span, k, span, bases[k], owns, table) for k in range(2)
                  for span in self.source.product_spans(k)]
         if all(self.source.blas_held(k) for k in range(2)):
             run_tasks(tasks, uses_blas=True)
@@ -138,18 +140,17 @@ class StreamedTessellation:
                 task()
         return table
 
-    def _corner_span(self, k: int, span, bases, table: np.ndarray) -> None:
+    def _corner_span(self, k: int, span, bases, owns: np.ndarray, table: np.ndarray) -> None:
         """The rows of ``table`` of the corners whose owners are the patches of one product block (``product_spans``)."""
         g, b, p0, p1 = span
         a, z = int(self.starts[k]) + p0, int(self.starts[k]) + p1  # global patch ids
-        ids = self.welding.corners[a:z].reshape(-1)
-        owned = np.flatnonzero(np.take(self.welding.corner_owner, ids) == np.arange(4 * a, 4 * z))
+        owned = np.flatnonzero(owns[4 * a : 4 * z])
         if owned.size == 0:
             return
         rows = _work("corner table rows", (owned.size, self.dim + 3))
         _corner_block(partial(self.source.span_rows, k, g, b), bases, owned >> 2, owned & 3, rows[:, : self.dim],
                       rows[:, self.dim :])
-        table[ids[owned]] = rows
+        table[np.take(self.welding.corners.reshape(-1), owned + 4 * a)] = rows
 
     def triangle_point_blocks(self):
         """Yield (t, 3, 3) float: the positions (x, y, z) of the corners of triangles, in triangle order,
