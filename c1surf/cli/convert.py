@@ -221,7 +221,7 @@ def convert(input_path, output, patches_paths, resolution, tolerance, units, no_
     surface, data = read_and_build(input_path, mesh_suffix, shape, progress, quiet, weld_tolerance(weld, no_weld),
                                    lazy_patches=stream)
     if stream and surface.lazy_patches:  # polynomial: tessellated and written by blocks
-        kept = StreamedSurface(surface, sources=bool(patches_paths))
+        kept = StreamedSurface(surface, sources=bool(patches_paths), sides=resolution > 2)  # -r 2: corners only
         del surface, data  # only what `kept` holds is read from here on: the rest of the build is freed now
         write_streamed(input_path, output, mesh_suffix, kept, resolution, float32, force, progress,
                        list(zip(patches_paths, patch_suffixes)))
@@ -288,7 +288,7 @@ def write_streamed(input_path, output, mesh_suffix: str, surface, resolution: in
         surface = StreamedSurface(surface, sources=bool(patch_targets))
     adjacency = surface.adjacency
     if mesh_suffix in HELD_POINTS:
-        held = adjacency.n_corners + adjacency.n_edges * (resolution - 2)  # the vertex ids below the interiors
+        held = adjacency.n_corners + (adjacency.n_edges * (resolution - 2) if resolution > 2 else 0)  # ids below the interiors
         check_streamed_memory(POINT_BYTES * held, "for the positions on patch sides", resolution, force)
     tess = StreamedTessellation(surface.source, adjacency, resolution)
     patch_paths, patch_suffixes = [path for path, _ in patch_targets], [suffix for _, suffix in patch_targets]

@@ -10,13 +10,14 @@ numbers of ``Surface.biquadratic`` / ``Surface.bicubic`` without making them.
 """
 from __future__ import annotations
 
+import threading
 from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
 
 from ..parallel import blas_on_one_thread
-from .stencils.layout import PatchLayout, product_block, product_blocks
+from .stencils.layout import PatchLayout, _ProductWork, block_product, product_block, product_blocks
 
 KINDS = ("biquadratic", "bicubic")
 DEFAULT_CACHE_BYTES = 64 << 20
@@ -142,6 +143,58 @@ class PatchSource:
                 yield PatchBlock(kind, ids + offset, coefficients, weights)
             offset += count
 
+    def product_spans(self, kind: int) -> list:
+        """[(g, b, p0, p1)]: every product block b of group g of kind ``kind``, in order, with the patches it makes:
+        p0..p1-1 (indices within the kind, as ``coefficients`` takes them; a block of no kept patch is left out)."""
+        layout, spans = self.layouts[kind], []
+        for g, group in enumerate(self._groups[kind]):
+            bounds = group.first + group.starts * group.per_item  # raw patches (all patches of all groups)
+            if layout.keep is not None:
+                bounds = np.searchsorted(layout.kept_rows(), bounds)
+            spans += [(g, b, int(bounds[b]), int(bounds[b + 1])) for b in range(bounds.size - 1) if bounds[b + 1] > bounds[b]]
+        return spans
+
+    def span_rows(self, kind: int, g: int, b: int, rows: np.ndarray) -> np.ndarray:
+        """(rows.shape + (d,)) float: coefficient rows of the patches of product block b of group g (``product_spans``),
+        bit for bit those ``coefficients`` gives: ``rows`` int, patch * k * k + coefficient (i k + j), the patches
+        numbered from the span's first (p0). Polynomial surfaces only.
+
+        The block's product is made now (with BLAS as the block has it; not kept), in work arrays of the calling
+        thread (blocks on a thread pool allocate little), and only the rows asked for are copied out of it, the
+        centre added to them as ``product_block`` adds it to all.
+        """
+        if self.rational:
+            raise ValueError("internal: the rows of a rational surface are homogeneous")
+        layout, group = self.layouts[kind], self._groups[kind][g]
+        start, stop = int(group.starts[b]), int(group.starts[b + 1])
+        work = _thread_work(group.slots.shape[0], group.weights.shape[0], int(np.diff(group.starts).max()),
+                            self.refined.shape[1])
+        with blas_on_one_thread(group.held):
+            product = block_product(self.refined, group.slots, group.weights, start, stop, work)
+        patch, coefficient = np.divmod(rows, layout.coefficients)
+        if layout.keep is not None:  # kept patches -> all patches of the block (from its first)
+            p0 = np.searchsorted(layout.kept_rows(), group.first + start * group.per_item)
+            patch = np.take(layout.kept_rows(), patch + p0) - (group.first + start * group.per_item)
+        item, within = np.divmod(patch, group.per_item)
+        # the product is (r, items, d): row (patch within its item) * k * k + coefficient, column item
+        out = np.take(product.reshape(-1, self.refined.shape[1]),
+                      (within * layout.coefficients + coefficient) * (stop - start) + item, axis=0)
+        out += self.origin
+        return out
+
+    def keep_slot_arrays(self) -> None:
+        """Let go of the topology the layouts' slots were made by blocks from, all but the arrays they read
+        (``biquadratic.GridSlots.keep_slot_arrays``), for a caller that holds only this source."""
+        for layout in self.layouts:
+            for slots, _ in layout.groups:
+                if hasattr(slots, "keep_slot_arrays"):
+                    slots.keep_slot_arrays()
+
+    def blas_held(self, kind: int) -> bool:
+        """Whether every product block of ``kind`` runs with BLAS on one thread (``product_blocks``' held), so that
+        blocks may be computed on the thread pool (``parallel.run_tasks``) and give the same bits."""
+        return all(group.held for group in self._groups[kind])
+
     def _block(self, kind: int, g: int, b: int) -> np.ndarray:
         """(items * per item, coefficients, d) float: the rows of product block b of group g, computed or kept."""
         key = (kind, g, b)
@@ -161,6 +214,18 @@ class PatchSource:
         while self._cached > self.cache_bytes and len(self._cache) > 1:
             self._cached -= self._cache.popitem(last=False)[1].nbytes
         return rows
+
+
+_local = threading.local()
+
+
+def _thread_work(m: int, r: int, items: int, d: int) -> _ProductWork:
+    """The calling thread's work arrays for product blocks of up to ``items`` items, made on first use and kept."""
+    arrays = _local.__dict__.setdefault("products", {})
+    key = (m, r, d)
+    if key not in arrays or arrays[key].gathered.shape[1] < items:
+        arrays[key] = _ProductWork(m, r, items, d)
+    return arrays[key]
 
 
 def patch_source(stage, refined: np.ndarray, origin: np.ndarray, rational: bool, **options) -> PatchSource:

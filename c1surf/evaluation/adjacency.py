@@ -51,6 +51,8 @@ class PatchAdjacency:
     corners : (P, 4) int (int32 from the construction while it fits), corner ids, dense 0..n_corners-1
     edges : (P, 4) int (as corners), edge ids, dense 0..n_edges-1
     reversed : (P, 4) bool
+    (edges and reversed are None in the corners-only adjacency of a tessellation at resolution 2, which
+    numbers no edge samples: ``adjacency_from_corner_labels``)
     """
 
     corners: np.ndarray
@@ -67,6 +69,8 @@ class PatchAdjacency:
 
     @property
     def n_edges(self) -> int:
+        if self.edges is None:
+            raise ValueError("internal: this adjacency was made with its corners only")
         return int(self.edges.max()) + 1 if self.edges.size else 0
 
     def neighbours(self) -> np.ndarray:
@@ -286,6 +290,13 @@ def adjacency_from_labels(corners: np.ndarray, edges: np.ndarray, forward: np.nd
         z = min(a + 4 * _ADJACENCY_BLOCK, flat_edges.size)
         np.not_equal(flat_forward[a:z], np.take(first_forward, flat_edges[a:z]), out=flat_forward[a:z])
     return PatchAdjacency(corners, edges, forward)
+
+
+def adjacency_from_corner_labels(corners: np.ndarray) -> PatchAdjacency:
+    """The corners-only PatchAdjacency of ``corner_labels``' array, renumbered in place (edges and reversed None):
+    what a tessellation at resolution 2 reads (its vertices are the corners), without the sides' labels."""
+    _renumber(corners.reshape(-1))
+    return PatchAdjacency(corners, None, None)
 
 
 def _row_blocks(parts):

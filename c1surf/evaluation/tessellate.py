@@ -288,7 +288,8 @@ class _Welding:
             edge_owner = _last_owner(edges, adjacency.n_edges)
             edges, edge_owner, dense_edges = _close_gaps(edges, edge_owner)
             dense = dense and dense_edges
-        reversed_ = np.ascontiguousarray(adjacency.reversed, dtype=bool)  # read through flat views
+        reversed_ = adjacency.reversed  # read through flat views; None in a corners-only adjacency (n = 2)
+        reversed_ = None if reversed_ is None else np.ascontiguousarray(reversed_, dtype=bool)
         return _Welding(n, corners, edges, reversed_, corner_owner, edge_owner, dense)
 
     @property
@@ -500,16 +501,17 @@ def _side_block(control: np.ndarray, bases: _Bases, patch, side, flip, points: n
                   np.take(bases.side_sign.reshape(8), kind))
 
 
-def _corner_block(control: np.ndarray, bases: _Bases, patch, slot, points: np.ndarray, normals: np.ndarray) -> None:
+def _corner_block(control, bases: _Bases, patch, slot, points: np.ndarray, normals: np.ndarray) -> None:
     """C corners, each from one corner of one patch: the control point, normals from first differences.
 
-    control : (P_k (d+1)^2, dim); patch, slot : (C,) int; points : (C, dim), normals : (C, 3)
+    control : (P_k (d+1)^2, dim), or a callable giving the rows (3, C, dim) at (3, C) offsets into such an array
+    patch, slot : (C,) int; points : (C, dim), normals : (C, 3)
     """
     c = patch.size
     index = _work("corner index", (3, c), np.int64)  # rows of the corner and of its neighbours in u and v
     np.add(patch * (bases.d + 1) ** 2, np.take(bases.corner_index.T, slot, axis=1), out=index)  # take: fast on small tables
-    rows = _work("corner rows", (3, c, control.shape[1]))
-    np.take(control, index, axis=0, out=rows, mode="clip")
+    rows = control(index) if callable(control) else np.take(control, index, axis=0, mode="clip",
+                                                            out=_work("corner rows", (3, c, control.shape[1])))
     points[:] = rows[0]
     planes = _work("corner planes", (3, 3, c))  # (corner / u / v, coordinate, C)
     np.copyto(planes, rows[:, :, :3].transpose(0, 2, 1))

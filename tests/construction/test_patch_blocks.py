@@ -109,3 +109,32 @@ def test_whole_arrays_of_an_open_mesh_keep_only_the_kept_patches(open_mesh_surfa
     eager, lazy = open_mesh_surfaces
     biquadratic, bicubic = lazy.patch_source().arrays()
     assert np.array_equal(biquadratic, eager.biquadratic) and np.array_equal(bicubic, eager.bicubic)
+
+
+def _span_rows_equal_the_arrays(source, wholes) -> None:
+    """Every product span's patches, and any of their coefficient rows (``span_rows``), equal the arrays."""
+    for kind, whole in enumerate(wholes):
+        spans, rng = source.product_spans(kind), np.random.default_rng(kind)
+        assert [p0 for _, _, p0, _ in spans[1:]] == [p1 for _, _, _, p1 in spans[:-1]]  # in order, no gap
+        assert (spans[0][2], spans[-1][3]) == (0, len(whole)) if spans else len(whole) == 0
+        flat = whole.reshape(len(whole), -1, whole.shape[-1])
+        for g, b, p0, p1 in spans:
+            rows = rng.integers(0, (p1 - p0) * flat.shape[1], (3, 17))
+            patch, coefficient = np.divmod(rows, flat.shape[1])
+            assert np.array_equal(source.span_rows(kind, g, b, rows), flat[p0 + patch, coefficient])
+
+
+@pytest.mark.parametrize("tiny", [False, True], ids=["default blocks", "tiny blocks"])
+@pytest.mark.parametrize("name", MESHES)
+def test_span_rows_equal_the_arrays(monkeypatch, name, tiny):
+    if tiny:
+        monkeypatch.setattr(layout, "_BLOCK_POINTS", 40)
+        monkeypatch.setattr(layout, "_THREAD_POINTS", 200)
+    eager, lazy = _surfaces(name)
+    _span_rows_equal_the_arrays(lazy.patch_source(), (eager.biquadratic, eager.bicubic))
+
+
+def test_span_rows_of_an_open_mesh_keep_only_the_kept_patches(open_mesh_surfaces):
+    eager, lazy = open_mesh_surfaces
+    assert lazy.patch_source().layouts[1].keep is not None  # the case: bicubic patches kept at real corners only
+    _span_rows_equal_the_arrays(lazy.patch_source(), (eager.biquadratic, eager.bicubic))

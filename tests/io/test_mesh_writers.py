@@ -8,7 +8,7 @@ from plyfile import PlyData
 from c1surf.io.meshes.number_text import format_fixed
 from c1surf.io.meshes.obj import read_obj
 from c1surf.io.meshes.obj_out import write_obj
-from c1surf.io.meshes.ply_out import write_ply
+from c1surf.io.meshes.ply_out import write_ply, write_ply_blocks
 from c1surf.io.meshes.write import TriangleMesh, write_attribute_mesh, write_triangle_mesh
 
 
@@ -52,6 +52,22 @@ def test_ply_round_trip(tmp_path, float32):
     got = np.stack([vertex[a] for a in "xyz"], axis=1)
     assert np.abs(got - points).max() <= (1e-6 if float32 else 0.0)
     assert np.array_equal(np.stack(ply["face"]["vertex_indices"]), triangles)
+
+
+def test_ply_blocks_of_one_records_array_write_its_bytes(tmp_path):
+    """Blocks whose points and normals are the halves of one (c, 6) array are written as that array's bytes
+    (no copy): the same file as separate arrays, as the faces written first, and as ``write_ply``."""
+    rng = np.random.default_rng(3)
+    records, triangles = rng.standard_normal((50, 6)), rng.integers(0, 50, (30, 3)).astype(np.int32)
+    halves = [(records[a : a + 7, :3], records[a : a + 7, 3:]) for a in range(0, 50, 7)]
+    copies = [(p.copy(), n.copy()) for p, n in halves]
+    for name, blocks in (("halves", halves), ("copies", copies)):
+        write_ply_blocks(tmp_path / f"{name}.ply", 50, 30, blocks, [triangles[:11], triangles[11:]])
+    write_ply_blocks(tmp_path / "first.ply", 50, 30, halves, [triangles[:11], triangles[11:]], triangles_first=True)
+    write_ply(tmp_path / "whole.ply", TriangleMesh(records[:, :3], triangles, records[:, 3:]))
+    whole = (tmp_path / "whole.ply").read_bytes()
+    assert (tmp_path / "halves.ply").read_bytes() == (tmp_path / "copies.ply").read_bytes() == whole
+    assert (tmp_path / "first.ply").read_bytes() == whole  # the faces written first, after the vertices' room
 
 
 def test_mesh_out_uses_the_fast_writers(tmp_path):

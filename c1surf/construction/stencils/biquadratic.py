@@ -85,6 +85,13 @@ class GridSlots:
         _fill_grid(self.mesh, self.frames[start:stop], grid)
         return grid[:, : stop - start]
 
+    def keep_slot_arrays(self) -> None:
+        """Keep of the refined mesh only what the slots are made from (``origin``, ``next``), for a holder that
+        lets the rest of the topology go (the streamed conversion: on the 4,000,000-quad torus its ``face``,
+        ``twin``, face sizes and offsets are 3 GB)."""
+        mesh = self.mesh
+        self.mesh = HalfEdgeMesh(mesh.n_vertices, None, None, mesh.origin, None, mesh.next, None, None)
+
     def hold(self) -> np.ndarray:
         """The whole (9, Nq) table, made once and kept from now on."""
         if self._whole is None:

@@ -20,7 +20,8 @@ import ctypes
 
 import numpy as np
 
-from ..adjacency import PatchAdjacency, adjacency_from_labels, corner_labels, side_labels
+from ..adjacency import (PatchAdjacency, adjacency_from_corner_labels, adjacency_from_labels, corner_labels,
+                         side_labels)
 from ..patch_set import PatchStream, surface_header, surface_source_ids
 
 __all__ = ["StreamedSurface"]
@@ -34,6 +35,8 @@ class StreamedSurface:
     surface : ``construction.surface.Surface``, polynomial (built with ``lazy_patches``: its patch arrays
         are never made); the caller should drop its own reference after this, so the build's memory goes
     sources : bool, keep where every patch comes from (patch files write it)
+    sides : bool, the adjacency numbers the patch sides too; False: its corners only (``adjacency.edges`` None),
+        enough for a tessellation at resolution 2 without patch files, and the sides' labels are never made
 
     Attributes
     ----------
@@ -44,7 +47,7 @@ class StreamedSurface:
     adjacency : PatchAdjacency of the patches (biquadratic first), made on first use
     """
 
-    def __init__(self, surface, sources: bool = False):
+    def __init__(self, surface, sources: bool = False, sides: bool = True):
         if surface.rational:
             raise ValueError("a rational surface is converted in memory")
         self.source = surface.patch_source()
@@ -54,6 +57,7 @@ class StreamedSurface:
         self.crease_sides = surface.crease_sides  # (k, 2): the C0 crease pieces' sides (patch files' header)
         self._topology = surface.topology  # until the adjacency (and the sources) are made from it
         self._keep_sources = bool(sources)
+        self._sides = bool(sides) or bool(sources)
         self._sources = None
         self._adjacency = None
 
@@ -80,7 +84,12 @@ class StreamedSurface:
             return_freed_memory()
             corners = corner_labels(face, frames)
             del face
+            self.source.keep_slot_arrays()  # the refined mesh's face and twin, sizes and offsets go now or below
             return_freed_memory()
+            if not self._sides:
+                del twin, frames
+                self._adjacency = adjacency_from_corner_labels(corners)
+                return self._adjacency
             edges, forward = side_labels(twin, frames)
             del twin, frames
             return_freed_memory()

@@ -16,12 +16,14 @@ and the caller tessellates in memory.
 """
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
 
 from ...arrays import unique_integers
-from ...parallel import blas_on_one_thread, thread_count
+from ...parallel import blas_on_one_thread, run_tasks, thread_count
 from .. import tessellate
-from ..tessellate import (_Bases, _corner_block, _grid_block, _interior_block, _owned_block, _side_block, _Welding,
+from ..tessellate import (_Bases, _corner_block, _work, _grid_block, _interior_block, _owned_block, _side_block, _Welding,
                           grid_triangles)
 
 __all__ = ["StreamedTessellation", "UndefinedNormals"]
@@ -86,9 +88,13 @@ class StreamedTessellation:
         """The vertex blocks of the corners, then of the edge samples (ids below ``welding.patch_base``)."""
         w, dim, samples = self.welding, self.dim, tessellate._BLOCK_SAMPLES  # the in-memory blocks, whatever they are
         checked = self._checked if check else (lambda points, normals: (points, normals))
+        corners = self._corner_table()
+        if check:
+            self._checked(corners[:, :0], corners[:, dim:])
         for a in range(0, w.n_corners, samples):
             z = min(a + samples, w.n_corners)
-            yield checked(*self._owned(w.corner_owner[a:z], 1, self._corner))
+            yield corners[a:z, :dim], corners[a:z, dim:]
+        del corners
         inner = w.inner
         step = max(1, samples // max(inner, 1))
         for a in range(0, w.n_edges, step):
@@ -115,6 +121,36 @@ class StreamedTessellation:
                         _interior_block(flat, self.bases[k], points, normals)
                     points = points.reshape(-1, dim)
                     yield (lo, hi, *(self._checked(points, normals) if check else (points, normals)))
+
+    def _corner_table(self) -> np.ndarray:
+        """(n_corners, dim + 3) float: the point and the normal of every corner, each from its owner as ``_owned``
+        evaluates it, made by the patches stage's product blocks in order (each block's coefficients made once,
+        blocks on the thread pool). A corner is a control point and elementwise arithmetic on two more, so its
+        bits do not depend on the corners evaluated beside it."""
+        table = np.empty((self.welding.n_corners, self.dim + 3))
+        bases = self.bases  # made here, not by two threads at once
+        owns = np.zeros(self.welding.corners.size, dtype=bool)  # flat corner (patch * 4 + slot) evaluating its id
+        owns[self.welding.corner_owner] = True
+        tasks = [partial(self._corner_span, k, span, bases[k], owns, table) for k in range(2)
+                 for span in self.source.product_spans(k)]
+        if all(self.source.blas_held(k) for k in range(2)):
+            run_tasks(tasks, uses_blas=True)
+        else:  # a block computed with BLAS on its own threads: one after another, as the in-memory blocks ran
+            for task in tasks:
+                task()
+        return table
+
+    def _corner_span(self, k: int, span, bases, owns: np.ndarray, table: np.ndarray) -> None:
+        """The rows of ``table`` of the corners whose owners are the patches of one product block (``product_spans``)."""
+        g, b, p0, p1 = span
+        a, z = int(self.starts[k]) + p0, int(self.starts[k]) + p1  # global patch ids
+        owned = np.flatnonzero(owns[4 * a : 4 * z])
+        if owned.size == 0:
+            return
+        rows = _work("corner table rows", (owned.size, self.dim + 3))
+        _corner_block(partial(self.source.span_rows, k, g, b), bases, owned >> 2, owned & 3, rows[:, : self.dim],
+                      rows[:, self.dim :])
+        table[np.take(self.welding.corners.reshape(-1), owned + 4 * a)] = rows
 
     def triangle_point_blocks(self):
         """Yield (t, 3, 3) float: the positions (x, y, z) of the corners of triangles, in triangle order,
@@ -187,9 +223,6 @@ class StreamedTessellation:
         with blas_on_one_thread(self._hold):
             _owned_block(evaluate, self._groups, self.starts, owner, width, points, normals)
         return points, normals
-
-    def _corner(self, k, control, rows, local, slot, points, normals) -> None:
-        _corner_block(control, self.bases[k], rows, slot, points, normals)
 
     def _side(self, k, control, rows, local, slot, points, normals) -> None:
         flip = np.take(self.welding.reversed.reshape(-1), (local + self.starts[k]) * 4 + slot)

@@ -14,6 +14,9 @@ Faces are ``property list uchar int vertex_indices``, binary little endian.
 """
 from __future__ import annotations
 
+import contextlib
+import os
+
 import numpy as np
 
 __all__ = ["write_ply", "write_ply_blocks", "write_ply_stream", "vertex_columns"]
@@ -78,7 +81,7 @@ def write_ply(path, mesh, float32: bool = False) -> None:
 
 
 def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, triangle_blocks,
-                     float32: bool = False) -> None:
+                     float32: bool = False, triangles_first: bool = False) -> None:
     """Write a tessellation given by blocks as ``write_ply`` writes it whole: the same bytes.
 
     Parameters
@@ -87,17 +90,31 @@ def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, tri
     vertex_blocks : iterable of (points (c, >= 3), normals (c, 3)) float, in vertex order
     triangle_blocks : iterable of (t, 3) int, in order
     float32 : positions and normals as ``float``
+    triangles_first : write the faces first (after the room of the vertices), when the triangle blocks do
+        not depend on the vertex blocks having run: their pages go to the disk meanwhile
     """
     real = "<f4" if float32 else "<f8"
     names = [(axis, real) for axis in ("x", "y", "z", "nx", "ny", "nz")]
     written = [0, 0]
     with open(path, "wb") as f:
         f.write(_header([(name, dtype, None) for name, dtype in names], n_vertices, n_triangles, ("c1surf",)))
+        vertices_at = f.tell()
+        if triangles_first:  # integers only: on the disk while the vertices are computed
+            f.seek(vertices_at + n_vertices * 6 * np.dtype(real).itemsize)
+            for triangles in triangle_blocks:
+                f.write(_face_bytes(triangles))
+                written[1] += triangles.shape[0]
+            f.flush()
+            _start_writeback(f, vertices_at)
+            f.seek(vertices_at)
         for points, normals in vertex_blocks:
-            values = [points[:, 0], points[:, 1], points[:, 2], normals[:, 0], normals[:, 1], normals[:, 2]]
-            f.write(_vertex_bytes([(name, dtype, v) for (name, dtype), v in zip(names, values)]))
+            records = None if float32 else _records(points, normals)
+            if records is None:
+                values = [points[:, 0], points[:, 1], points[:, 2], normals[:, 0], normals[:, 1], normals[:, 2]]
+                records = _vertex_bytes([(name, dtype, v) for (name, dtype), v in zip(names, values)])
+            f.write(records)
             written[0] += points.shape[0]
-        for triangles in triangle_blocks:
+        for triangles in () if triangles_first else triangle_blocks:
             f.write(_face_bytes(triangles))
             written[1] += triangles.shape[0]
     if written != [n_vertices, n_triangles]:
@@ -108,7 +125,28 @@ def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, tri
 def write_ply_stream(path, tessellation, float32: bool = False) -> None:
     """Write a tessellation by blocks (``evaluation.stream.StreamedTessellation``): the bytes of ``write_ply``."""
     write_ply_blocks(path, tessellation.n_vertices, tessellation.n_triangles, tessellation.vertex_blocks(),
-                     tessellation.triangle_blocks(), float32)
+                     tessellation.triangle_blocks(), float32, triangles_first=True)
+
+
+def _start_writeback(f, start: int) -> None:
+    """Have the kernel start writing the file's pages from ``start`` on to the disk, without waiting (Linux), so
+    that ``atomic_output``'s flush before the rename finds less to do."""
+    advise = getattr(os, "posix_fadvise", None)
+    if advise is not None:
+        with contextlib.suppress(OSError):
+            advise(f.fileno(), start, 0, os.POSIX_FADV_DONTNEED)
+
+
+def _records(points: np.ndarray, normals: np.ndarray):
+    """The double records ``x y z nx ny nz`` of a block as they lie in memory, or None: when ``points`` (c, 3) and
+    ``normals`` (c, 3) are the two halves of the rows of one C-contiguous (c, 6) little-endian float64 array (the
+    streamed tessellation's corner table), its bytes are the file's, written without a copy."""
+    if points.shape[1:] != (3,) or points.dtype != np.dtype("<f8") or normals.dtype != np.dtype("<f8"):
+        return None
+    if not (points.strides == normals.strides == (48, 8) and normals.ctypes.data == points.ctypes.data + 24):
+        return None
+    rows = np.lib.stride_tricks.as_strided(points, shape=(points.shape[0], 6), strides=(48, 8), writeable=False)
+    return memoryview(rows.reshape(-1))
 
 
 def _vertex_bytes(columns) -> bytes:
