@@ -214,8 +214,10 @@ def weld_surface_input(mesh: MeshFile, data: SurfaceData | None, tolerance: floa
 def prepare_surface_input(mesh: MeshFile, data: SurfaceData | None, weld: float | None, exact_creases: bool = False):
     """``mesh`` and ``data`` as the construction takes them: welded (``weld_surface_input``), without
     repeated faces (``drop_repeated_surface_faces``), with its interior valence-2 vertices dissolved
-    (``dissolve_surface_input``) and, with ``exact_creases``, the faces of crease sectors too large for
-    an exact C0 crease merged (``merge_surface_sectors``)."""
+    (``dissolve_surface_input``) and, with ``exact_creases``, its non-manifold edges cut into sheets
+    (``split_surface_sheets``, unless ``data.non_manifold`` is "refuse") and the faces of crease sectors
+    too large for an exact C0 crease merged (``merge_surface_sectors``), then dissolved again where that
+    left an interior vertex in two faces."""
     prepared = dissolve_surface_input(*drop_repeated_surface_faces(*weld_surface_input(mesh, data, weld)))
     if not exact_creases:
         return prepared
@@ -280,8 +282,10 @@ def _lookup(keys: np.ndarray, table: np.ndarray, values: np.ndarray) -> np.ndarr
 def merge_surface_sectors(mesh: MeshFile, data: SurfaceData | None):
     """Merge the faces of crease sectors too large for an exact C0 crease (``mesh.creases.sectors``).
 
-    Faces with different blend ratios, hole tags or other per-face data are not merged, nor edges
-    tagged with any sharpness; per-face data and holes follow the merged polygon's lowest face.
+    Faces with different blend ratios, hole tags or other per-face data are not merged, nor semi-sharp
+    crease edges; the first edge of a dart chain inside a corner's sector may go (its tag is dropped from
+    the features and named in a note, ``MeshFile.sector_merge``); per-face data and holes follow the
+    merged polygon's lowest face.
     """
     f = None if data is None else data.features
     if f is None or not np.any(f.crease_sharpness >= INFINITELY_SHARP):
