@@ -14,6 +14,13 @@ ROOT = Path(__file__).resolve().parents[2]
 MESHES = ["cube", "dodecahedron", "twisted", "high_valence", "hexagon_all_six_valent"]
 
 
+def _small_blocks(monkeypatch, tiny: bool) -> None:
+    """With ``tiny``, product blocks of a few points (every block boundary is exercised)."""
+    if tiny:
+        monkeypatch.setattr(layout, "_BLOCK_POINTS", 40)
+        monkeypatch.setattr(layout, "_THREAD_POINTS", 200)
+
+
 def _surfaces(name: str, **kwargs):
     m = read_mesh(ROOT / "sample_meshes" / f"{name}.obj")
     eager = Surface(m.face_sizes, m.face_vertices, m.points, **kwargs)
@@ -24,9 +31,7 @@ def _surfaces(name: str, **kwargs):
 @pytest.mark.parametrize("tiny", [False, True], ids=["default blocks", "tiny blocks"])
 @pytest.mark.parametrize("name", MESHES)
 def test_any_patches_in_any_order_equal_the_arrays(monkeypatch, name, tiny):
-    if tiny:
-        monkeypatch.setattr(layout, "_BLOCK_POINTS", 40)
-        monkeypatch.setattr(layout, "_THREAD_POINTS", 200)
+    _small_blocks(monkeypatch, tiny)
     eager, lazy = _surfaces(name)
     source = lazy.patch_source(cache_bytes=1 << 12 if tiny else None)
     for kind, whole in enumerate((eager.biquadratic, eager.bicubic)):
@@ -127,9 +132,7 @@ def _span_rows_equal_the_arrays(source, wholes) -> None:
 @pytest.mark.parametrize("tiny", [False, True], ids=["default blocks", "tiny blocks"])
 @pytest.mark.parametrize("name", MESHES)
 def test_span_rows_equal_the_arrays(monkeypatch, name, tiny):
-    if tiny:
-        monkeypatch.setattr(layout, "_BLOCK_POINTS", 40)
-        monkeypatch.setattr(layout, "_THREAD_POINTS", 200)
+    _small_blocks(monkeypatch, tiny)
     eager, lazy = _surfaces(name)
     _span_rows_equal_the_arrays(lazy.patch_source(), (eager.biquadratic, eager.bicubic))
 
