@@ -69,8 +69,13 @@ def crease_side_pairs(topology) -> np.ndarray:
     start = np.r_[True, np.any(keys[1:] != keys[:-1], axis=1)]
     group = np.cumsum(start) - 1
     size = np.bincount(group)
-    if np.any(size < 2):
-        raise ValueError("internal: a crease side without a partner")
+    if np.any(size < 2):  # the other side makes no patches (a hole face beyond the crease): a boundary side
+        alone = size[group] < 2
+        keys, curves = keys[~alone], curves[~alone]
+        if keys.shape[0] == 0:
+            return np.zeros((0, 2), dtype=np.int64)
+        start = np.r_[True, np.any(keys[1:] != keys[:-1], axis=1)]
+        group = np.cumsum(start) - 1
     # a piece of k sides (k sheets) is listed as k - 1 pairs, each with the piece's first side
     first = curves[np.flatnonzero(start)][group]
     pairs = np.sort(np.stack([first, curves], axis=1)[~start], axis=1)

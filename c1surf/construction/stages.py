@@ -229,7 +229,9 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
 def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:
     matrix = perturbation_matrix(topology.refined, topology.holes)
     if matrix is not None and topology.crease_sheets is not None:  # C0 creases: ghost partners follow
-        matrix = mirror_perturbation(matrix, topology.refined, topology.real_vertex)
+        coarse_face = topology.input.face[topology.level1.origin[np.arange(topology.refined.n_vertices)]]
+        sheet_ghost = np.isin(coarse_face, topology.crease_sheets.ghost_faces)
+        matrix = mirror_perturbation(matrix, topology.refined, topology.real_vertex, sheet_ghost)
     return None if matrix is None else MatrixStage("perturbation", matrix)
 
 

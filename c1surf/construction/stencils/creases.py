@@ -196,7 +196,8 @@ def mirror_rows(step: csr_matrix, mesh: HalfEdgeMesh, sheets, corner_ratio: np.n
 
 
 
-def mirror_perturbation(matrix: csr_matrix, refined: HalfEdgeMesh, real_vertex: np.ndarray) -> csr_matrix:
+def mirror_perturbation(matrix: csr_matrix, refined: HalfEdgeMesh, real_vertex: np.ndarray,
+                        sheet_ghost: np.ndarray) -> csr_matrix:
     """A1's perturbation with every ghost point next to a C0 crease moved opposite to its real partner.
 
     The second Doo-Sabin step keeps mirrored pairs mirrored; the perturbation of even holes may move
@@ -209,10 +210,13 @@ def mirror_perturbation(matrix: csr_matrix, refined: HalfEdgeMesh, real_vertex: 
     matrix : (Vr, Vr) csr_matrix, the perturbation (identity plus the even holes' corrections)
     refined : HalfEdgeMesh, the twice-refined mesh
     real_vertex : (Vr,) bool, refined points whose patches are kept (the ghost quads' are not)
+    sheet_ghost : (Vr,) bool, refined points of the sheets' ghost quads: only these mirror a partner (the
+        ghost layer closing a boundary that no crease reaches is not mirrored: an even hole there keeps
+        its own perturbation)
     """
     from scipy.sparse import csr_matrix, diags
 
-    crossing = real_vertex[refined.origin] & ~real_vertex[refined.dest]
+    crossing = real_vertex[refined.origin] & sheet_ghost[refined.dest]
     ghost, real = refined.dest[crossing], refined.origin[crossing]
     ghost, first = np.unique(ghost, return_index=True)
     real = real[first]
