@@ -98,11 +98,13 @@ def test_the_fandisk_at_a_crease_angle_is_c0_along_its_feature_lines():
     assert report.relative_crease_gap <= 1e-12 and report.max_normal_jump <= 1e-10
 
 
-@pytest.mark.parametrize("name", ["odedstein-meshes/plane_holes.obj", "opensubdiv/catmark_hole_test1.obj"])
-def test_open_and_holed_meshes_at_a_crease_angle(name):
+@pytest.mark.parametrize("name", ["odedstein-meshes/plane_holes.obj", "opensubdiv/catmark_hole_test1.obj",
+                                  "opensubdiv/catmark_fan.obj"])
+def test_open_holed_and_non_manifold_meshes_at_a_crease_angle(name):
     # plane_holes (open, 27 boundary loops): an even hole at a boundary that no crease reaches keeps its own
     # perturbation (its ghost-layer points are no mirror partners: once 1.5e-3 rad); hole_test1: a crease
-    # along a hole tag's rim has patches on one side only, a boundary side
+    # along a hole tag's rim has patches on one side only, a boundary side; catmark_fan: its fins are folded
+    # at the non-manifold line's middle vertex (a corner there in the fins' sheets, so in the plate's too)
     from c1surf.api import check_surface, surface_from_file
     from conftest import shared_mesh
 

@@ -257,8 +257,9 @@ def split_surface_sheets(mesh: MeshFile, data: SurfaceData | None):
     values = np.r_[f.crease_sharpness, np.full(len(split.seams), INFINITELY_SHARP)]
     sharpness = _lookup(key(source[edges]), tagged, values)  # each copy of a tagged edge keeps its sharpness
     creased = sharpness > 0
-    corners = np.r_[f.corner_vertices, split.corners]
-    corner_sharpness = np.r_[f.corner_sharpness, np.full(split.corners.size, INFINITELY_SHARP)]
+    line_corners = np.union1d(split.corners, _sheet_junctions(mesh, edges[sharpness >= INFINITELY_SHARP], split))
+    corners = np.r_[f.corner_vertices, line_corners]
+    corner_sharpness = np.r_[f.corner_sharpness, np.full(line_corners.size, INFINITELY_SHARP)]
     copies = np.isin(source, corners)
     features = SharpFeatures(edges[creased], sharpness[creased], np.flatnonzero(copies),
                              _lookup(source[copies], corners, corner_sharpness), f.hole_faces, source)
@@ -266,6 +267,24 @@ def split_surface_sheets(mesh: MeshFile, data: SurfaceData | None):
     data = replace(data, points=points, vertex_blend=extend(data.vertex_blend), weights=extend(data.weights),
                    vertex_normals=extend(data.vertex_normals), features=features)
     return mesh, data
+
+
+def _sheet_junctions(mesh: MeshFile, sharp: np.ndarray, split) -> np.ndarray:
+    """(k,) int: vertices of the non-manifold lines that some sheet holds on three or more seam edges (its
+    infinitely sharp and boundary edges, e.g. a fin folded at the line): a corner there, so a corner in
+    every sheet (all sheets build one curve)."""
+    from ...mesh.halfedges import build_halfedges
+
+    n = split.vertex_source.size
+    halves = build_halfedges(mesh.face_sizes, mesh.face_vertices, n)
+    boundary = halves.twin < 0
+    ends = np.r_[sharp.ravel(), halves.origin[boundary], halves.dest[boundary]]
+    pairs = np.r_[np.repeat(np.minimum(*sharp.T) * n + np.maximum(*sharp.T), 2),
+                  np.tile(np.minimum(halves.origin[boundary], halves.dest[boundary]) * n
+                          + np.maximum(halves.origin[boundary], halves.dest[boundary]), 2)]
+    seam_edges = np.bincount(np.unique(np.stack([ends, pairs], axis=1), axis=0)[:, 0], minlength=n)  # distinct edges
+    on_line = np.isin(split.vertex_source, split.seams)
+    return np.unique(split.vertex_source[on_line & (seam_edges >= 3)])
 
 
 def _lookup(keys: np.ndarray, table: np.ndarray, values: np.ndarray) -> np.ndarray:
