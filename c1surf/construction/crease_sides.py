@@ -62,20 +62,23 @@ def crease_side_pairs(topology) -> np.ndarray:
     boundary_keys = open_keys[open_count == 1]  # an edge cut in several sheets is a non-manifold crease
     on_boundary = np.isin(keys[:, 2] * width + keys[:, 3], boundary_keys)
     keys, patch, side = keys[~on_boundary], patch[~on_boundary], side[~on_boundary]  # one side: a boundary
-    if keys.shape[0] == 0:
-        return np.zeros((0, 2), dtype=np.int64)
+    return _pairs_by_key(keys, 4 * patch + side)
+
+
+def _pairs_by_key(keys: np.ndarray, curves: np.ndarray) -> np.ndarray:
+    """(k, 2) int: the curves (c,) that share a key (c, 4) row, paired with the first of their group; a
+    curve alone (the other side makes no patches: a hole face beyond the crease) is a boundary side."""
     order = np.lexsort(keys.T[::-1])
-    keys, curves = keys[order], (4 * patch + side)[order]
-    start = np.r_[True, np.any(keys[1:] != keys[:-1], axis=1)]
-    group = np.cumsum(start) - 1
-    size = np.bincount(group)
-    if np.any(size < 2):  # the other side makes no patches (a hole face beyond the crease): a boundary side
-        alone = size[group] < 2
-        keys, curves = keys[~alone], curves[~alone]
+    keys, curves = keys[order], curves[order]
+    for _ in range(2):  # once more after dropping the curves alone
         if keys.shape[0] == 0:
             return np.zeros((0, 2), dtype=np.int64)
         start = np.r_[True, np.any(keys[1:] != keys[:-1], axis=1)]
         group = np.cumsum(start) - 1
+        alone = np.bincount(group)[group] < 2
+        if not alone.any():
+            break
+        keys, curves = keys[~alone], curves[~alone]
     # a piece of k sides (k sheets) is listed as k - 1 pairs, each with the piece's first side
     first = curves[np.flatnonzero(start)][group]
     pairs = np.sort(np.stack([first, curves], axis=1)[~start], axis=1)
