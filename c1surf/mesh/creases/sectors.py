@@ -91,25 +91,22 @@ def merge_crease_sectors(face_sizes, face_vertices, n_vertices: int, sharp_edges
     for _ in range(3):  # components that stay inexact give their removals back; that may free others
         if not removed.any():
             return None
-        region, valid = _regions(mesh, removed)
-        removed &= valid[region[mesh.face]] & valid[region[mesh.face[np.maximum(mesh.twin, 0)]]]
-        after = _merged(mesh, removed)
+        removed, region = _valid_removals(mesh, removed)
+        after = _merged(mesh, removed, region)
         still = _inexact_components(after, mesh, sharp, corner_tag)
         undo = removed & still[mesh.origin] | removed & still[mesh.dest]
         if not undo.any():
             break
         removed &= ~(undo | undo[np.maximum(mesh.twin, 0)])
-    region, valid = _regions(mesh, removed)
-    removed &= valid[region[mesh.face]] & valid[region[mesh.face[np.maximum(mesh.twin, 0)]]]
+    removed, region = _valid_removals(mesh, removed)
     if not removed.any():
         return None
-    sizes, vertices, kept = _merged(mesh, removed)
-    region, _ = _regions(mesh, removed)
+    sizes, vertices, kept = _merged(mesh, removed, region)
     polygon_size = np.bincount(region, minlength=mesh.n_faces)
     at = np.unique(np.r_[mesh.origin[removed], mesh.dest[removed]])
     seam_vertex = np.zeros(n_vertices, dtype=bool)
     seam_vertex[mesh.origin[sharp | (mesh.twin < 0)]] = True
-    lost = removed & _sharp_halfedges(mesh, sharp_edges)
+    lost = removed & tagged
     lost_edges = np.unique(np.sort(np.stack([mesh.origin[lost], mesh.dest[lost]], axis=1), axis=1), axis=0)
     return SectorMerge(sizes, vertices, kept, int(polygon_size[polygon_size > 1].sum()),
                        int(np.count_nonzero(polygon_size > 1)), at[seam_vertex[at]], lost_edges)
@@ -259,10 +256,17 @@ def _regions(mesh: HalfEdgeMesh, removed: np.ndarray):
     return region, valid
 
 
-def _merged(mesh: HalfEdgeMesh, removed: np.ndarray):
-    """(face_sizes, face_vertices, kept (F,) bool) of ``mesh`` with the faces across ``removed`` edges merged."""
+def _valid_removals(mesh: HalfEdgeMesh, removed: np.ndarray):
+    """(removed less the edges of invalid regions, the regions of what is left): ``_regions``' checks applied."""
+    region, valid = _regions(mesh, removed)
+    removed = removed & valid[region[mesh.face]] & valid[region[mesh.face[np.maximum(mesh.twin, 0)]]]
+    return removed, np.where(valid[region], region, np.arange(mesh.n_faces))  # an invalid region's faces alone
+
+
+def _merged(mesh: HalfEdgeMesh, removed: np.ndarray, region: np.ndarray):
+    """(face_sizes, face_vertices, kept (F,) bool) of ``mesh`` with the faces across ``removed`` edges merged
+    (``region``: ``_regions`` of ``removed``)."""
     h = np.arange(mesh.n_halfedges)
-    region, _ = _regions(mesh, removed)
     keep = ~removed
     # the next boundary half-edge of a region: next, and across removed edges around the vertex
     following = mesh.next.astype(np.int64).copy()
