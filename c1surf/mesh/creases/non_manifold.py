@@ -58,15 +58,15 @@ def split_non_manifold_edges(face_sizes, face_vertices, n_vertices: int) -> Shee
     """
     face_sizes = np.asarray(face_sizes, dtype=np.int64)
     face_vertices = np.asarray(face_vertices, dtype=np.int64)
-    if _repeated_vertex_sets(face_sizes, face_vertices):
-        return None  # a face listed twice (with both orientations) is no sheet: the repair refuses it by its lines
     mesh = build_halfedges(face_sizes, face_vertices, n_vertices)
     a, b = mesh.origin, mesh.dest
     key = np.minimum(a, b) * n_vertices + np.maximum(a, b)
     unique, inverse, counts = np.unique(key, return_inverse=True, return_counts=True)
     per_half = counts[inverse.ravel()]
     if per_half.max(initial=0) <= 2:
-        return None
+        return None  # every mesh without such edges stops here, before the costlier test below
+    if _repeated_vertex_sets(face_sizes, face_vertices):
+        return None  # a face listed twice (with both orientations) is no sheet: the repair refuses it by its lines
     # corners (half-edge h: the corner at origin[h] in face[h]) joined across edges in exactly two faces,
     # whichever way the two run (orientation is repaired later)
     two = np.flatnonzero(per_half == 2)
