@@ -1,9 +1,11 @@
 """``c1surf check``: measure tangent-plane continuity across every shared patch edge."""
 from __future__ import annotations
 
+import math
 from pathlib import Path
 
 import click
+from click.core import ParameterSource
 
 from ..evaluation.patch_set import PatchSet, surface_patch_set
 from ..evaluation.smoothness import measure_smoothness
@@ -36,6 +38,21 @@ def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
     return surface_patch_set(surface, str(path))
 
 
+CREASE_HINT = math.radians(1.0)  # a normal jump no G1 surface has: a crease, most likely
+
+
+def patch_file_crease_angle(shape: dict, weld, no_weld) -> float | None:
+    """``--crease-angle`` for a patch file (the edges whose normals jump by more are creases); a note names the
+    options given that only a mesh input uses (a patch file is measured as it is)."""
+    context = click.get_current_context()
+    given = [name for name in (*shape, "weld", "no_weld") if name != "crease_angle"
+             and context.get_parameter_source(name) not in (None, ParameterSource.DEFAULT)]
+    if given:
+        flags = ", ".join("--" + name.replace("_", "-") for name in given)
+        click.echo(f"c1surf: note: {flags}: used only when the input is a mesh, not for a patch file", err=True)
+    return shape.get("crease_angle")
+
+
 @click.command()
 @click.argument("path", metavar="PATCHES|INPUT", type=click.Path(dir_okay=False))
 @click.option("--tolerance", type=float, default=1e-9, show_default=True,
@@ -58,11 +75,19 @@ def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
     jump and exits 1 when the surface is not G1 to within --tolerance. The
     crease edges a patch file lists (`convert --exact-creases`) must be shared
     by their two sides to within --tolerance and are not measured for G1.
+    IGES and STEP files list none: there --crease-angle DEG makes the shared
+    edges whose normals jump by more than DEG creases (measured for the gap).
     """
+    patch_file = Path(path).suffix.lower() in PATCH_READERS
+    bend = patch_file_crease_angle(shape, weld, no_weld) if patch_file else None
     patch_set = read_or_build(path, shape, weld_tolerance(weld, no_weld))
     groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
+    if bend is not None and patch_set.crease_sides is not None:
+        click.echo(f"c1surf: note: {path} lists its crease sides: --crease-angle is not used", err=True)
+        bend = None
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,
-                                unoriented=unoriented, crease_sides=patch_set.crease_sides)
+                                unoriented=unoriented, crease_sides=patch_set.crease_sides,
+                                crease_angle=None if bend is None else math.radians(bend))
     n_patches = sum(len(g) for g in groups)
     click.echo(f"patches:          {n_patches}")
     click.echo(f"shared edges:     {report.shared_edges}")
@@ -76,7 +101,15 @@ def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
                    f"{report.max_crease_gap:.3e} ({report.relative_crease_gap:.3e} of the bounding box)")
         if report.unpaired_crease_sides:
             click.echo(f"crease edges whose two sides do not meet: {report.unpaired_crease_sides}")
+    elif bend is not None:  # a file without the list (IGES, STEP): the edges bending more than DEG
+        click.echo(f"crease edges:     {report.crease_edges} bending more than {bend:g} degrees, max gap "
+                   f"{report.max_crease_gap:.3e} ({report.relative_crease_gap:.3e} of the bounding box)")
     ok = report.is_g1(tolerance, tolerance)
     click.echo(f"G1: {'yes' if ok else 'NO'} (tolerance {tolerance:g})")
+    if patch_file and patch_set.crease_sides is None and bend is None and report.max_normal_jump > CREASE_HINT:
+        click.echo(f"c1surf: note: {path} lists no crease sides (c1surf's IGES and STEP files do not), so every shared edge "
+                   f"is measured for G1, and some bend by {math.degrees(report.max_normal_jump):.3g} degrees: "
+                   "pass --crease-angle DEG to measure the edges bending more than DEG as creases (their gap only)",
+                   err=True)
     if not ok:
         raise click.exceptions.Exit(1)

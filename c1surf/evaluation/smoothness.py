@@ -100,7 +100,7 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
 
 
 def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False, tolerance: float = 1e-9,
-                       weights=None, crease_sides=None) -> SmoothnessReport:
+                       weights=None, crease_sides=None, crease_angle: float | None = None) -> SmoothnessReport:
     """Sample every shared patch edge; measure position gap and normal jump.
 
     Parameters
@@ -113,6 +113,8 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     tolerance : float, relative distance below which two points are the same
     crease_sides : (k, 2) int or None, curve ids ``4 p + s`` of the two sides of each C0 crease piece:
         found shared by those two sides, they are measured for their gap only
+    crease_angle : float (radians) or None: without ``crease_sides``, every shared edge whose normals
+        differ by more than this somewhere along it is a crease piece (files that list none: IGES, STEP)
 
     Returns
     -------
@@ -144,6 +146,9 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     pb_r = np.repeat(second // 4, samples)
     gap = np.linalg.norm(xa - xb, axis=1)
     angle = normal_angles(na, nb, unoriented)
+    if crease_sides is None and crease_angle is not None:  # the edges that bend more: measured as creases
+        bent = angle.reshape(-1, samples).max(axis=1) > crease_angle
+        crease_sides = np.stack([first[bent], second[bent]], axis=1)
     gap, angle, creases = _set_creases_apart(gap, angle, first, second, crease_sides, samples)
     overshared = _sheet_creases(creases, sides, patches, crease_sides, t, weights is not None, tolerance * diagonal)
     worst = int(np.argmax(angle))

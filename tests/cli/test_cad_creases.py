@@ -27,7 +27,7 @@ def converted(request, tmp_path_factory):
     mesh = boss_box(m, seed)
     write_obj(d / "part.obj", *mesh)
     result = run("convert", d / "part.obj", "-o", d / "part.ply", "-r", 3, "--crease-angle", 40, "--exact-creases",
-                 "--patches", d / "part.json", "--patches", d / "part.step")
+                 "--patches", d / "part.json", "--patches", d / "part.step", "--patches", d / "part.igs")
     assert result.exit_code == 0, result.output
     return d, mesh, m, result
 
@@ -81,6 +81,29 @@ def test_the_step_file_is_one_valid_closed_solid(converted):
     d, *_ = converted
     shape = read_step(d / "part.step")
     assert len(ocp_shapes(shape, TopAbs_SOLID)) == 1 and BRepCheck_Analyzer(shape).IsValid()
+
+
+@pytest.mark.parametrize("suffix", [".step", ".igs"])
+def test_check_of_a_cad_file_measures_the_edges_bending_more_than_the_crease_angle_as_creases(converted, suffix):
+    # IGES and STEP files list no crease sides: without --crease-angle every crease is a normal jump (and a
+    # note says what to pass); with it the edges bending more are measured for their gap, the rest for G1
+    pytest.importorskip("OCP")
+    d, (sizes, corners, points), *_ = converted
+    path = d / f"part{suffix}"
+    plain = run("check", path)
+    assert plain.exit_code == 1 and "G1: NO" in plain.output
+    assert "lists no crease sides" in plain.stderr and "--crease-angle" in plain.stderr
+    check = run("check", path, "--crease-angle", 20, "--blend", 0.3)
+    assert check.exit_code == 0, check.output
+    found = re.search(r"crease edges: +(\d+) bending more than 20 degrees, max gap \S+ \((\S+) of the bounding box\)",
+                      check.output)
+    listed = re.search(r"crease edges: +(\d+) of", run("check", d / "part.json").output)
+    assert found[1] == listed[1]  # the same pieces as the JSON file lists (the merged faces split back into patches)
+    assert float(found[2]) <= 1e-12
+    assert float(re.search(r"max normal jump: +(\S+) rad", check.output)[1]) <= 1e-10
+    assert "--blend: used only when the input is a mesh" in check.stderr
+    json_note = run("check", d / "part.json", "--crease-angle", 20)
+    assert "lists its crease sides: --crease-angle is not used" in json_note.stderr
 
 
 def test_the_fandisk_at_a_crease_angle_is_c0_along_its_feature_lines():
