@@ -22,7 +22,8 @@ process for the largest outputs):
 3. a 100,000-triangle torus at the default resolution (-r 8);
 4. quad tori up to 4,000,000 faces (c1surf only above 400,000; its in-memory
    worker only up to ``--max-memory-faces``);
-5. the tessellation throughput at N=8 against the numpy limit (positions only);
+5. the tessellation throughput at N=8 against two numpy limits: all outputs (positions, unit normals,
+   triangles of every sample, unwelded) and positions only (one GEMM);
 6. fidelity: distances from the input's vertices to each tool's surface and the
    enclosed volume (spot, sword, small tori);
 7. ``--tolerance`` (when this c1surf has it): triangles against the uniform

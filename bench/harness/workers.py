@@ -137,26 +137,74 @@ def work_throughput(job):
 
 
 def work_limit(job):
-    """The numpy limit: bicubic patches on an 8 x 8 grid as one dense product, positions only (no normals, no triangles)."""
-    from scipy.special import comb
+    """The numpy limits of a tessellation at N = 8 of bicubic patches, two ways (what each counts is in its name):
 
+    "positions only": one dense product of the basis and coefficient-major coefficients, nothing else;
+    "all outputs": what a tessellation writes for every sample, unwelded: its position and unit normal
+    (one product with the bases of the values and both derivatives, then cross product and norm) and the
+    triangles of the patch grid (a template shifted per patch), into arrays of the output's layout
+    (points (V, 3), normals (V, 3), int32 triangles (T, 3)), by blocks of patches as c1surf works.
+    """
     from c1surf.cli import runtime
 
     runtime.tune_allocator()  # the same allocator setting as the c1surf workers
     patches, n = job["patches"], 8
-    coefficients = np.random.default_rng(0).standard_normal((16, 3 * patches))  # coefficient-major: one GEMM
-    t = np.linspace(0.0, 1.0, n)
-    i = np.arange(4)
-    b = comb(3, i) * t[:, None] ** i * (1 - t[:, None]) ** (3 - i)
-    basis = np.einsum("ai,bj->abij", b, b).reshape(n * n, 16)
-    times = []
-    for _ in range(job.get("repeats", 3) + 1):
-        start = time.perf_counter()
-        samples = basis @ coefficients  # fresh output, like any evaluation
-        times.append(time.perf_counter() - start)
-        del samples
-    times = times[1:]  # the first touches the output's pages
-    return {"patches": patches, "resolution": n, "samples": patches * n * n, "seconds": statistics.median(times),
-            "samples_per_second": patches * n * n / statistics.median(times),
-            "best_samples_per_second": patches * n * n / min(times), "counts": "positions only"}
+    rng = np.random.default_rng(0)
+    value, du, dv = _bicubic_bases(n)
+    coefficients = rng.standard_normal((16, 3 * patches))  # coefficient-major: one GEMM
+    positions = _best_of(job.get("repeats", 3), lambda: value @ coefficients)  # fresh output, like any evaluation
+    del coefficients
+    patch_major = rng.standard_normal((patches, 16, 3))
+    outputs = _best_of(job.get("repeats", 3), lambda: _all_outputs(patch_major, value, du, dv, n))
+    samples = patches * n * n
+    result = {"patches": patches, "resolution": n, "samples": samples}
+    for key, times in (("positions only", positions), ("all outputs", outputs)):
+        result[key] = {"seconds": statistics.median(times), "samples_per_second": samples / statistics.median(times),
+                       "best_samples_per_second": samples / min(times)}
+    result.update(result["positions only"], counts="positions only")  # the version-2 fields: the positions' limit
+    return result
 
+
+def _bicubic_bases(n: int):
+    """(n n, 16) float each: the bicubic Bernstein basis at the n x n grid, and its u and v derivatives."""
+    from scipy.special import comb
+
+    t = np.linspace(0.0, 1.0, n)
+    b = comb(3, np.arange(4)) * t[:, None] ** np.arange(4) * (1 - t[:, None]) ** (3 - np.arange(4))
+    lower = comb(2, np.arange(3)) * t[:, None] ** np.arange(3) * (1 - t[:, None]) ** (2 - np.arange(3))
+    db = 3 * (np.pad(lower, ((0, 0), (1, 0))) - np.pad(lower, ((0, 0), (0, 1))))  # d/dt of the cubic basis
+    grid = lambda x, y: np.einsum("ai,bj->abij", x, y).reshape(n * n, 16)
+    return grid(b, b), grid(db, b), grid(b, db)
+
+
+def _best_of(repeats: int, run) -> list:
+    """Seconds of ``repeats`` calls of ``run`` after a first one (which touches the output's pages)."""
+    times = []
+    for _ in range(repeats + 1):
+        start = time.perf_counter()
+        out = run()
+        times.append(time.perf_counter() - start)
+        del out
+    return times[1:]
+
+
+def _all_outputs(coefficients: np.ndarray, value, du, dv, n: int, block: int = 4096):
+    """(points (P n n, 3), normals (P n n, 3), triangles (2 P (n-1)^2, 3) int32) of (P, 16, 3) bicubic patches."""
+    p, m = coefficients.shape[0], n * n
+    stacked = np.concatenate([value, du, dv]).T.copy()  # (16, 3 m)
+    points, normals = np.empty((p * m, 3)), np.empty((p * m, 3))
+    q = (np.arange(n - 1)[:, None] * n + np.arange(n - 1)).ravel()
+    template = np.concatenate([np.stack([q, q + 1, q + n + 1], -1), np.stack([q, q + n + 1, q + n], -1)]).astype(np.int32)
+    triangles = np.empty((p * template.shape[0], 3), dtype=np.int32)
+    for a in range(0, p, block):
+        z = min(a + block, p)
+        rows = (coefficients[a:z].transpose(0, 2, 1).reshape(-1, 16) @ stacked).reshape(z - a, 3, 3, m)
+        points[a * m : z * m].reshape(z - a, m, 3)[:] = rows[:, :, 0].transpose(0, 2, 1)
+        u, v = rows[:, :, 1], rows[:, :, 2]  # (b, 3, m)
+        cross = np.stack([u[:, 1] * v[:, 2] - u[:, 2] * v[:, 1], u[:, 2] * v[:, 0] - u[:, 0] * v[:, 2],
+                          u[:, 0] * v[:, 1] - u[:, 1] * v[:, 0]], axis=-1)  # (b, m, 3)
+        cross /= np.sqrt(np.einsum("...i,...i->...", cross, cross))[..., None]
+        normals[a * m : z * m] = cross.reshape(-1, 3)
+        shift = (np.arange(a, z, dtype=np.int32) * m)[:, None, None]
+        triangles[a * template.shape[0] : z * template.shape[0]].reshape(z - a, -1, 3)[:] = template + shift
+    return points, normals, triangles
