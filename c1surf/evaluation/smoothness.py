@@ -113,8 +113,8 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     tolerance : float, relative distance below which two points are the same
     crease_sides : (k, 2) int or None, curve ids ``4 p + s`` of the two sides of each C0 crease piece:
         found shared by those two sides, they are measured for their gap only
-    crease_angle : float (radians) or None: without ``crease_sides``, every shared edge whose normals
-        differ by more than this somewhere along it is a crease piece (files that list none: IGES, STEP)
+    crease_angle : float (radians) or None: without ``crease_sides``, the shared edges whose normals
+        differ by more somewhere are crease pieces (for files that list none: IGES, STEP)
 
     Returns
     -------
@@ -139,16 +139,13 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
                                 unpaired_crease_sides=0 if crease_sides is None else len(crease_sides))
 
     t = np.linspace(0.0, 1.0, samples)
-    reversed_ = sides.reversed
     xa, na = side_frames(patches, first, t, rational=weights is not None)
-    xb, nb = side_frames(patches, second, t, reversed_, rational=weights is not None)
-    pa_r = np.repeat(first // 4, samples)
-    pb_r = np.repeat(second // 4, samples)
+    xb, nb = side_frames(patches, second, t, sides.reversed, rational=weights is not None)
+    pa_r, pb_r = np.repeat(first // 4, samples), np.repeat(second // 4, samples)
     gap = np.linalg.norm(xa - xb, axis=1)
     angle = normal_angles(na, nb, unoriented)
-    if crease_sides is None and crease_angle is not None:  # the edges that bend more: measured as creases
-        bent = angle.reshape(-1, samples).max(axis=1) > crease_angle
-        crease_sides = np.stack([first[bent], second[bent]], axis=1)
+    if crease_sides is None and crease_angle is not None:  # the edges that bend more than it: crease pieces
+        crease_sides = _bent_sides(angle, first, second, crease_angle)
     gap, angle, creases = _set_creases_apart(gap, angle, first, second, crease_sides, samples)
     overshared = _sheet_creases(creases, sides, patches, crease_sides, t, weights is not None, tolerance * diagonal)
     worst = int(np.argmax(angle))
@@ -170,6 +167,13 @@ def normal_angles(na: np.ndarray, nb: np.ndarray, unoriented: bool = False) -> n
     dot = np.einsum("ij,ij->i", na, nb)
     angle = np.arctan2(np.linalg.norm(np.cross(na, nb), axis=1), np.abs(dot) if unoriented else dot)
     return np.where(np.isnan(angle), 0.0, angle)  # singular points (zero-length derivative) have no normal
+
+
+def _bent_sides(angle: np.ndarray, first: np.ndarray, second: np.ndarray, crease_angle: float) -> np.ndarray:
+    """(k, 2) int: the matched side pairs whose normals differ by more than ``crease_angle`` somewhere along
+    them (``angle``: (pairs * samples,) radians), to be measured as crease pieces."""
+    bent = angle.reshape(first.size, -1).max(axis=1) > crease_angle
+    return np.stack([first[bent], second[bent]], axis=1)
 
 
 def _set_creases_apart(gap: np.ndarray, angle: np.ndarray, first, second, crease_sides, samples: int):
