@@ -255,7 +255,11 @@ def refine(coarse: HalfEdgeMesh, levels: int):
         return None, None, coarse
     faces1 = refine_doo_sabin(coarse)
     level1 = refined_halfedges(coarse, faces1)
-    refined = level1 if levels == 1 else refined_halfedges(level1, refine_doo_sabin(level1))
+    coarse.release_prev()  # read by the rotations of the refinement only, unless there are creases
+    if levels == 1:
+        return faces1, level1, level1
+    refined = refined_halfedges(level1, refine_doo_sabin(level1))
+    level1.release_prev()  # 0.25 GB for the 4,000,000-quad torus
     return faces1, level1, refined
 
 

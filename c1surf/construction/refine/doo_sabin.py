@@ -105,8 +105,9 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
       twin in the E-face of ``prev[h]``'s edge.
 
     Boundary half-edges (the coarse edge or vertex has no E- or V-face) get -1. The F-faces' part of
-    ``face`` and ``next`` is the coarse mesh's, the E-faces are quads in a row; ``prev`` is made from
-    ``next`` when first read (``HalfEdgeMesh.prev``).
+    ``next`` is the coarse mesh's, the E-faces are quads in a row; ``face_offsets``, ``face`` and ``prev``
+    are made when first read (``HalfEdgeMesh``), so the only per-half-edge arrays made here are ``next``
+    and ``twin`` (and the refined faces' ``face_vertices`` are its ``origin``).
 
     Parameters
     ----------
@@ -124,9 +125,7 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     t = np.take(mesh.twin, rep).astype(index, copy=False)
     ring_start = n_half + 4 * n_edges
     n_fine = faces.face_vertices.size
-    offsets = np.zeros(faces.face_sizes.size + 1, dtype=np.int64)
-    np.cumsum(faces.face_sizes, out=offsets[1:])
-    face, nxt = _refined_cycles(mesh, offsets, n_edges, n_fine, index)
+    nxt = _refined_next(mesh, faces.face_sizes[n_faces + n_edges :], n_edges, n_fine, index)
     # twins: F-face half-edge h and its E-face side (0 for rep, 2 for t) ...
     twin = np.full(n_fine, -1, dtype=index)
     side = np.arange(n_half, ring_start, 4, dtype=index)
@@ -147,33 +146,27 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     ends *= -2
     ends += across
     ends += 3  # across + 3 - 2 ((across - H) & 3)
-    return HalfEdgeMesh(int(n_half), faces.face_sizes, offsets, faces.face_vertices, face, nxt, None, twin)  # prev: later
+    # face offsets, face and prev: made when first read (the twice-refined mesh's offsets and face are read
+    # once the stages are gone, if at all: 1.5 GB for the 4,000,000-quad torus)
+    return HalfEdgeMesh(int(n_half), faces.face_sizes, None, faces.face_vertices, None, nxt, None, twin)
 
 
-def _refined_cycles(mesh: HalfEdgeMesh, offsets: np.ndarray, n_edges: int, n_fine: int, index):
-    """``face``, ``next`` (n_fine,) of the refined mesh (``refined_halfedges``): the F-faces' are the coarse
-    mesh's, the E-faces are quads in a row, the V-faces cycles of their sizes (``_cycles``)."""
-    n_half, n_faces = mesh.n_halfedges, mesh.n_faces
+def _refined_next(mesh: HalfEdgeMesh, ring_sizes: np.ndarray, n_edges: int, n_fine: int, index) -> np.ndarray:
+    """``next`` (n_fine,) of the refined mesh (``refined_halfedges``): the F-faces' is the coarse mesh's, the
+    E-faces are quads in a row, the V-faces (sizes ``ring_sizes``) cycles of their sizes."""
+    n_half = mesh.n_halfedges
     ring_start = n_half + 4 * n_edges
-    face, nxt = np.empty(n_fine, dtype=index), np.empty(n_fine, dtype=index)
-    face[:n_half], nxt[:n_half] = mesh.face, mesh.next
-    # E-faces: long runs of arange, then every fourth entry wrapped (broadcasting over rows of 4 runs
+    nxt = np.empty(n_fine, dtype=index)
+    nxt[:n_half] = mesh.next
+    # E-faces: a long run of arange, then every fourth entry wrapped (broadcasting over rows of 4 runs
     # inner loops of 4 and is 3x slower)
-    e_face, e_next = face[n_half:ring_start], nxt[n_half:ring_start]
-    np.right_shift(np.arange(4 * n_edges, dtype=index), 2, out=e_face)
-    e_face += n_faces
+    e_next = nxt[n_half:ring_start]
     e_next[:] = np.arange(n_half + 1, ring_start + 1, dtype=index)
     e_next[3::4] -= 4
-    _cycles(offsets[n_faces + n_edges :], n_faces + n_edges, face[ring_start:], nxt[ring_start:])
-    return face, nxt
-
-
-def _cycles(offsets: np.ndarray, first_face: int, face: np.ndarray, nxt: np.ndarray) -> None:
-    """Fill ``face``, ``nxt`` (n,) of the faces whose half-edges start at ``offsets`` (k + 1,), numbered
-    from ``first_face``: each face's half-edges in a cycle (``halfedges.face_cycles``, shifted)."""
-    start = int(offsets[0])
-    sizes = np.diff(offsets)
-    face[:] = np.repeat(np.arange(first_face, first_face + sizes.size, dtype=face.dtype), sizes)
-    nxt[:] = np.arange(start + 1, start + nxt.size + 1, dtype=nxt.dtype)
-    if sizes.size:
-        nxt[offsets[1:] - 1 - start] = offsets[:-1]
+    # V-faces: each face's half-edges in a cycle (``halfedges.face_cycles``, shifted)
+    v_next = nxt[ring_start:]
+    v_next[:] = np.arange(ring_start + 1, n_fine + 1, dtype=index)
+    if ring_sizes.size:
+        ends = np.cumsum(ring_sizes)  # one past each V-face's last half-edge, from ring_start
+        v_next[ends - 1] = ring_start + ends - ring_sizes
+    return nxt

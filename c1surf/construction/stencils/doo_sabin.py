@@ -120,6 +120,17 @@ def doo_sabin_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray) ->
     return out.reshape((mesh.n_halfedges,) + x.shape[1:])
 
 
+def compact_ratio(ratio) -> np.ndarray:
+    """(H,) float64 ``ratio``, or, when every entry has the same bits, one value broadcast to (H,) (read-only,
+    no memory: the ratios of a quad mesh's second step are 0.5 GB for the 4,000,000-quad torus)."""
+    ratio = np.asarray(ratio, dtype=np.float64)
+    if ratio.ndim == 1 and ratio.size > 1:
+        bits = ratio.view(np.int64)
+        if np.all(bits == bits[0]):  # bits, not values: 0.0 and -0.0 stay apart
+            return np.broadcast_to(ratio[:1].copy(), ratio.shape)
+    return ratio
+
+
 class FirstDooSabinStep:
     """The first Doo-Sabin step as a stage (``construction.stages.Stage``): ``doo_sabin_matrix``'s map, applied
     by ``doo_sabin_rows`` until the matrix is asked for (``matrix``, ``reuse``), then by the matrix.
@@ -135,7 +146,7 @@ class FirstDooSabinStep:
 
     def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_1"):
         self.name, self.mesh = name, mesh
-        self.ratio = np.asarray(ratio, dtype=np.float64)
+        self.ratio = compact_ratio(ratio)
         self.shape = (mesh.n_halfedges, mesh.n_vertices)
         self._matrix = None
 
@@ -216,7 +227,7 @@ class DooSabinStep:
     def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_2", correction=None):
         self.name = name
         self.mesh = mesh
-        self.ratio = np.asarray(ratio, dtype=np.float64)
+        self.ratio = compact_ratio(ratio)
         self.correction = correction
         self.shape = (mesh.n_halfedges, mesh.n_vertices)
         self._matrix = None
