@@ -25,6 +25,13 @@ from .refine.fewer_steps import check_refinements, fewer_refinement_sources, ref
 from .refine.holes import HoleGroup, hole_neighbourhoods, patch_frames
 
 
+# From this many refined half-edges on (the 1,000,000-quad torus has 64M: its twin is 256 MB), the refined mesh's
+# twin is let go once the patch frames are made, and made again if read (``HalfEdgeMesh.release_twin``): the
+# stages never read it, nor a streamed tessellation at resolution 2, and the patch adjacency of its sides
+# (-r 3 and more, patch files, the in-memory path) reads it once the stages are gone. Smaller meshes keep it.
+RELEASED_TWIN_HALFEDGES = 1 << 25
+
+
 @dataclass(frozen=True)
 class SurfaceTopology:
     """The refined connectivity of a Surface and which patches it has.
@@ -175,6 +182,8 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     real_vertex = real_refined_vertices(coarse, level1, refined, real_face, levels)
     holes = hole_neighbourhoods(refined, None if real_face.all() else real_vertex)
     frames, n_quad, real_cubic = patch_frames(refined, holes, real_vertex)  # bicubic patches at real corners only
+    if refined.n_halfedges >= RELEASED_TWIN_HALFEDGES:
+        refined.release_twin()  # made again if read: the stages and a tessellation at -r 2 never do
     sizes = np.concatenate([np.full(g.cells.size, g.n) for g in holes]) if holes else np.zeros(0, dtype=np.int64)
     return SurfaceTopology(
         n_input_vertices=int(n_vertices), n_input_faces=int(face_sizes.size), repairs=repairs,

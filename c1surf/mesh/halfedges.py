@@ -8,6 +8,7 @@ half-edges.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -35,8 +36,10 @@ class HalfEdgeMesh:
     ``prev`` from ``next`` (a refined mesh's: for the 4,000,000-quad torus the
     twice-refined mesh's ``face`` is 1 GB and its offsets 0.5 GB, which a
     conversion reads only once the stages are gone, or never; its ``prev``,
-    1 GB, nothing reads when the mesh has no holes). ``release_prev`` lets a
-    ``prev`` made so go again.
+    1 GB, nothing reads when the mesh has no holes). ``release_prev`` lets
+    ``prev`` go again. A refined mesh also knows how to make its ``twin``
+    again (``remake_twin``, from the coarser mesh): ``release_twin`` lets it go
+    until it is read again.
     """
 
     n_vertices: int
@@ -46,7 +49,20 @@ class HalfEdgeMesh:
     _face: np.ndarray | None
     next: np.ndarray
     _prev: np.ndarray | None
-    twin: np.ndarray
+    _twin: np.ndarray | None
+    remake_twin: Callable[[], np.ndarray] | None = None
+
+    @property
+    def twin(self) -> np.ndarray:
+        """(H,) int, opposite half-edge in the neighbouring face, -1 on a boundary."""
+        if self._twin is None and self.remake_twin is not None:
+            object.__setattr__(self, "_twin", self.remake_twin())
+        return self._twin
+
+    def release_twin(self) -> None:
+        """Let ``twin`` go if it can be made again (``remake_twin``; the same values the next time it is read)."""
+        if self.remake_twin is not None:
+            object.__setattr__(self, "_twin", None)
 
     @property
     def face_offsets(self) -> np.ndarray:
@@ -75,7 +91,7 @@ class HalfEdgeMesh:
         return self._prev
 
     def release_prev(self) -> None:
-        """Let ``prev`` go (it is made again from ``next`` if read again: the same values, ``next``'s type).
+        """Let ``prev`` go (made again from ``next`` if read again: the same values, ``next``'s type, as given).
 
         For a holder done with the rotations: the refinement reads the coarse and once-refined meshes'
         (0.13 and 0.25 GB for the 4,000,000-quad torus); the stages of a mesh without creases never do.

@@ -13,6 +13,7 @@ Where the new points go is ``stencils.doo_sabin``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -119,19 +120,39 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     HalfEdgeMesh with ``mesh.n_halfedges`` vertices
     """
     index = faces.face_vertices.dtype
-    n_half, n_faces = mesh.n_halfedges, mesh.n_faces
+    n_faces, n_fine = mesh.n_faces, faces.face_vertices.size
     n_edges = int(np.count_nonzero(faces.kind == FACE_FROM_EDGE))
-    rep = faces.parent[n_faces : n_faces + n_edges].astype(index)  # E-faces follow the F-faces
+    nxt = _refined_next(mesh, faces.face_sizes[n_faces + n_edges :], n_edges, n_fine, index)
+    twin = _refined_twin(mesh, faces.parent[n_faces : n_faces + n_edges], faces.face_vertices)
+    # face offsets, face and prev: made when first read (the twice-refined mesh's offsets and face are read
+    # once the stages are gone, if at all: 1.5 GB for the 4,000,000-quad torus); twin can be made again
+    return HalfEdgeMesh(int(mesh.n_halfedges), faces.face_sizes, None, faces.face_vertices, None, nxt, None, twin,
+                        remake_twin=partial(_remade_twin, mesh, faces.face_vertices))
+
+
+def _remade_twin(mesh: HalfEdgeMesh, origin: np.ndarray) -> np.ndarray:
+    """The refined mesh's ``twin`` again (``HalfEdgeMesh.remake_twin``), from the coarse ``mesh`` and the refined
+    ``origin``: its E-faces' half-edges are the coarse ones below their twins, in order (``refine_doo_sabin``)."""
+    h = np.arange(mesh.n_halfedges, dtype=origin.dtype)
+    twin = _refined_twin(mesh, h[h < mesh.twin], origin)
+    mesh.release_prev()  # made for this: the coarse mesh's holder had let it go (``topology.refine``)
+    return twin
+
+
+def _refined_twin(mesh: HalfEdgeMesh, rep: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """(H',) ``twin`` of the refined mesh (``refined_halfedges``) whose half-edges start at ``origin`` (H',), refined
+    from ``mesh``; ``rep`` (E,): the coarse half-edge of every E-face (the refined faces' ``parent`` there)."""
+    index, n_half, n_fine = origin.dtype, mesh.n_halfedges, origin.size
+    n_edges = rep.size
+    rep = rep.astype(index, copy=False)
     t = np.take(mesh.twin, rep).astype(index, copy=False)
     ring_start = n_half + 4 * n_edges
-    n_fine = faces.face_vertices.size
-    nxt = _refined_next(mesh, faces.face_sizes[n_faces + n_edges :], n_edges, n_fine, index)
     # twins: F-face half-edge h and its E-face side (0 for rep, 2 for t) ...
     twin = np.full(n_fine, -1, dtype=index)
     side = np.arange(n_half, ring_start, 4, dtype=index)
     twin[rep], twin[t] = side, side + 2
     # ... the E-faces' sides 1 and 3 in the V-faces of the edge's ends ...
-    ring = faces.face_vertices[ring_start:]
+    ring = origin[ring_start:]
     ring_slot = np.full(n_half, -1, dtype=index)  # where each coarse half-edge is in its vertex's V-face
     ring_slot[ring] = np.arange(ring_start, n_fine, dtype=index)
     e_twin = twin[n_half:ring_start].reshape(n_edges, 4)
@@ -146,9 +167,7 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     ends *= -2
     ends += across
     ends += 3  # across + 3 - 2 ((across - H) & 3)
-    # face offsets, face and prev: made when first read (the twice-refined mesh's offsets and face are read
-    # once the stages are gone, if at all: 1.5 GB for the 4,000,000-quad torus)
-    return HalfEdgeMesh(int(n_half), faces.face_sizes, None, faces.face_vertices, None, nxt, None, twin)
+    return twin
 
 
 def _refined_next(mesh: HalfEdgeMesh, ring_sizes: np.ndarray, n_edges: int, n_fine: int, index) -> np.ndarray:

@@ -78,17 +78,19 @@ class StreamedSurface:
             return_freed_memory()  # the stages, if the caller dropped the Surface
             if self._keep_sources:
                 self._sources = surface_source_ids(topology, compact=True)
-            face, twin = topology.refined.face, topology.refined.twin
+            # twin only for the sides (the build may have let it go: ``topology.build_topology``; made again here)
+            face, twin = topology.refined.face, topology.refined.twin if self._sides else None
             frames = (topology.quad_frames, topology.cubic_frames)  # as parts: no (P, 4) concatenation
             del topology  # the refined meshes of both steps, the coarse mesh, ...: everything but these arrays
+            self.source.keep_slot_arrays()  # of the refined mesh, only its origin and next from here on
             return_freed_memory()
             corners = corner_labels(face, frames)
             del face
-            self.source.keep_slot_arrays()  # the refined mesh's face and twin, sizes and offsets go now or below
             return_freed_memory()
             if not self._sides:
-                del twin, frames
+                del frames
                 self._adjacency = adjacency_from_corner_labels(corners)
+                return_freed_memory()  # the renumbering's tables
                 return self._adjacency
             edges, forward = side_labels(twin, frames)
             del twin, frames
