@@ -28,10 +28,10 @@ class RefinedFaces:
 
     Attributes
     ----------
-    face_sizes : (F',) int64
+    face_sizes : (F',) int (int32 when the fine half-edges fit, as ``face_vertices``)
     face_vertices : (sum(face_sizes),) int (int32 when it fits), indices of fine vertices (= coarse half-edges)
-    kind : (F',) int8, FACE_FROM_FACE / FACE_FROM_EDGE / FACE_FROM_VERTEX
-    parent : (F',) int64, coarse face, coarse half-edge (one of the edge's two) or coarse vertex
+    kind : (F',) int8, FACE_FROM_FACE / FACE_FROM_EDGE / FACE_FROM_VERTEX (None: not asked for)
+    parent : (F',) int64, coarse face, coarse half-edge (one of the edge's two) or coarse vertex (None: not asked for)
     """
 
     face_sizes: np.ndarray
@@ -45,12 +45,14 @@ def refined_index_type(mesh: HalfEdgeMesh):
     return np.int32 if 4 * (mesh.n_halfedges + mesh.n_vertices) < 2**31 else np.int64
 
 
-def refine_doo_sabin(mesh: HalfEdgeMesh) -> RefinedFaces:
+def refine_doo_sabin(mesh: HalfEdgeMesh, sources: bool = True) -> RefinedFaces:
     """Faces of one Doo-Sabin (dual quad quadrisection) step of a closed mesh.
 
     Parameters
     ----------
     mesh : HalfEdgeMesh, closed and manifold (every twin defined)
+    sources : bool, make ``kind`` and ``parent`` (False: None; the last step's are not read, and its
+        ``parent`` is 0.5 GB for the 4,000,000-quad torus)
 
     Returns
     -------
@@ -60,18 +62,17 @@ def refine_doo_sabin(mesh: HalfEdgeMesh) -> RefinedFaces:
     # many half-edges: int32 whenever that fits
     index = refined_index_type(mesh)
     n_half, n_faces = mesh.n_halfedges, mesh.n_faces
-    h = np.arange(n_half, dtype=index)
-    rep = h[h < mesh.twin]  # one half-edge of each interior edge, in order
+    rep = _edge_halfedges(mesh, index)  # one half-edge of each interior edge, in order
     vertices, v_sizes, ring = outgoing_rings(mesh, index)
     # every part written in place into the arrays of all faces (no concatenation of the parts)
     n_fine = n_faces + rep.size + vertices.size
-    face_sizes = np.empty(n_fine, dtype=np.int64)
+    face_sizes = np.empty(n_fine, dtype=index)
     face_sizes[:n_faces] = mesh.face_sizes
     face_sizes[n_faces : n_faces + rep.size] = 4
     face_sizes[n_faces + rep.size :] = v_sizes
     face_vertices = np.empty(n_half + 4 * rep.size + ring.size, dtype=index)
     # F-faces: the corners of each face, in order.
-    face_vertices[:n_half] = h
+    face_vertices[:n_half] = np.arange(n_half, dtype=index)
     # E-faces: for the edge of h (a -> b in face f) and its twin t (b -> a in
     # face g), the quad (corner b in f, corner a in f, corner a in g, corner b in g).
     t = mesh.twin[rep]
@@ -79,6 +80,8 @@ def refine_doo_sabin(mesh: HalfEdgeMesh) -> RefinedFaces:
     quads[:, 0], quads[:, 1], quads[:, 2], quads[:, 3] = mesh.next[rep], rep, mesh.next[t], t
     # V-faces: the corners around each vertex in rotation order.
     face_vertices[n_half + 4 * rep.size :] = ring
+    if not sources:
+        return RefinedFaces(face_sizes=face_sizes, face_vertices=face_vertices, kind=None, parent=None)
     kind = np.empty(n_fine, dtype=np.int8)
     kind[:n_faces], kind[n_faces : n_faces + rep.size], kind[n_faces + rep.size :] = \
         FACE_FROM_FACE, FACE_FROM_EDGE, FACE_FROM_VERTEX
@@ -120,10 +123,11 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     HalfEdgeMesh with ``mesh.n_halfedges`` vertices
     """
     index = faces.face_vertices.dtype
-    n_faces, n_fine = mesh.n_faces, faces.face_vertices.size
-    n_edges = int(np.count_nonzero(faces.kind == FACE_FROM_EDGE))
-    nxt = _refined_next(mesh, faces.face_sizes[n_faces + n_edges :], n_edges, n_fine, index)
-    twin = _refined_twin(mesh, faces.parent[n_faces : n_faces + n_edges], faces.face_vertices)
+    n_fine = faces.face_vertices.size
+    rep = _edge_halfedges(mesh, index)  # the E-faces' coarse half-edges (their ``parent``, which may be None)
+    nxt = _refined_next(mesh, faces.face_sizes[mesh.n_faces + rep.size :], rep.size, n_fine, index)
+    twin = _refined_twin(mesh, rep, faces.face_vertices)
+    del rep
     # face offsets, face and prev: made when first read (the twice-refined mesh's offsets and face are read
     # once the stages are gone, if at all: 1.5 GB for the 4,000,000-quad torus); twin can be made again
     return HalfEdgeMesh(int(mesh.n_halfedges), faces.face_sizes, None, faces.face_vertices, None, nxt, None, twin,
@@ -133,10 +137,15 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
 def _remade_twin(mesh: HalfEdgeMesh, origin: np.ndarray) -> np.ndarray:
     """The refined mesh's ``twin`` again (``HalfEdgeMesh.remake_twin``), from the coarse ``mesh`` and the refined
     ``origin``: its E-faces' half-edges are the coarse ones below their twins, in order (``refine_doo_sabin``)."""
-    h = np.arange(mesh.n_halfedges, dtype=origin.dtype)
-    twin = _refined_twin(mesh, h[h < mesh.twin], origin)
+    twin = _refined_twin(mesh, _edge_halfedges(mesh, origin.dtype), origin)
     mesh.release_prev()  # made for this: the coarse mesh's holder had let it go (``topology.refine``)
     return twin
+
+
+def _edge_halfedges(mesh: HalfEdgeMesh, index) -> np.ndarray:
+    """(E,) ``index``: the half-edges below their twins, in order: one per interior edge (``refine_doo_sabin``'s)."""
+    h = np.arange(mesh.n_halfedges, dtype=index)
+    return h[h < mesh.twin]
 
 
 def _refined_twin(mesh: HalfEdgeMesh, rep: np.ndarray, origin: np.ndarray) -> np.ndarray:

@@ -124,7 +124,7 @@ def compact_ratio(ratio) -> np.ndarray:
     """(H,) float64 ``ratio``, or, when every entry has the same bits, one value broadcast to (H,) (read-only,
     no memory: the ratios of a quad mesh's second step are 0.5 GB for the 4,000,000-quad torus)."""
     ratio = np.asarray(ratio, dtype=np.float64)
-    if ratio.ndim == 1 and ratio.size > 1:
+    if ratio.ndim == 1 and ratio.size > 1 and ratio.strides[0] != 0:  # (a broadcast value is one already)
         bits = ratio.view(np.int64)
         if np.all(bits == bits[0]):  # bits, not values: 0.0 and -0.0 stay apart
             return np.broadcast_to(ratio[:1].copy(), ratio.shape)
