@@ -37,7 +37,7 @@ from .stencils.creases import crease_correction, mirror_perturbation, mirror_row
 from .stencils.doo_sabin import DooSabinStep, FirstDooSabinStep, compact_ratio, doo_sabin_matrix
 from .stencils.hole_rules import HoleRules
 from .stencils.perturbation import perturbation_matrix
-from .topology import SurfaceTopology
+from .topology import RELEASED_TWIN_HALFEDGES, SurfaceTopology, return_freed_memory
 
 if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is made: a closed mesh's conversion makes none (0.2 s)
     from scipy.sparse import csr_matrix
@@ -225,7 +225,10 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
         halfedge, vertex = refined_sharpness(topology.input, topology.level1, sharp.halfedge, sharp.vertex)
         correction = crease_correction(topology.level1, ratio, inputs.corner_ratio[topology.level1.origin], halfedge,
                                        vertex, step=2)
-    return DooSabinStep(topology.level1, ratio, correction=correction)
+    step = DooSabinStep(topology.level1, ratio, correction=correction)
+    if topology.refined.n_halfedges >= RELEASED_TWIN_HALFEDGES:
+        return_freed_memory()  # what this stage's temporaries freed, before the largest arrays of the build
+    return step
 
 
 def second_step_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, corner_ratio: np.ndarray,

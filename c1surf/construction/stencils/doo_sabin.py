@@ -184,7 +184,7 @@ def doo_sabin_factored(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray
     """
     x = np.asarray(points, dtype=np.float64)
     flat = np.ascontiguousarray(x.reshape(x.shape[0], -1))
-    offsets = mesh.face_offsets
+    offsets, sizes = mesh.face_offsets, mesh.face_sizes
     out = np.empty((mesh.n_halfedges, flat.shape[1]))
 
     def faces(first: int, last: int) -> None:  # faces first:last, by blocks that stay in cache
@@ -193,10 +193,12 @@ def doo_sabin_factored(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray
             h0, h1 = offsets[f0], offsets[f1]
             corners = np.take(flat, mesh.origin[h0:h1], axis=0, mode="clip")  # x at every corner, face by face
             centroids = np.add.reduceat(corners, offsets[f0:f1] - h0, axis=0)
-            centroids /= mesh.face_sizes[f0:f1, None]
+            centroids /= sizes[f0:f1, None]
             block = out[h0:h1]
             np.multiply(corners, (1.0 - ratio[h0:h1])[:, None], out=block)
-            block += ratio[h0:h1, None] * np.take(centroids, mesh.face[h0:h1] - f0, axis=0, mode="clip")
+            # each corner's face among these (``mesh.face[h0:h1] - f0``, without the mesh's whole ``face``)
+            local = np.repeat(np.arange(f1 - f0), sizes[f0:f1])
+            block += ratio[h0:h1, None] * np.take(centroids, local, axis=0, mode="clip")
 
     for_each_range(mesh.n_faces, faces, minimum=1 << 14)
     return out.reshape((mesh.n_halfedges,) + x.shape[1:])
