@@ -8,6 +8,7 @@ half-edges.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Callable
 
 import numpy as np
 
@@ -30,19 +31,55 @@ class HalfEdgeMesh:
     The per-half-edge arrays are int64 for input meshes and int32 for refined
     meshes small enough (``doo_sabin.refined_halfedges``: half the memory
     traffic on the largest arrays); products of them are formed in int64.
-    ``prev`` may be given as None: it is then made from ``next`` when first
-    read (a refined mesh's: the twice-refined mesh's is 46 MB for the
-    180,000-quad torus, which nothing reads when the mesh has no holes).
+    ``face_offsets``, ``face`` and ``prev`` may be given as None: each is then
+    made when first read, ``face_offsets`` and ``face`` from ``face_sizes``,
+    ``prev`` from ``next`` (a refined mesh's: for the 4,000,000-quad torus the
+    twice-refined mesh's ``face`` is 1 GB and its offsets 0.5 GB, which a
+    conversion reads only once the stages are gone, or never; its ``prev``,
+    1 GB, nothing reads when the mesh has no holes). ``release_prev`` lets
+    ``prev`` go again. A refined mesh also knows how to make its ``twin``
+    again (``remake_twin``, from the coarser mesh): ``release_twin`` lets it go
+    until it is read again.
     """
 
     n_vertices: int
     face_sizes: np.ndarray
-    face_offsets: np.ndarray
+    _face_offsets: np.ndarray | None
     origin: np.ndarray
-    face: np.ndarray
+    _face: np.ndarray | None
     next: np.ndarray
     _prev: np.ndarray | None
-    twin: np.ndarray
+    _twin: np.ndarray | None
+    remake_twin: Callable[[], np.ndarray] | None = None
+
+    @property
+    def twin(self) -> np.ndarray:
+        """(H,) int, opposite half-edge in the neighbouring face, -1 on a boundary."""
+        if self._twin is None and self.remake_twin is not None:
+            object.__setattr__(self, "_twin", self.remake_twin())
+        return self._twin
+
+    def release_twin(self) -> None:
+        """Let ``twin`` go if it can be made again (``remake_twin``; the same values the next time it is read)."""
+        if self.remake_twin is not None:
+            object.__setattr__(self, "_twin", None)
+
+    @property
+    def face_offsets(self) -> np.ndarray:
+        """(F+1,) int64, half-edges of face f are face_offsets[f]:face_offsets[f+1]."""
+        if self._face_offsets is None:
+            offsets = np.zeros(self.face_sizes.size + 1, dtype=np.int64)
+            np.cumsum(self.face_sizes, out=offsets[1:])
+            object.__setattr__(self, "_face_offsets", offsets)  # made once, as if given (the class is frozen)
+        return self._face_offsets
+
+    @property
+    def face(self) -> np.ndarray:
+        """(H,) int (``origin``'s type), face each half-edge belongs to: face f repeated face_sizes[f] times."""
+        if self._face is None:
+            face = np.repeat(np.arange(self.face_sizes.size, dtype=self.origin.dtype), self.face_sizes)
+            object.__setattr__(self, "_face", face)
+        return self._face
 
     @property
     def prev(self) -> np.ndarray:
@@ -52,6 +89,15 @@ class HalfEdgeMesh:
             prev[self.next] = np.arange(self.next.size, dtype=self.next.dtype)
             object.__setattr__(self, "_prev", prev)  # made once, as if given (the class is frozen)
         return self._prev
+
+    def release_prev(self) -> None:
+        """Let ``prev`` go (made again from ``next`` if read again: the same values, ``next``'s type, as given).
+
+        For a holder done with the rotations: the refinement reads the coarse and once-refined meshes'
+        (0.13 and 0.25 GB for the 4,000,000-quad torus); the stages of a mesh without creases never do.
+        """
+        if self._prev is not None and self._prev.dtype == self.next.dtype:
+            object.__setattr__(self, "_prev", None)
 
     @property
     def n_faces(self) -> int:

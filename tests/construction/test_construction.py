@@ -259,7 +259,49 @@ def test_refined_halfedges_by_arithmetic_match_a_fresh_sort(path):
         sorted_ = build_halfedges(faces.face_sizes, faces.face_vertices, coarse.n_halfedges)
         for field in ("face_sizes", "face_offsets", "origin", "face", "next", "prev", "twin"):
             np.testing.assert_array_equal(getattr(fast, field), getattr(sorted_, field), err_msg=field)
+        # the last step's faces without their sources, and a twin let go and made again when read
+        lean = refined_halfedges(coarse, refine_doo_sabin(coarse, sources=False))
+        lean.release_twin()
+        coarse.release_prev()
+        for field in ("twin", "face_sizes", "face_offsets", "origin", "face", "next", "prev"):
+            np.testing.assert_array_equal(getattr(lean, field), getattr(sorted_, field), err_msg=field)
         coarse = fast
+
+
+@pytest.mark.parametrize("path", [SAMPLES / p.name for p in sorted(SAMPLES.glob("*.obj"))] + OPEN_SHARED[:2], ids=str)
+def test_second_step_ratios_by_blocks_match_the_whole(path):
+    """The second step's ratios made by blocks of faces (one broadcast value when all equal) are the whole
+    computation's, bit for bit."""
+    from c1surf.construction.refine.doo_sabin import FACE_FROM_VERTEX
+    from c1surf.construction.stages import second_step_ratios
+    from c1surf.construction.stencils.blend import second_step_corner_ratios
+
+    surface = surface_of(path if isinstance(path, Path) else shared_mesh(path))
+    topology = surface.topology
+    is_vertex_cell = topology.faces1.kind == FACE_FROM_VERTEX
+    corner_ratio = surface.stage("doo_sabin_1").ratio
+    whole = second_step_corner_ratios(topology.level1, is_vertex_cell, corner_ratio)
+    for block in (1, 7, 1 << 20):
+        by_blocks = second_step_ratios(topology.level1, is_vertex_cell, corner_ratio, block=block)
+        np.testing.assert_array_equal(by_blocks.view(np.int64), whole.view(np.int64))
+
+
+def test_a_large_mesh_build_lets_the_twin_go(monkeypatch):
+    """Past ``RELEASED_TWIN_HALFEDGES`` the refined twin is let go after the frames and made again when read:
+    the same patches and the same adjacency."""
+    import c1surf.construction.topology as topology_module
+    from c1surf.evaluation.adjacency import patch_adjacency
+
+    kept = surface_of(SAMPLES / "twisted.obj")
+    monkeypatch.setattr(topology_module, "RELEASED_TWIN_HALFEDGES", 0)
+    lean = surface_of(SAMPLES / "twisted.obj")
+    assert lean.refined._twin is None
+    np.testing.assert_array_equal(lean.biquadratic, kept.biquadratic)
+    np.testing.assert_array_equal(lean.bicubic, kept.bicubic)
+    a, b = patch_adjacency(lean.refined, lean.frames), patch_adjacency(kept.refined, kept.frames)
+    np.testing.assert_array_equal(np.asarray(a.corners), np.asarray(b.corners))
+    np.testing.assert_array_equal(np.asarray(a.edges), np.asarray(b.edges))
+    np.testing.assert_array_equal(lean.refined.twin, kept.refined.twin)
 
 
 @pytest.mark.parametrize("path", [SAMPLES / "twisted.obj", SAMPLES / "high_valence.obj"] + OPEN_SHARED[:2], ids=str)

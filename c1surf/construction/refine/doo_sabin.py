@@ -13,6 +13,7 @@ Where the new points go is ``stencils.doo_sabin``.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -27,10 +28,10 @@ class RefinedFaces:
 
     Attributes
     ----------
-    face_sizes : (F',) int64
+    face_sizes : (F',) int (int32 when the fine half-edges fit, as ``face_vertices``)
     face_vertices : (sum(face_sizes),) int (int32 when it fits), indices of fine vertices (= coarse half-edges)
-    kind : (F',) int8, FACE_FROM_FACE / FACE_FROM_EDGE / FACE_FROM_VERTEX
-    parent : (F',) int64, coarse face, coarse half-edge (one of the edge's two) or coarse vertex
+    kind : (F',) int8, FACE_FROM_FACE / FACE_FROM_EDGE / FACE_FROM_VERTEX (None: not asked for)
+    parent : (F',) int64, coarse face, coarse half-edge (one of the edge's two) or coarse vertex (None: not asked for)
     """
 
     face_sizes: np.ndarray
@@ -44,12 +45,14 @@ def refined_index_type(mesh: HalfEdgeMesh):
     return np.int32 if 4 * (mesh.n_halfedges + mesh.n_vertices) < 2**31 else np.int64
 
 
-def refine_doo_sabin(mesh: HalfEdgeMesh) -> RefinedFaces:
+def refine_doo_sabin(mesh: HalfEdgeMesh, sources: bool = True) -> RefinedFaces:
     """Faces of one Doo-Sabin (dual quad quadrisection) step of a closed mesh.
 
     Parameters
     ----------
     mesh : HalfEdgeMesh, closed and manifold (every twin defined)
+    sources : bool, make ``kind`` and ``parent`` (False: None; the last step's are not read, and its
+        ``parent`` is 0.5 GB for the 4,000,000-quad torus)
 
     Returns
     -------
@@ -59,18 +62,17 @@ def refine_doo_sabin(mesh: HalfEdgeMesh) -> RefinedFaces:
     # many half-edges: int32 whenever that fits
     index = refined_index_type(mesh)
     n_half, n_faces = mesh.n_halfedges, mesh.n_faces
-    h = np.arange(n_half, dtype=index)
-    rep = h[h < mesh.twin]  # one half-edge of each interior edge, in order
+    rep = _edge_halfedges(mesh, index)  # one half-edge of each interior edge, in order
     vertices, v_sizes, ring = outgoing_rings(mesh, index)
     # every part written in place into the arrays of all faces (no concatenation of the parts)
     n_fine = n_faces + rep.size + vertices.size
-    face_sizes = np.empty(n_fine, dtype=np.int64)
+    face_sizes = np.empty(n_fine, dtype=index)
     face_sizes[:n_faces] = mesh.face_sizes
     face_sizes[n_faces : n_faces + rep.size] = 4
     face_sizes[n_faces + rep.size :] = v_sizes
     face_vertices = np.empty(n_half + 4 * rep.size + ring.size, dtype=index)
     # F-faces: the corners of each face, in order.
-    face_vertices[:n_half] = h
+    face_vertices[:n_half] = np.arange(n_half, dtype=index)
     # E-faces: for the edge of h (a -> b in face f) and its twin t (b -> a in
     # face g), the quad (corner b in f, corner a in f, corner a in g, corner b in g).
     t = mesh.twin[rep]
@@ -78,6 +80,8 @@ def refine_doo_sabin(mesh: HalfEdgeMesh) -> RefinedFaces:
     quads[:, 0], quads[:, 1], quads[:, 2], quads[:, 3] = mesh.next[rep], rep, mesh.next[t], t
     # V-faces: the corners around each vertex in rotation order.
     face_vertices[n_half + 4 * rep.size :] = ring
+    if not sources:
+        return RefinedFaces(face_sizes=face_sizes, face_vertices=face_vertices, kind=None, parent=None)
     kind = np.empty(n_fine, dtype=np.int8)
     kind[:n_faces], kind[n_faces : n_faces + rep.size], kind[n_faces + rep.size :] = \
         FACE_FROM_FACE, FACE_FROM_EDGE, FACE_FROM_VERTEX
@@ -105,8 +109,9 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
       twin in the E-face of ``prev[h]``'s edge.
 
     Boundary half-edges (the coarse edge or vertex has no E- or V-face) get -1. The F-faces' part of
-    ``face`` and ``next`` is the coarse mesh's, the E-faces are quads in a row; ``prev`` is made from
-    ``next`` when first read (``HalfEdgeMesh.prev``).
+    ``next`` is the coarse mesh's, the E-faces are quads in a row; ``face_offsets``, ``face`` and ``prev``
+    are made when first read (``HalfEdgeMesh``), so the only per-half-edge arrays made here are ``next``
+    and ``twin`` (and the refined faces' ``face_vertices`` are its ``origin``).
 
     Parameters
     ----------
@@ -118,21 +123,45 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     HalfEdgeMesh with ``mesh.n_halfedges`` vertices
     """
     index = faces.face_vertices.dtype
-    n_half, n_faces = mesh.n_halfedges, mesh.n_faces
-    n_edges = int(np.count_nonzero(faces.kind == FACE_FROM_EDGE))
-    rep = faces.parent[n_faces : n_faces + n_edges].astype(index)  # E-faces follow the F-faces
+    n_fine = faces.face_vertices.size
+    rep = _edge_halfedges(mesh, index)  # the E-faces' coarse half-edges (their ``parent``, which may be None)
+    nxt = _refined_next(mesh, faces.face_sizes[mesh.n_faces + rep.size :], rep.size, n_fine, index)
+    twin = _refined_twin(mesh, rep, faces.face_vertices)
+    del rep
+    # face offsets, face and prev: made when first read (the twice-refined mesh's offsets and face are read
+    # once the stages are gone, if at all: 1.5 GB for the 4,000,000-quad torus); twin can be made again
+    return HalfEdgeMesh(int(mesh.n_halfedges), faces.face_sizes, None, faces.face_vertices, None, nxt, None, twin,
+                        remake_twin=partial(_remade_twin, mesh, faces.face_vertices))
+
+
+def _remade_twin(mesh: HalfEdgeMesh, origin: np.ndarray) -> np.ndarray:
+    """The refined mesh's ``twin`` again (``HalfEdgeMesh.remake_twin``), from the coarse ``mesh`` and the refined
+    ``origin``: its E-faces' half-edges are the coarse ones below their twins, in order (``refine_doo_sabin``)."""
+    twin = _refined_twin(mesh, _edge_halfedges(mesh, origin.dtype), origin)
+    mesh.release_prev()  # made for this: the coarse mesh's holder had let it go (``topology.refine``)
+    return twin
+
+
+def _edge_halfedges(mesh: HalfEdgeMesh, index) -> np.ndarray:
+    """(E,) ``index``: the half-edges below their twins, in order: one per interior edge (``refine_doo_sabin``'s)."""
+    h = np.arange(mesh.n_halfedges, dtype=index)
+    return h[h < mesh.twin]
+
+
+def _refined_twin(mesh: HalfEdgeMesh, rep: np.ndarray, origin: np.ndarray) -> np.ndarray:
+    """(H',) ``twin`` of the refined mesh (``refined_halfedges``) whose half-edges start at ``origin`` (H',), refined
+    from ``mesh``; ``rep`` (E,): the coarse half-edge of every E-face (the refined faces' ``parent`` there)."""
+    index, n_half, n_fine = origin.dtype, mesh.n_halfedges, origin.size
+    n_edges = rep.size
+    rep = rep.astype(index, copy=False)
     t = np.take(mesh.twin, rep).astype(index, copy=False)
     ring_start = n_half + 4 * n_edges
-    n_fine = faces.face_vertices.size
-    offsets = np.zeros(faces.face_sizes.size + 1, dtype=np.int64)
-    np.cumsum(faces.face_sizes, out=offsets[1:])
-    face, nxt = _refined_cycles(mesh, offsets, n_edges, n_fine, index)
     # twins: F-face half-edge h and its E-face side (0 for rep, 2 for t) ...
     twin = np.full(n_fine, -1, dtype=index)
     side = np.arange(n_half, ring_start, 4, dtype=index)
     twin[rep], twin[t] = side, side + 2
     # ... the E-faces' sides 1 and 3 in the V-faces of the edge's ends ...
-    ring = faces.face_vertices[ring_start:]
+    ring = origin[ring_start:]
     ring_slot = np.full(n_half, -1, dtype=index)  # where each coarse half-edge is in its vertex's V-face
     ring_slot[ring] = np.arange(ring_start, n_fine, dtype=index)
     e_twin = twin[n_half:ring_start].reshape(n_edges, 4)
@@ -147,33 +176,25 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     ends *= -2
     ends += across
     ends += 3  # across + 3 - 2 ((across - H) & 3)
-    return HalfEdgeMesh(int(n_half), faces.face_sizes, offsets, faces.face_vertices, face, nxt, None, twin)  # prev: later
+    return twin
 
 
-def _refined_cycles(mesh: HalfEdgeMesh, offsets: np.ndarray, n_edges: int, n_fine: int, index):
-    """``face``, ``next`` (n_fine,) of the refined mesh (``refined_halfedges``): the F-faces' are the coarse
-    mesh's, the E-faces are quads in a row, the V-faces cycles of their sizes (``_cycles``)."""
-    n_half, n_faces = mesh.n_halfedges, mesh.n_faces
+def _refined_next(mesh: HalfEdgeMesh, ring_sizes: np.ndarray, n_edges: int, n_fine: int, index) -> np.ndarray:
+    """``next`` (n_fine,) of the refined mesh (``refined_halfedges``): the F-faces' is the coarse mesh's, the
+    E-faces are quads in a row, the V-faces (sizes ``ring_sizes``) cycles of their sizes."""
+    n_half = mesh.n_halfedges
     ring_start = n_half + 4 * n_edges
-    face, nxt = np.empty(n_fine, dtype=index), np.empty(n_fine, dtype=index)
-    face[:n_half], nxt[:n_half] = mesh.face, mesh.next
-    # E-faces: long runs of arange, then every fourth entry wrapped (broadcasting over rows of 4 runs
+    nxt = np.empty(n_fine, dtype=index)
+    nxt[:n_half] = mesh.next
+    # E-faces: a long run of arange, then every fourth entry wrapped (broadcasting over rows of 4 runs
     # inner loops of 4 and is 3x slower)
-    e_face, e_next = face[n_half:ring_start], nxt[n_half:ring_start]
-    np.right_shift(np.arange(4 * n_edges, dtype=index), 2, out=e_face)
-    e_face += n_faces
+    e_next = nxt[n_half:ring_start]
     e_next[:] = np.arange(n_half + 1, ring_start + 1, dtype=index)
     e_next[3::4] -= 4
-    _cycles(offsets[n_faces + n_edges :], n_faces + n_edges, face[ring_start:], nxt[ring_start:])
-    return face, nxt
-
-
-def _cycles(offsets: np.ndarray, first_face: int, face: np.ndarray, nxt: np.ndarray) -> None:
-    """Fill ``face``, ``nxt`` (n,) of the faces whose half-edges start at ``offsets`` (k + 1,), numbered
-    from ``first_face``: each face's half-edges in a cycle (``halfedges.face_cycles``, shifted)."""
-    start = int(offsets[0])
-    sizes = np.diff(offsets)
-    face[:] = np.repeat(np.arange(first_face, first_face + sizes.size, dtype=face.dtype), sizes)
-    nxt[:] = np.arange(start + 1, start + nxt.size + 1, dtype=nxt.dtype)
-    if sizes.size:
-        nxt[offsets[1:] - 1 - start] = offsets[:-1]
+    # V-faces: each face's half-edges in a cycle (``halfedges.face_cycles``, shifted)
+    v_next = nxt[ring_start:]
+    v_next[:] = np.arange(ring_start + 1, n_fine + 1, dtype=index)
+    if ring_sizes.size:
+        ends = np.cumsum(ring_sizes)  # one past each V-face's last half-edge, from ring_start
+        v_next[ends - 1] = ring_start + ends - ring_sizes
+    return nxt

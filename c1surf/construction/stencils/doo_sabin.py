@@ -92,32 +92,52 @@ def doo_sabin_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray) ->
     """
     x = np.asarray(points, dtype=np.float64)
     flat = x.reshape(x.shape[0], -1)
-    d = flat.shape[1]
     planes = np.ascontiguousarray(flat.T)  # (d, V): one coordinate at a time, contiguous (4x faster than rows)
-    out = np.empty((mesh.n_halfedges, d))
+    out = np.empty((mesh.n_halfedges, flat.shape[1]))
     ratio = np.asarray(ratio, dtype=np.float64)
     for n in unique_integers(mesh.face_sizes):
         faces = np.flatnonzero(mesh.face_sizes == n)
-        k = faces.size
-        rows = mesh.face_offsets[faces][:, None] + np.arange(n)  # (k, n): row i of a face is its corner i
-        run = faces[-1] - faces[0] + 1 == k  # their rows are one slice of the output
-        target = out[rows[0, 0] : rows[-1, -1] + 1].reshape(k, n, d) if run else np.empty((k, n, d))
-        corners = np.ascontiguousarray(mesh.origin[rows].T)  # (n, k): every row has its face's corners, in order
-        a = np.ascontiguousarray(ratio[rows].T)
-        off_diagonal = a / n  # the matrix's weights: a / n, and a / n + (1 - a) at the row's own corner
-        diagonal = off_diagonal + (1.0 - a)
-        gathered, product, total = np.empty((n, k)), np.empty(k), np.empty(k)
-        for c in range(d):
-            for j in range(n):
-                np.take(planes[c], corners[j], out=gathered[j])
-            for i in range(n):
-                total[:] = 0.0  # scipy's product starts each row from zero and adds the entries in order
-                for j in range(n):
-                    total += np.multiply(diagonal[i] if i == j else off_diagonal[i], gathered[j], out=product)
-                target[:, i, c] = total
-        if not run:
-            out[rows.ravel()] = target.reshape(-1, d)
+        for start in range(0, faces.size, _ROWS_BLOCK):  # by blocks of faces: each face's rows alone, the same bits
+            _rows_block(mesh, ratio, planes, faces[start : start + _ROWS_BLOCK], int(n), out)
     return out.reshape((mesh.n_halfedges,) + x.shape[1:])
+
+
+_ROWS_BLOCK = 1 << 16  # faces per block of ``doo_sabin_rows``: its temporaries were 0.9 GB for the 4,000,000-quad torus
+
+
+def _rows_block(mesh: HalfEdgeMesh, ratio: np.ndarray, planes: np.ndarray, faces: np.ndarray, n: int,
+                out: np.ndarray) -> None:
+    """Write the rows (H, d) ``out`` of ``doo_sabin_rows`` of the n-sided ``faces`` (k,), from ``planes`` (d, V)."""
+    k, d = faces.size, planes.shape[0]
+    rows = mesh.face_offsets[faces][:, None] + np.arange(n)  # (k, n): row i of a face is its corner i
+    run = faces[-1] - faces[0] + 1 == k  # their rows are one slice of the output
+    target = out[rows[0, 0] : rows[-1, -1] + 1].reshape(k, n, d) if run else np.empty((k, n, d))
+    corners = np.ascontiguousarray(mesh.origin[rows].T)  # (n, k): every row has its face's corners, in order
+    a = np.ascontiguousarray(ratio[rows].T)
+    off_diagonal = a / n  # the matrix's weights: a / n, and a / n + (1 - a) at the row's own corner
+    diagonal = off_diagonal + (1.0 - a)
+    gathered, product, total = np.empty((n, k)), np.empty(k), np.empty(k)
+    for c in range(d):
+        for j in range(n):
+            np.take(planes[c], corners[j], out=gathered[j])
+        for i in range(n):
+            total[:] = 0.0  # scipy's product starts each row from zero and adds the entries in order
+            for j in range(n):
+                total += np.multiply(diagonal[i] if i == j else off_diagonal[i], gathered[j], out=product)
+            target[:, i, c] = total
+    if not run:
+        out[rows.ravel()] = target.reshape(-1, d)
+
+
+def compact_ratio(ratio) -> np.ndarray:
+    """(H,) float64 ``ratio``, or, when every entry has the same bits, one value broadcast to (H,) (read-only,
+    no memory: the ratios of a quad mesh's second step are 0.5 GB for the 4,000,000-quad torus)."""
+    ratio = np.asarray(ratio, dtype=np.float64)
+    if ratio.ndim == 1 and ratio.size > 1 and ratio.strides[0] != 0:  # (a broadcast value is one already)
+        bits = ratio.view(np.int64)
+        if np.all(bits == bits[0]):  # bits, not values: 0.0 and -0.0 stay apart
+            return np.broadcast_to(ratio[:1].copy(), ratio.shape)
+    return ratio
 
 
 class FirstDooSabinStep:
@@ -135,7 +155,7 @@ class FirstDooSabinStep:
 
     def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_1"):
         self.name, self.mesh = name, mesh
-        self.ratio = np.asarray(ratio, dtype=np.float64)
+        self.ratio = compact_ratio(ratio)
         self.shape = (mesh.n_halfedges, mesh.n_vertices)
         self._matrix = None
 
@@ -173,7 +193,7 @@ def doo_sabin_factored(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray
     """
     x = np.asarray(points, dtype=np.float64)
     flat = np.ascontiguousarray(x.reshape(x.shape[0], -1))
-    offsets = mesh.face_offsets
+    offsets, sizes = mesh.face_offsets, mesh.face_sizes
     out = np.empty((mesh.n_halfedges, flat.shape[1]))
 
     def faces(first: int, last: int) -> None:  # faces first:last, by blocks that stay in cache
@@ -182,10 +202,12 @@ def doo_sabin_factored(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray
             h0, h1 = offsets[f0], offsets[f1]
             corners = np.take(flat, mesh.origin[h0:h1], axis=0, mode="clip")  # x at every corner, face by face
             centroids = np.add.reduceat(corners, offsets[f0:f1] - h0, axis=0)
-            centroids /= mesh.face_sizes[f0:f1, None]
+            centroids /= sizes[f0:f1, None]
             block = out[h0:h1]
             np.multiply(corners, (1.0 - ratio[h0:h1])[:, None], out=block)
-            block += ratio[h0:h1, None] * np.take(centroids, mesh.face[h0:h1] - f0, axis=0, mode="clip")
+            # each corner's face among these (``mesh.face[h0:h1] - f0``, without the mesh's whole ``face``)
+            local = np.repeat(np.arange(f1 - f0), sizes[f0:f1])
+            block += ratio[h0:h1, None] * np.take(centroids, local, axis=0, mode="clip")
 
     for_each_range(mesh.n_faces, faces, minimum=1 << 14)
     return out.reshape((mesh.n_halfedges,) + x.shape[1:])
@@ -216,7 +238,7 @@ class DooSabinStep:
     def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_2", correction=None):
         self.name = name
         self.mesh = mesh
-        self.ratio = np.asarray(ratio, dtype=np.float64)
+        self.ratio = compact_ratio(ratio)
         self.correction = correction
         self.shape = (mesh.n_halfedges, mesh.n_vertices)
         self._matrix = None

@@ -16,10 +16,9 @@ goes too: at that point only what the rest of the conversion reads is held.
 """
 from __future__ import annotations
 
-import ctypes
-
 import numpy as np
 
+from ...construction.topology import return_freed_memory
 from ..adjacency import (PatchAdjacency, adjacency_from_corner_labels, adjacency_from_labels, corner_labels,
                          side_labels)
 from ..patch_set import PatchStream, surface_header, surface_source_ids
@@ -78,17 +77,19 @@ class StreamedSurface:
             return_freed_memory()  # the stages, if the caller dropped the Surface
             if self._keep_sources:
                 self._sources = surface_source_ids(topology, compact=True)
-            face, twin = topology.refined.face, topology.refined.twin
+            # twin only for the sides (the build may have let it go: ``topology.build_topology``; made again here)
+            face, twin = topology.refined.face, topology.refined.twin if self._sides else None
             frames = (topology.quad_frames, topology.cubic_frames)  # as parts: no (P, 4) concatenation
             del topology  # the refined meshes of both steps, the coarse mesh, ...: everything but these arrays
+            self.source.keep_slot_arrays()  # of the refined mesh, only its origin and next from here on
             return_freed_memory()
             corners = corner_labels(face, frames)
             del face
-            self.source.keep_slot_arrays()  # the refined mesh's face and twin, sizes and offsets go now or below
             return_freed_memory()
             if not self._sides:
-                del twin, frames
+                del frames
                 self._adjacency = adjacency_from_corner_labels(corners)
+                return_freed_memory()  # the renumbering's tables
                 return self._adjacency
             edges, forward = side_labels(twin, frames)
             del twin, frames
@@ -111,20 +112,3 @@ class StreamedSurface:
         kind, source = self._sources
         header = surface_header(self, input_path, adjacency, self.counts)
         return PatchStream(self.source, adjacency, kind, source, header)
-
-
-def return_freed_memory() -> None:
-    """Give the pages of freed memory back to the system (glibc's ``malloc_trim``; nothing where there is none).
-
-    The command line has glibc keep freed memory for reuse (``cli.runtime.tune_allocator``: every array from
-    the heap, given back only above 1 GiB free at its top), and the library's arrays below glibc's mmap
-    threshold live in its heaps anyway. Once the build is let go, what comes next is much smaller, so
-    those pages are given back here. Measured on the 180k-quad torus: 812 MB after its Surface was
-    dropped, 657 MB after the call, 340 MB once the topology went; on the 4,000,000-quad torus
-    16.2 -> 12.9 -> 6.7 GB (0.02 to 0.7 s a call).
-    """
-    try:
-        trim = ctypes.CDLL(None).malloc_trim
-    except (OSError, AttributeError, TypeError):  # not glibc (TypeError: no CDLL(None) on Windows)
-        return
-    trim(0)
