@@ -77,7 +77,12 @@ class HalfEdgeMesh:
     def face(self) -> np.ndarray:
         """(H,) int (``origin``'s type), face each half-edge belongs to: face f repeated face_sizes[f] times."""
         if self._face is None:
-            face = np.repeat(np.arange(self.face_sizes.size, dtype=self.origin.dtype), self.face_sizes)
+            # a 1 where each face but the first starts, summed up: np.repeat would make its repeats intp (a
+            # temporary of 8 bytes a face: 0.5 GB for the 4,000,000-quad torus's twice-refined mesh)
+            face = np.zeros(self.origin.size, dtype=self.origin.dtype)
+            if face.size:
+                face[np.cumsum(self.face_sizes[:-1], dtype=self.origin.dtype)] = 1
+                np.cumsum(face, out=face)
             object.__setattr__(self, "_face", face)
         return self._face
 

@@ -23,7 +23,7 @@ from c1surf.construction import patch_blocks
 from c1surf.construction.stencils import layout
 from c1surf.construction.surface import Surface
 from c1surf.evaluation import tessellate
-from c1surf.evaluation.stream import StreamedTessellation, UndefinedNormals
+from c1surf.evaluation.stream import StreamedTessellation, UndefinedNormals, welded
 from c1surf.io.meshes.read import read_mesh
 from c1surf.io.patches import json_patches, npz
 from c1surf.io.registry import MESH_WRITERS, PATCH_WRITERS
@@ -45,6 +45,7 @@ def tiny_blocks(monkeypatch):
     monkeypatch.setattr(patch_blocks, "DEFAULT_CACHE_BYTES", 1 << 12)  # a few blocks: evicted and made again
     monkeypatch.setattr(json_patches, "_STREAM_BLOCK", 7)
     monkeypatch.setattr(npz, "_STREAM_BLOCK", 5)
+    monkeypatch.setattr(welded, "CORNER_TABLE_BYTES", 48 * 13)  # the corners' table made 13 rows at a time
 
 
 def _convert(monkeypatch, tmp_path: Path, mesh: Path, name: str, stream: bool, *options, patches=()) -> list:

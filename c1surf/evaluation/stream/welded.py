@@ -28,6 +28,9 @@ from ..tessellate import (_Bases, _corner_block, _work, _grid_block, _interior_b
 
 __all__ = ["StreamedTessellation", "UndefinedNormals"]
 
+# The most bytes of corner points and normals made at once (``StreamedTessellation._corner_passes``).
+CORNER_TABLE_BYTES = 3 << 29
+
 
 class UndefinedNormals(Exception):
     """A sample has no normal (zero derivative): only the whole tessellation can give it one."""
@@ -88,13 +91,18 @@ class StreamedTessellation:
         """The vertex blocks of the corners, then of the edge samples (ids below ``welding.patch_base``)."""
         w, dim, samples = self.welding, self.dim, tessellate._BLOCK_SAMPLES  # the in-memory blocks, whatever they are
         checked = self._checked if check else (lambda points, normals: (points, normals))
-        corners = self._corner_table()
-        if check:
-            self._checked(corners[:, :0], corners[:, dim:])
-        for a in range(0, w.n_corners, samples):
-            z = min(a + samples, w.n_corners)
-            yield corners[a:z, :dim], corners[a:z, dim:]
-        del corners
+        passes = self._corner_passes()
+        for lo, hi in passes:
+            corners = self._corner_table(lo, hi)
+            if check:
+                self._checked(corners[:, :0], corners[:, dim:])
+            for a in range(0, hi - lo, samples):
+                z = min(a + samples, hi - lo)
+                # the views of a pass's last block would keep its table alive (the caller holds the block it
+                # writes) while the next pass makes its own: a copy then
+                block = corners[a:z].copy() if z == hi - lo and hi < passes[-1][1] else corners[a:z]
+                yield block[:, :dim], block[:, dim:]
+            del corners, block
         inner = w.inner
         step = max(1, samples // max(inner, 1))
         for a in range(0, w.n_edges, step):
@@ -122,16 +130,26 @@ class StreamedTessellation:
                     points = points.reshape(-1, dim)
                     yield (lo, hi, *(self._checked(points, normals) if check else (points, normals)))
 
-    def _corner_table(self) -> np.ndarray:
-        """(n_corners, dim + 3) float: the point and the normal of every corner, each from its owner as ``_owned``
-        evaluates it, made by the patches stage's product blocks in order (each block's coefficients made once,
-        blocks on the thread pool). A corner is a control point and elementwise arithmetic on two more, so its
-        bits do not depend on the corners evaluated beside it."""
-        table = np.empty((self.welding.n_corners, self.dim + 3))
+    def _corner_passes(self) -> list:
+        """[(lo, hi)]: the ranges of corner ids whose tables are made one after another, each within
+        ``CORNER_TABLE_BYTES`` (one range but for the largest meshes: the 4,000,000-quad torus's table is
+        3.1 GB at -r 2, beside the patch source's 4.4 GB; each more range makes the product blocks again)."""
+        n, row = self.welding.n_corners, (self.dim + 3) * 8
+        count = max(1, -(-n * row // CORNER_TABLE_BYTES))
+        bounds = [n * i // count for i in range(count + 1)]
+        return list(zip(bounds[:-1], bounds[1:]))
+
+    def _corner_table(self, lo: int = 0, hi: int | None = None) -> np.ndarray:
+        """(hi - lo, dim + 3) float: the point and the normal of corners lo..hi-1 (default: all), each from its
+        owner as ``_owned`` evaluates it, made by the patches stage's product blocks in order (each block's
+        coefficients made once per call, blocks on the thread pool). A corner is a control point and elementwise
+        arithmetic on two more, so its bits do not depend on the corners evaluated beside it."""
+        hi = self.welding.n_corners if hi is None else hi
+        table = np.empty((hi - lo, self.dim + 3))
         bases = self.bases  # made here, not by two threads at once
         owns = np.zeros(self.welding.corners.size, dtype=bool)  # flat corner (patch * 4 + slot) evaluating its id
-        owns[self.welding.corner_owner] = True
-        tasks = [partial(self._corner_span, k, span, bases[k], owns, table) for k in range(2)
+        owns[self.welding.corner_owner[lo:hi]] = True
+        tasks = [partial(self._corner_span, k, span, bases[k], owns, table, lo) for k in range(2)
                  for span in self.source.product_spans(k)]
         if all(self.source.blas_held(k) for k in range(2)):
             run_tasks(tasks, uses_blas=True)
@@ -140,8 +158,9 @@ class StreamedTessellation:
                 task()
         return table
 
-    def _corner_span(self, k: int, span, bases, owns: np.ndarray, table: np.ndarray) -> None:
-        """The rows of ``table`` of the corners whose owners are the patches of one product block (``product_spans``)."""
+    def _corner_span(self, k: int, span, bases, owns: np.ndarray, table: np.ndarray, lo: int) -> None:
+        """The rows of ``table`` (corner ids from ``lo``) of the corners whose owners are the patches of one
+        product block (``product_spans``) and that ``owns`` marks."""
         g, b, p0, p1 = span
         a, z = int(self.starts[k]) + p0, int(self.starts[k]) + p1  # global patch ids
         owned = np.flatnonzero(owns[4 * a : 4 * z])
@@ -150,7 +169,7 @@ class StreamedTessellation:
         rows = _work("corner table rows", (owned.size, self.dim + 3))
         _corner_block(partial(self.source.span_rows, k, g, b), bases, owned >> 2, owned & 3, rows[:, : self.dim],
                       rows[:, self.dim :])
-        table[np.take(self.welding.corners.reshape(-1), owned + 4 * a)] = rows
+        table[np.take(self.welding.corners.reshape(-1), owned + 4 * a) - lo] = rows
 
     def triangle_point_blocks(self):
         """Yield (t, 3, 3) float: the positions (x, y, z) of the corners of triangles, in triangle order,
