@@ -19,9 +19,9 @@ def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray
 
     Blocks of patches that stay in cache, on the thread pool: gather slot by slot
     (each into a contiguous row of the block), one (r x m) @ (m x block d) product,
-    one strided copy into the output. mode="clip": no bounds check, no buffering
-    (the indices are valid by construction). The blocks are ``product_blocks``:
-    a block computed alone (``product_block``) gives the same bits.
+    one gather by a fixed permutation into the output (``product_block``). mode="clip":
+    no bounds check, no buffering (the indices are valid by construction). The blocks
+    are ``product_blocks``: a block computed alone (``product_block``) gives the same bits.
 
     Parameters
     ----------
@@ -29,11 +29,11 @@ def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray
     slots : (m, k) int, slots[j, p] is the row of points that is input j of patch p
     weights : (r, m) float
     out : (k, r, d) float, filled and returned
-    offset : (d,) float or None, added to every output row after its sum, in the same strided pass
-        that copies the block out (points relative to an origin: rows of ``weights`` summing to 1,
-        this puts the origin back; adding it inside the product instead, as one more input row,
-        costs nothing but rounds the small terms at the offset's scale: 1.1e-10 rad on
-        OpenSubdiv's bishop against 4.9e-11)
+    offset : (d,) float or None, added to every output row after its sum (points relative to an
+        origin: rows of ``weights`` summing to 1, this puts the origin back), as the last term of
+        the product or in a pass before the copy out (``block_product``); added as the first term
+        instead, it would round the small terms at the offset's scale: 1.1e-10 rad on OpenSubdiv's
+        bishop against 4.9e-11
     """
     points = np.ascontiguousarray(points)
     m, k = slots.shape
