@@ -146,11 +146,6 @@ def neighbour_rows(partners: np.ndarray) -> np.ndarray:
     out[partners < 0] = -1
     return out.reshape(-1, 4, 2)
 
-def _first_appearance(labels: np.ndarray) -> np.ndarray:
-    """Renumber arbitrary integer labels 0, 1, 2, ... in order of first appearance (row-major)."""
-    return _first_appearances(labels)[0]
-
-
 def _first_appearances(labels: np.ndarray):
     """(ids, first): labels renumbered 0, 1, 2, ... in order of first appearance (row-major), and
     first (k,) int64, the flat position where id i appears first (increasing)."""
@@ -191,7 +186,7 @@ def _canonical(corner_labels: np.ndarray, edge_labels: np.ndarray, forward_key: 
 
     forward_key : (P, 4) int; two sides of one edge run the same way iff their keys are equal.
     """
-    corners, (edges, reversed_) = run_tasks([lambda: _first_appearance(corner_labels),
+    corners, (edges, reversed_) = run_tasks([lambda: _first_appearances(corner_labels)[0],
                                              lambda: _edge_ids(edge_labels, forward_key)])
     return PatchAdjacency(corners, edges, reversed_)
 
@@ -223,9 +218,10 @@ def patch_adjacency(refined, frames) -> PatchAdjacency:
     (``adjacency_from_labels`` renumbers them in place). A caller that owns the refined mesh's arrays can
     call the three itself and let each input go once read (``evaluation.stream.StreamedSurface``).
     """
-    corners = corner_labels(refined.face, frames)
-    edges, forward = side_labels(refined.twin, frames)
-    return adjacency_from_labels(corners, edges, forward)
+    # corners and sides are independent: a task each on the thread pool (gathers and scatters run without the GIL)
+    corners, (edges, forward) = run_tasks([lambda: adjacency_from_corner_labels(corner_labels(refined.face, frames)).corners,
+                                           lambda: _sides_renumbered(*side_labels(refined.twin, frames))])
+    return PatchAdjacency(corners, edges, forward)
 
 
 def _frame_parts(frames) -> list:
@@ -280,7 +276,11 @@ def side_labels(twin: np.ndarray, frames):
 def adjacency_from_labels(corners: np.ndarray, edges: np.ndarray, forward: np.ndarray) -> PatchAdjacency:
     """The PatchAdjacency of ``corner_labels`` and ``side_labels``' arrays, renumbered in place (they become its
     corners, edges and reversed)."""
-    _renumber(corners.reshape(-1))
+    return PatchAdjacency(adjacency_from_corner_labels(corners).corners, *_sides_renumbered(edges, forward))
+
+
+def _sides_renumbered(edges: np.ndarray, forward: np.ndarray):
+    """(edges, reversed): ``side_labels``' arrays (P, 4) int and (P, 4) bool made edge ids and directions in place."""
     first = _renumber(edges.reshape(-1))
     # a side is reversed when its direction differs from that of the edge's first side
     first_forward = np.take(forward.reshape(-1), first)
@@ -289,7 +289,7 @@ def adjacency_from_labels(corners: np.ndarray, edges: np.ndarray, forward: np.nd
     for a in range(0, flat_edges.size, 4 * _ADJACENCY_BLOCK):
         z = min(a + 4 * _ADJACENCY_BLOCK, flat_edges.size)
         np.not_equal(flat_forward[a:z], np.take(first_forward, flat_edges[a:z]), out=flat_forward[a:z])
-    return PatchAdjacency(corners, edges, forward)
+    return edges, forward
 
 
 def adjacency_from_corner_labels(corners: np.ndarray) -> PatchAdjacency:
