@@ -146,6 +146,11 @@ def neighbour_rows(partners: np.ndarray) -> np.ndarray:
     out[partners < 0] = -1
     return out.reshape(-1, 4, 2)
 
+def _first_appearance(labels: np.ndarray) -> np.ndarray:
+    """Renumber arbitrary integer labels 0, 1, 2, ... in order of first appearance (row-major)."""
+    return _first_appearances(labels)[0]
+
+
 def _first_appearances(labels: np.ndarray):
     """(ids, first): labels renumbered 0, 1, 2, ... in order of first appearance (row-major), and
     first (k,) int64, the flat position where id i appears first (increasing)."""
@@ -186,7 +191,7 @@ def _canonical(corner_labels: np.ndarray, edge_labels: np.ndarray, forward_key: 
 
     forward_key : (P, 4) int; two sides of one edge run the same way iff their keys are equal.
     """
-    corners, (edges, reversed_) = run_tasks([lambda: _first_appearances(corner_labels)[0],
+    corners, (edges, reversed_) = run_tasks([lambda: _first_appearance(corner_labels),
                                              lambda: _edge_ids(edge_labels, forward_key)])
     return PatchAdjacency(corners, edges, reversed_)
 
@@ -198,9 +203,8 @@ _ADJACENCY_BLOCK = 1 << 16
 def patch_adjacency(refined, frames) -> PatchAdjacency:
     """Adjacency of the patches of a construction, from its refined mesh.
 
-    Patches are dual to the refined mesh: a patch sits at a 4-valent refined
-    vertex with outgoing half-edges e0..e3 (counter-clockwise), its corners
-    are the refined faces around the vertex and its sides cross e0..e3.
+    Patches are dual to the refined mesh: a patch sits at a 4-valent refined vertex with outgoing half-edges
+    e0..e3 (counter-clockwise), its corners are the refined faces around the vertex and its sides cross e0..e3.
 
     Parameters
     ----------
@@ -212,13 +216,13 @@ def patch_adjacency(refined, frames) -> PatchAdjacency:
     -------
     PatchAdjacency (canonical numbering, see the module docstring)
 
-    Memory: the result ((P, 4) int32 corners and edges, (P, 4) bool) and one int32 table per label range
-    (refined faces, refined half-edges) besides blocks of ``_ADJACENCY_BLOCK`` patches: the labels are
-    gathered by blocks (``corner_labels``, ``side_labels``) straight into the arrays that become the ids
-    (``adjacency_from_labels`` renumbers them in place). A caller that owns the refined mesh's arrays can
+    Corners and sides are independent: a task each on the thread pool (their gathers and scatters run without
+    the GIL). Memory: the result ((P, 4) int32 corners and edges, (P, 4) bool) and one int32 table per label
+    range (refined faces, refined half-edges; both at once) besides blocks of ``_ADJACENCY_BLOCK`` patches: the
+    labels are gathered by blocks (``corner_labels``, ``side_labels``) straight into the arrays that become the
+    ids (``adjacency_from_labels`` renumbers them in place). A caller that owns the refined mesh's arrays can
     call the three itself and let each input go once read (``evaluation.stream.StreamedSurface``).
     """
-    # corners and sides are independent: a task each on the thread pool (gathers and scatters run without the GIL)
     corners, (edges, forward) = run_tasks([lambda: adjacency_from_corner_labels(corner_labels(refined.face, frames)).corners,
                                            lambda: _sides_renumbered(*side_labels(refined.twin, frames))])
     return PatchAdjacency(corners, edges, forward)
@@ -274,20 +278,16 @@ def side_labels(twin: np.ndarray, frames):
 
 
 def adjacency_from_labels(corners: np.ndarray, edges: np.ndarray, forward: np.ndarray) -> PatchAdjacency:
-    """The PatchAdjacency of ``corner_labels`` and ``side_labels``' arrays, renumbered in place (they become its
-    corners, edges and reversed)."""
+    """The PatchAdjacency of ``corner_labels`` and ``side_labels``' arrays, renumbered in place (they become its own)."""
     return PatchAdjacency(adjacency_from_corner_labels(corners).corners, *_sides_renumbered(edges, forward))
 
 
 def _sides_renumbered(edges: np.ndarray, forward: np.ndarray):
     """(edges, reversed): ``side_labels``' arrays (P, 4) int and (P, 4) bool made edge ids and directions in place."""
-    first = _renumber(edges.reshape(-1))
     # a side is reversed when its direction differs from that of the edge's first side
-    first_forward = np.take(forward.reshape(-1), first)
-    del first
-    flat_edges, flat_forward = edges.reshape(-1), forward.reshape(-1)
-    for a in range(0, flat_edges.size, 4 * _ADJACENCY_BLOCK):
-        z = min(a + 4 * _ADJACENCY_BLOCK, flat_edges.size)
+    first_forward = np.take(forward.reshape(-1), _renumber(edges.reshape(-1)))
+    flat_edges, flat_forward, step = edges.reshape(-1), forward.reshape(-1), 4 * _ADJACENCY_BLOCK
+    for a, z in ((a, min(a + step, flat_edges.size)) for a in range(0, flat_edges.size, step)):
         np.not_equal(flat_forward[a:z], np.take(first_forward, flat_edges[a:z]), out=flat_forward[a:z])
     return edges, forward
 
