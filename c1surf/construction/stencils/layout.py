@@ -154,8 +154,10 @@ def block_product(points: np.ndarray, slots: np.ndarray, weights: np.ndarray, st
     work = work or _ProductWork(m, weights.shape[0], n, d)
     g = work.gathered[:, :n]
     index = slots[:, start:stop] if isinstance(slots, np.ndarray) else slots.block(start, stop, work.index(m, slots.dtype))
-    for j in range(m):
-        np.take(points, index[j], axis=0, out=g[j], mode="clip")
+    if index.dtype != np.intp:  # converted once into the block's work array: np.take converts on every call
+        np.copyto(work.index(m, np.intp)[:, :n], index)
+        index = work.index(m, np.intp)[:, :n]
+    np.take(points, index, axis=0, out=g[:m], mode="clip")  # one call for all slots (a whole block: contiguous)
     if offset is None:
         return np.matmul(weights, g[:m].reshape(m, -1), out=work.product[:, : n * d])
     work.offset_row(offset)
@@ -169,7 +171,7 @@ class _ProductWork:
     def __init__(self, m: int, r: int, items: int, d: int):
         self.gathered = np.empty((m + 1, items, d))  # the last row: the offset's (``offset_row``)
         self.product = np.empty((r, items * d))
-        self._index = None
+        self._index = {}
         self._offset = None
 
     def offset_row(self, offset: np.ndarray) -> None:
@@ -179,10 +181,11 @@ class _ProductWork:
             self._offset = np.array(offset, dtype=np.float64)
 
     def index(self, m: int, dtype) -> np.ndarray:
-        """(m, items) int of ``dtype``: room for the slots of a block made by blocks (made on first use)."""
-        if self._index is None or self._index.dtype != dtype:
-            self._index = np.empty((m, self.gathered.shape[1]), dtype=dtype)
-        return self._index
+        """(m, items) int of ``dtype``: room for the slots of a block made by blocks, or converted (made on first use)."""
+        key = np.dtype(dtype)
+        if key not in self._index:
+            self._index[key] = np.empty((m, self.gathered.shape[1]), dtype=dtype)
+        return self._index[key]
 
 
 def gathered_matrix(slots: np.ndarray, weights: np.ndarray, n_points: int):
