@@ -203,9 +203,8 @@ _ADJACENCY_BLOCK = 1 << 16
 def patch_adjacency(refined, frames) -> PatchAdjacency:
     """Adjacency of the patches of a construction, from its refined mesh.
 
-    Patches are dual to the refined mesh: a patch sits at a 4-valent refined
-    vertex with outgoing half-edges e0..e3 (counter-clockwise), its corners
-    are the refined faces around the vertex and its sides cross e0..e3.
+    Patches are dual to the refined mesh: a patch sits at a 4-valent refined vertex with outgoing half-edges
+    e0..e3 (counter-clockwise), its corners are the refined faces around the vertex and its sides cross e0..e3.
 
     Parameters
     ----------
@@ -217,15 +216,16 @@ def patch_adjacency(refined, frames) -> PatchAdjacency:
     -------
     PatchAdjacency (canonical numbering, see the module docstring)
 
-    Memory: the result ((P, 4) int32 corners and edges, (P, 4) bool) and one int32 table per label range
-    (refined faces, refined half-edges) besides blocks of ``_ADJACENCY_BLOCK`` patches: the labels are
-    gathered by blocks (``corner_labels``, ``side_labels``) straight into the arrays that become the ids
-    (``adjacency_from_labels`` renumbers them in place). A caller that owns the refined mesh's arrays can
+    Corners and sides are independent: a task each on the thread pool (their gathers and scatters run without
+    the GIL). Memory: the result ((P, 4) int32 corners and edges, (P, 4) bool) and one int32 table per label
+    range (refined faces, refined half-edges; both at once) besides blocks of ``_ADJACENCY_BLOCK`` patches: the
+    labels are gathered by blocks (``corner_labels``, ``side_labels``) straight into the arrays that become the
+    ids (``adjacency_from_labels`` renumbers them in place). A caller that owns the refined mesh's arrays can
     call the three itself and let each input go once read (``evaluation.stream.StreamedSurface``).
     """
-    corners = corner_labels(refined.face, frames)
-    edges, forward = side_labels(refined.twin, frames)
-    return adjacency_from_labels(corners, edges, forward)
+    corners, (edges, forward) = run_tasks([lambda: adjacency_from_corner_labels(corner_labels(refined.face, frames)).corners,
+                                           lambda: _sides_renumbered(*side_labels(refined.twin, frames))])
+    return PatchAdjacency(corners, edges, forward)
 
 
 def _frame_parts(frames) -> list:
@@ -278,18 +278,18 @@ def side_labels(twin: np.ndarray, frames):
 
 
 def adjacency_from_labels(corners: np.ndarray, edges: np.ndarray, forward: np.ndarray) -> PatchAdjacency:
-    """The PatchAdjacency of ``corner_labels`` and ``side_labels``' arrays, renumbered in place (they become its
-    corners, edges and reversed)."""
-    _renumber(corners.reshape(-1))
-    first = _renumber(edges.reshape(-1))
+    """The PatchAdjacency of ``corner_labels`` and ``side_labels``' arrays, renumbered in place (they become its own)."""
+    return PatchAdjacency(adjacency_from_corner_labels(corners).corners, *_sides_renumbered(edges, forward))
+
+
+def _sides_renumbered(edges: np.ndarray, forward: np.ndarray):
+    """(edges, reversed): ``side_labels``' arrays (P, 4) int and (P, 4) bool made edge ids and directions in place."""
     # a side is reversed when its direction differs from that of the edge's first side
-    first_forward = np.take(forward.reshape(-1), first)
-    del first
-    flat_edges, flat_forward = edges.reshape(-1), forward.reshape(-1)
-    for a in range(0, flat_edges.size, 4 * _ADJACENCY_BLOCK):
-        z = min(a + 4 * _ADJACENCY_BLOCK, flat_edges.size)
+    first_forward = np.take(forward.reshape(-1), _renumber(edges.reshape(-1)))
+    flat_edges, flat_forward, step = edges.reshape(-1), forward.reshape(-1), 4 * _ADJACENCY_BLOCK
+    for a, z in ((a, min(a + step, flat_edges.size)) for a in range(0, flat_edges.size, step)):
         np.not_equal(flat_forward[a:z], np.take(first_forward, flat_edges[a:z]), out=flat_forward[a:z])
-    return PatchAdjacency(corners, edges, forward)
+    return edges, forward
 
 
 def adjacency_from_corner_labels(corners: np.ndarray) -> PatchAdjacency:

@@ -70,6 +70,7 @@ class GridSlots:
     """
 
     ndim = 2
+    offset_in_product = True  # its 9-term products sum in order: an offset may be their last term (``layout.block_product``)
 
     def __init__(self, mesh: HalfEdgeMesh, frames: np.ndarray):
         self.mesh, self.frames = mesh, frames

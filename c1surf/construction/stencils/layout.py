@@ -19,9 +19,9 @@ def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray
 
     Blocks of patches that stay in cache, on the thread pool: gather slot by slot
     (each into a contiguous row of the block), one (r x m) @ (m x block d) product,
-    one strided copy into the output. mode="clip": no bounds check, no buffering
-    (the indices are valid by construction). The blocks are ``product_blocks``:
-    a block computed alone (``product_block``) gives the same bits.
+    one gather by a fixed permutation into the output (``product_block``). mode="clip":
+    no bounds check, no buffering (the indices are valid by construction). The blocks
+    are ``product_blocks``: a block computed alone (``product_block``) gives the same bits.
 
     Parameters
     ----------
@@ -29,11 +29,11 @@ def gathered_products(points: np.ndarray, slots: np.ndarray, weights: np.ndarray
     slots : (m, k) int, slots[j, p] is the row of points that is input j of patch p
     weights : (r, m) float
     out : (k, r, d) float, filled and returned
-    offset : (d,) float or None, added to every output row after its sum, in the same strided pass
-        that copies the block out (points relative to an origin: rows of ``weights`` summing to 1,
-        this puts the origin back; adding it inside the product instead, as one more input row,
-        costs nothing but rounds the small terms at the offset's scale: 1.1e-10 rad on
-        OpenSubdiv's bishop against 4.9e-11)
+    offset : (d,) float or None, added to every output row after its sum (points relative to an
+        origin: rows of ``weights`` summing to 1, this puts the origin back), as the last term of
+        the product or in a pass before the copy out (``block_product``); added as the first term
+        instead, it would round the small terms at the offset's scale: 1.1e-10 rad on OpenSubdiv's
+        bishop against 4.9e-11
     """
     points = np.ascontiguousarray(points)
     m, k = slots.shape
@@ -85,45 +85,107 @@ def product_block(points: np.ndarray, slots: np.ndarray, weights: np.ndarray, st
     points : (V, d) float, C-contiguous; slots : (m, k) int, or a table made by blocks (``block(start, stop)``:
     ``biquadratic.GridSlots``); weights : (r, m) float; work : the block's work arrays (made here if None)
     """
-    d = points.shape[1]
-    block = block_product(points, slots, weights, start, stop, work).reshape(weights.shape[0], -1, d)
-    # (r, items, d) -> (items, r, d) one coordinate at a time: each copy then runs over (items, r) with
-    # long inner loops, 3.4x faster than the whole transpose at once, whose inner loop is d long
-    for c in range(d):
-        if offset is None:
-            out[:, :, c] = block[:, :, c].T
-        else:
-            np.add(block[:, :, c].T, offset[c], out=out[:, :, c])
+    d, r = points.shape[1], weights.shape[0]
+    inside = offset is not None and getattr(slots, "offset_in_product", False)
+    product = block_product(points, slots, weights, start, stop, work, offset if inside else None)  # (r, items d)
+    if offset is not None and not inside:  # one pass over rows items d long: the bits of adding it after the transpose
+        product += _tiled(offset, stop - start)
+    if out.flags.c_contiguous:
+        # (r, items, d) -> (items, r, d) as one gather of single values by a fixed permutation (kept per
+        # block size): 2.2x faster than the copy by coordinates below, whose writes are d apart
+        np.take(product.reshape(-1), _transpose_order(r, stop - start, d), out=out.reshape(-1), mode="clip")
+        return out
+    block = product.reshape(r, -1, d)
+    for c in range(d):  # (r, items, d) -> (items, r, d) one coordinate at a time
+        out[:, :, c] = block[:, :, c].T
     return out
 
 
+_ORDERS: dict = {}
+
+
+def _transpose_order(r: int, items: int, d: int) -> np.ndarray:
+    """(items r d,) intp: the flat index in an (r, items, d) array of every entry of the (items, r, d) one."""
+    key = (r, items, d)
+    order = _ORDERS.get(key)
+    if order is None:
+        if len(_ORDERS) > 64:
+            _ORDERS.clear()
+        p, i, c = np.ogrid[:items, :r, :d]
+        order = _ORDERS[key] = (i * (items * d) + p * d + c).reshape(-1).astype(np.intp)
+    return order
+
+
+def _tiled(offset: np.ndarray, items: int) -> np.ndarray:
+    """(items d,) float: ``offset`` (d,) repeated once per item (kept per offset and block size)."""
+    key = ("offset", items, offset.tobytes())
+    tiled = _ORDERS.get(key)
+    if tiled is None:
+        if len(_ORDERS) > 64:
+            _ORDERS.clear()
+        tiled = _ORDERS[key] = np.tile(offset, items)
+    return tiled
+
+
+_WITH_ONES: dict = {}
+
+
+def _with_ones(weights: np.ndarray) -> np.ndarray:
+    """(r, m + 1) float: ``weights`` and a column of ones (the offset's row of ``block_product``), kept per array."""
+    held = _WITH_ONES.get(id(weights))
+    if held is None or held[0] is not weights:
+        held = _WITH_ONES[id(weights)] = (weights, np.concatenate([weights, np.ones((weights.shape[0], 1))], axis=1))
+    return held[1]
+
+
 def block_product(points: np.ndarray, slots: np.ndarray, weights: np.ndarray, start: int, stop: int,
-                  work: "_ProductWork | None" = None) -> np.ndarray:
+                  work: "_ProductWork | None" = None, offset: np.ndarray | None = None) -> np.ndarray:
     """(r, (stop - start) d) float: the product of ``product_block`` before it is copied out, coefficient-major
-    (row i, columns (item, coordinate)), without the offset; in ``work.product`` (made here if None)."""
-    m, d = slots.shape[0], points.shape[1]
-    work = work or _ProductWork(m, weights.shape[0], stop - start, d)
-    g = work.gathered[:, : stop - start]
+    (row i, columns (item, coordinate)); in ``work.product`` (made here if None).
+
+    offset : (d,) float or None, added to every entry as the product's last term: one more gathered row
+    holding it (written once per work array) with weight 1. Only for slots whose product sums its terms in
+    order (their ``offset_in_product``: the biquadratic grid's 9, checked bit for bit): then this gives the
+    bits of adding it after the sum (as ``product_block`` does for the others and
+    ``patch_blocks.PatchSource.rows_of`` for all), without a pass. (The bicubic holes' products of 4n + 1
+    terms do not: BLAS splits their sums.)
+    """
+    m, d, n = slots.shape[0], points.shape[1], stop - start
+    work = work or _ProductWork(m, weights.shape[0], n, d)
+    g = work.gathered[:, :n]
     index = slots[:, start:stop] if isinstance(slots, np.ndarray) else slots.block(start, stop, work.index(m, slots.dtype))
-    for j in range(m):
-        np.take(points, index[j], axis=0, out=g[j], mode="clip")
-    return np.matmul(weights, g.reshape(m, -1), out=work.product[:, : (stop - start) * d])
+    if index.dtype != np.intp:  # converted once into the block's work array: np.take converts on every call
+        np.copyto(work.index(m, np.intp)[:, :n], index)
+        index = work.index(m, np.intp)[:, :n]
+    np.take(points, index, axis=0, out=g[:m], mode="clip")  # one call for all slots (a whole block: contiguous)
+    if offset is None:
+        return np.matmul(weights, g[:m].reshape(m, -1), out=work.product[:, : n * d])
+    work.offset_row(offset)
+    return np.matmul(_with_ones(weights), g.reshape(m + 1, -1), out=work.product[:, : n * d])
 
 
 class _ProductWork:
-    """Work arrays of product blocks of up to ``items`` items: gathered (m, items, d), product (r, items d),
+    """Work arrays of product blocks of up to ``items`` items: gathered (m + 1, items, d), product (r, items d),
     and the block's slots when they are made by blocks (``index``)."""
 
     def __init__(self, m: int, r: int, items: int, d: int):
-        self.gathered = np.empty((m, items, d))
+        self.gathered = np.empty((m + 1, items, d))  # the last row: the offset's (``offset_row``)
         self.product = np.empty((r, items * d))
-        self._index = None
+        self._index = {}
+        self._offset = None
+
+    def offset_row(self, offset: np.ndarray) -> None:
+        """Fill the last gathered row with ``offset`` (d,) for every item (unless it holds it already)."""
+        if self._offset is None or not np.array_equal(self._offset, offset):
+            self.gathered[-1] = offset
+            self._offset = np.array(offset, dtype=np.float64)
 
     def index(self, m: int, dtype) -> np.ndarray:
-        """(m, items) int of ``dtype``: room for the slots of a block made by blocks (made on first use)."""
-        if self._index is None or self._index.dtype != dtype:
-            self._index = np.empty((m, self.gathered.shape[1]), dtype=dtype)
-        return self._index
+        """(m, items) int of ``dtype``: room for the slots of a block made by blocks, or converted (made on first use)."""
+        key = np.dtype(dtype)
+        if key not in self._index:
+            self._index[key] = np.empty((m, self.gathered.shape[1]), dtype=dtype)
+        return self._index[key]
 
 
 def gathered_matrix(slots: np.ndarray, weights: np.ndarray, n_points: int):
