@@ -169,8 +169,12 @@ class PatchSource:
         start, stop = int(group.starts[b]), int(group.starts[b + 1])
         work = _thread_work(group.slots.shape[0], group.weights.shape[0], int(np.diff(group.starts).max()),
                             self.refined.shape[1])
+        # the centre enters as ``product_block`` adds it: as the product's last term where the whole surface's
+        # products take it so (``offset_in_product``), after the sum elsewhere, whichever way BLAS sums
+        inside = bool(getattr(group.slots, "offset_in_product", False))
         with blas_on_one_thread(group.held):
-            product = block_product(self.refined, group.slots, group.weights, start, stop, work)
+            product = block_product(self.refined, group.slots, group.weights, start, stop, work,
+                                    self.origin if inside else None)
         patch, coefficient = np.divmod(rows, layout.coefficients)
         if layout.keep is not None:  # kept patches -> all patches of the block (from its first)
             p0 = np.searchsorted(layout.kept_rows(), group.first + start * group.per_item)
@@ -179,7 +183,8 @@ class PatchSource:
         # the product is (r, items, d): row (patch within its item) * k * k + coefficient, column item
         out = np.take(product.reshape(-1, self.refined.shape[1]),
                       (within * layout.coefficients + coefficient) * (stop - start) + item, axis=0)
-        out += self.origin
+        if not inside:
+            out += self.origin
         return out
 
     def keep_slot_arrays(self) -> None:
