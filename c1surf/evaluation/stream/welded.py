@@ -93,7 +93,7 @@ class StreamedTessellation:
         checked = self._checked if check else (lambda points, normals: (points, normals))
         passes = self._corner_passes()
         for lo, hi in passes:
-            corners = self._corner_table(lo, hi)
+            corners, block = self._corner_table(lo, hi), None
             if check:
                 self._checked(corners[:, :0], corners[:, dim:])
             for a in range(0, hi - lo, samples):
