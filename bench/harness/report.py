@@ -174,7 +174,7 @@ class Targets:
         meshes = sorted({f["input"] for f in fid if f.get("ok")})
         name = "fidelity beside speed: input vertices to each tool's surface, enclosed volume"
         if meshes:
-            self.add(name, len(meshes), "measured", None, "inputs: " + ", ".join(meshes) + " (table below)")
+            self.add(name, len(meshes), "measured", None, "inputs: " + ", ".join(meshes) + " (table above)")
         else:
             self.missing(name, "measured", "no fidelity measurement succeeded")
         tol = self.results.get("tolerance", {})
@@ -183,7 +183,7 @@ class Targets:
                   for t in m["tolerances"] if t.get("uniform") and t.get("triangles")]
         if ratios:
             self.add(name, round(statistics.median(ratios), 2), "measured", None,
-                     f"median of uniform/tolerance triangle counts over {len(ratios)} cases (table below)")
+                     f"median of uniform/tolerance triangle counts over {len(ratios)} cases (table above)")
         else:
             self.missing(name, "measured", tol.get("skipped", "no --tolerance case reached a uniform match"))
 
