@@ -25,19 +25,19 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
+from ..memory import return_freed_memory
 from ..mesh.ghost_layer import ghost_points_matrix, reflex_corners
-from ..mesh.halfedges import HalfEdgeMesh
 from .extensions.interpolation import normal_constraint, vertex_interpolation_step
 from .features import INFINITELY_SHARP
 from .refine.doo_sabin import FACE_FROM_VERTEX
 from .stencils.bicubic import bicubic_layout
 from .stencils.biquadratic import biquadratic_layout
-from .stencils.blend import second_step_corner_ratios
+from .stencils.blend import second_step_ratios
 from .stencils.creases import crease_correction, mirror_perturbation, mirror_rows, refined_sharpness
-from .stencils.doo_sabin import DooSabinStep, FirstDooSabinStep, compact_ratio, doo_sabin_matrix
+from .stencils.doo_sabin import DooSabinStep, FirstDooSabinStep, doo_sabin_matrix
 from .stencils.hole_rules import HoleRules
 from .stencils.perturbation import perturbation_matrix
-from .topology import RELEASED_TWIN_HALFEDGES, SurfaceTopology, return_freed_memory
+from .topology import RELEASED_TWIN_HALFEDGES, SurfaceTopology
 
 if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is made: a closed mesh's conversion makes none (0.2 s)
     from scipy.sparse import csr_matrix
@@ -229,33 +229,6 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
     if topology.refined.n_halfedges >= RELEASED_TWIN_HALFEDGES:
         return_freed_memory()  # what this stage's temporaries freed, before the largest arrays of the build
     return step
-
-
-def second_step_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, corner_ratio: np.ndarray,
-                       block: int = 1 << 20) -> np.ndarray:
-    """(H',) float: ``stencils.blend.second_step_corner_ratios`` of the once-refined mesh, made by blocks of
-    ``block`` faces (each face's corners read that face alone: the same bits), as ``compact_ratio`` keeps them:
-    one value broadcast if every corner has the same bits, else the whole array. A quad mesh's ratios are one
-    value, and the whole array (0.5 GB for the 4,000,000-quad torus, and its temporaries 4 times that) is
-    never made."""
-    offsets, n_faces = level1.face_offsets, level1.n_faces
-    whole, first = None, None
-    for f0 in range(0, n_faces, block):
-        f1 = min(n_faces, f0 + block)
-        h0, h1 = int(offsets[f0]), int(offsets[f1])
-        part = HalfEdgeMesh(level1.n_vertices, level1.face_sizes[f0:f1], None, level1.origin[h0:h1], None, None, None,
-                            None)  # its face and offsets are made from its sizes, numbered from f0
-        ratio = second_step_corner_ratios(part, is_vertex_cell[f0:f1], corner_ratio)
-        if whole is None:
-            first = ratio[:1].copy() if first is None else first
-            if np.all(ratio.view(np.int64) == first.view(np.int64)[0]):
-                continue  # the same bits so far
-            whole = np.empty(level1.n_halfedges)
-            whole[:h0] = first[0]
-        whole[h0:h1] = ratio
-    if whole is None:
-        return np.zeros(0) if first is None else np.broadcast_to(first, (level1.n_halfedges,))
-    return whole
 
 
 def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:

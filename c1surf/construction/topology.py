@@ -9,7 +9,6 @@ that reads points (convex or reflex ghost corners) is a stage
 """
 from __future__ import annotations
 
-import ctypes
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,6 +22,7 @@ from ..mesh.creases.sheets import CreaseSheets, cut_crease_sheets
 from .features import INFINITELY_SHARP, CoarseSharpness, SharpFeatures, coarse_sharpness
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_VERTEX, RefinedFaces, refine_doo_sabin, refined_halfedges
 from .refine.fewer_steps import check_refinements, fewer_refinement_sources, refinements_needed
+from ..memory import return_freed_memory
 from .refine.holes import HoleGroup, hole_neighbourhoods, patch_frames
 
 
@@ -288,22 +288,3 @@ def real_refined_vertices(coarse: HalfEdgeMesh, level1, refined: HalfEdgeMesh, r
     if levels < 2 or real_face.all():
         return np.ones(refined.n_vertices, dtype=bool)
     return real_face[coarse.face[level1.origin[: refined.n_vertices]]]
-
-
-def return_freed_memory() -> None:
-    """Give the pages of freed memory back to the system (glibc's ``malloc_trim``; nothing where there is none).
-
-    The command line has glibc keep freed memory for reuse (``cli.runtime.tune_allocator``: every array from
-    the heap, given back only above 1 GiB free at its top), and the library's arrays below glibc's mmap
-    threshold live in its heaps anyway. Once the build is let go, what comes next is much smaller, so
-    those pages are given back here. Measured on the 180k-quad torus: 812 MB after its Surface was
-    dropped, 657 MB after the call, 340 MB once the topology went; on the 4,000,000-quad torus
-    16.2 -> 12.9 -> 6.7 GB (0.02 to 0.7 s a call). The build of a large mesh calls it too, between
-    its largest steps (``build_topology``): what one step freed is not resident beside the next one's
-    arrays, which do not fit in its holes.
-    """
-    try:
-        trim = ctypes.CDLL(None).malloc_trim
-    except (OSError, AttributeError, TypeError):  # not glibc (TypeError: no CDLL(None) on Windows)
-        return
-    trim(0)

@@ -273,7 +273,7 @@ def test_second_step_ratios_by_blocks_match_the_whole(path):
     """The second step's ratios made by blocks of faces (one broadcast value when all equal) are the whole
     computation's, bit for bit."""
     from c1surf.construction.refine.doo_sabin import FACE_FROM_VERTEX
-    from c1surf.construction.stages import second_step_ratios
+    from c1surf.construction.stencils.blend import second_step_ratios
     from c1surf.construction.stencils.blend import second_step_corner_ratios
 
     surface = surface_of(path if isinstance(path, Path) else shared_mesh(path))

@@ -95,3 +95,30 @@ def second_step_corner_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, 
     ratio = np.where(in_vertex_cell, cell_min[level1.face], ratio)
     per_face = 1.0 - np.cos(2.0 * np.pi / level1.face_sizes)  # per face, then spread to its corners
     return ratio * np.take(per_face, level1.face)
+
+
+def second_step_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, corner_ratio: np.ndarray,
+                       block: int = 1 << 20) -> np.ndarray:
+    """(H',) float: ``second_step_corner_ratios`` of the once-refined mesh, made by blocks of
+    ``block`` faces (each face's corners read that face alone: the same bits), as ``doo_sabin.compact_ratio`` keeps them:
+    one value broadcast if every corner has the same bits, else the whole array. A quad mesh's ratios are one
+    value, and the whole array (0.5 GB for the 4,000,000-quad torus, and its temporaries 4 times that) is
+    never made."""
+    offsets, n_faces = level1.face_offsets, level1.n_faces
+    whole, first = None, None
+    for f0 in range(0, n_faces, block):
+        f1 = min(n_faces, f0 + block)
+        h0, h1 = int(offsets[f0]), int(offsets[f1])
+        part = HalfEdgeMesh(level1.n_vertices, level1.face_sizes[f0:f1], None, level1.origin[h0:h1], None, None, None,
+                            None)  # its face and offsets are made from its sizes, numbered from f0
+        ratio = second_step_corner_ratios(part, is_vertex_cell[f0:f1], corner_ratio)
+        if whole is None:
+            first = ratio[:1].copy() if first is None else first
+            if np.all(ratio.view(np.int64) == first.view(np.int64)[0]):
+                continue  # the same bits so far
+            whole = np.empty(level1.n_halfedges)
+            whole[:h0] = first[0]
+        whole[h0:h1] = ratio
+    if whole is None:
+        return np.zeros(0) if first is None else np.broadcast_to(first, (level1.n_halfedges,))
+    return whole

@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...construction.topology import return_freed_memory
+from ...memory import return_freed_memory
 from ..adjacency import (PatchAdjacency, adjacency_from_corner_labels, adjacency_from_labels, corner_labels,
                          side_labels)
 from ..patch_set import PatchStream, surface_header, surface_source_ids
