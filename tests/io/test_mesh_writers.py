@@ -1,6 +1,8 @@
 """The vectorized OBJ and PLY writers: what they write reads back exactly (to the stated precision)."""
 from __future__ import annotations
 
+import threading
+
 import numpy as np
 import pytest
 from plyfile import PlyData
@@ -68,6 +70,45 @@ def test_ply_blocks_of_one_records_array_write_its_bytes(tmp_path):
     whole = (tmp_path / "whole.ply").read_bytes()
     assert (tmp_path / "halves.ply").read_bytes() == (tmp_path / "copies.ply").read_bytes() == whole
     assert (tmp_path / "first.ply").read_bytes() == whole  # the faces written first, after the vertices' room
+
+
+def _face_threads() -> list:
+    return [t for t in threading.enumerate() if t.name == "ply faces"]
+
+
+def test_ply_faces_first_stop_with_an_error_of_either_side(tmp_path):
+    """The faces written first run on a thread beside the vertex blocks: an error in the vertex blocks stops
+    them (no thread outlives the file) and is the error raised; an error in the triangle blocks is raised
+    once the vertices are written. Many blocks, so that the faces are still being written."""
+    rng = np.random.default_rng(4)
+    records, triangles = rng.standard_normal((50, 6)), rng.integers(0, 50, (30, 3)).astype(np.int32)
+    started = threading.Event()
+
+    def triangle_blocks(fail_at=None):
+        for k in range(3000):
+            started.set()
+            if k == fail_at:
+                raise MemoryError("no room for the faces")
+            yield triangles[:1]
+
+    def vertex_blocks(fail):
+        started.wait(5)  # the face thread has begun
+        yield records[:25, :3], records[:25, 3:]
+        if fail:
+            raise KeyboardInterrupt
+        yield records[25:, :3], records[25:, 3:]
+
+    with pytest.raises(KeyboardInterrupt):
+        write_ply_blocks(tmp_path / "a.ply", 50, 3000, vertex_blocks(True), triangle_blocks(), triangles_first=True)
+    assert not _face_threads()
+    started.clear()
+    with pytest.raises(MemoryError, match="no room for the faces"):
+        write_ply_blocks(tmp_path / "b.ply", 50, 3000, vertex_blocks(False), triangle_blocks(2000), triangles_first=True)
+    assert not _face_threads()
+    started.clear()
+    write_ply_blocks(tmp_path / "c.ply", 50, 3000, vertex_blocks(False), triangle_blocks(), triangles_first=True)
+    write_ply(tmp_path / "d.ply", TriangleMesh(records[:, :3], np.repeat(triangles[:1], 3000, axis=0), records[:, 3:]))
+    assert (tmp_path / "c.ply").read_bytes() == (tmp_path / "d.ply").read_bytes()
 
 
 def test_mesh_out_uses_the_fast_writers(tmp_path):

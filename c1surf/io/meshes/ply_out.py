@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import contextlib
 import os
+import threading
 
 import numpy as np
 
@@ -98,22 +99,26 @@ def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, tri
     written = [0, 0]
     with open(path, "wb") as f:
         f.write(_header([(name, dtype, None) for name, dtype in names], n_vertices, n_triangles, ("c1surf",)))
-        vertices_at = f.tell()
-        if triangles_first:  # integers only: on the disk while the vertices are computed
-            f.seek(vertices_at + n_vertices * 6 * np.dtype(real).itemsize)
-            for triangles in triangle_blocks:
-                f.write(_face_bytes(triangles))
-                written[1] += triangles.shape[0]
-            f.flush()
-            _start_writeback(f, vertices_at)
-            f.seek(vertices_at)
-        for points, normals in vertex_blocks:
-            records = None if float32 else _records(points, normals)
-            if records is None:
-                values = [points[:, 0], points[:, 1], points[:, 2], normals[:, 0], normals[:, 1], normals[:, 2]]
-                records = _vertex_bytes([(name, dtype, v) for (name, dtype), v in zip(names, values)])
-            f.write(records)
-            written[0] += points.shape[0]
+        f.flush()
+        faces = None
+        if triangles_first:  # integers only: written by a thread of their own while the vertices are computed
+            faces = _FaceWriter(f.fileno(), f.tell() + n_vertices * 6 * np.dtype(real).itemsize, triangle_blocks)
+            faces.start()
+        try:
+            for points, normals in vertex_blocks:
+                records = None if float32 else _records(points, normals)
+                if records is None:
+                    values = [points[:, 0], points[:, 1], points[:, 2], normals[:, 0], normals[:, 1], normals[:, 2]]
+                    records = _vertex_bytes([(name, dtype, v) for (name, dtype), v in zip(names, values)])
+                f.write(records)
+                written[0] += points.shape[0]
+        except BaseException:
+            if faces is not None:
+                faces.finish(stop=True)  # an error or an interrupt here: the faces stop too, before the file closes
+            raise
+        if faces is not None:
+            faces.finish(stop=False)
+            written[1] = faces.count
         for triangles in () if triangles_first else triangle_blocks:
             f.write(_face_bytes(triangles))
             written[1] += triangles.shape[0]
@@ -122,19 +127,59 @@ def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, tri
                          f"the header says {n_vertices} and {n_triangles}")
 
 
+class _FaceWriter(threading.Thread):
+    """Write the face records of ``triangle_blocks`` from byte ``offset`` of the open file ``fd`` (``os.pwrite``:
+    the file position stays the caller's), beside the vertex blocks the caller computes meanwhile (0.1-0.15 s of
+    the 180,000-quad torus's conversion at -r 2 no longer comes after the vertices). Then have the kernel start
+    writing those pages to the disk (``_start_writeback``)."""
+
+    def __init__(self, fd: int, offset: int, triangle_blocks):
+        super().__init__(name="ply faces", daemon=True)
+        self.fd, self.offset, self.blocks = fd, offset, triangle_blocks
+        self.count, self.error, self._halt = 0, None, threading.Event()
+
+    def run(self) -> None:
+        try:
+            at = self.offset
+            for triangles in self.blocks:
+                if self._halt.is_set():
+                    return
+                data = memoryview(_face_bytes(triangles))
+                while data.nbytes:
+                    n = os.pwrite(self.fd, data, at)
+                    at, data = at + n, data[n:]
+                self.count += triangles.shape[0]
+            _start_writeback(self.fd, self.offset)
+        except BaseException as exc:  # given to the caller by ``finish``
+            self.error = exc
+
+    def finish(self, stop: bool) -> None:
+        """Wait for the thread (told to stop after its current block if ``stop``); raise its error, if any."""
+        if stop:
+            self._halt.set()
+        try:
+            self.join()
+        except BaseException:  # interrupted while waiting: it stops after its block (it must not outlive the file)
+            self._halt.set()
+            self.join()
+            raise
+        if self.error is not None and not stop:
+            raise self.error
+
+
 def write_ply_stream(path, tessellation, float32: bool = False) -> None:
     """Write a tessellation by blocks (``evaluation.stream.StreamedTessellation``): the bytes of ``write_ply``."""
     write_ply_blocks(path, tessellation.n_vertices, tessellation.n_triangles, tessellation.vertex_blocks(),
                      tessellation.triangle_blocks(), float32, triangles_first=True)
 
 
-def _start_writeback(f, start: int) -> None:
+def _start_writeback(fd: int, start: int) -> None:
     """Have the kernel start writing the file's pages from ``start`` on to the disk, without waiting (Linux), so
     that ``atomic_output``'s flush before the rename finds less to do."""
     advise = getattr(os, "posix_fadvise", None)
     if advise is not None:
         with contextlib.suppress(OSError):
-            advise(f.fileno(), start, 0, os.POSIX_FADV_DONTNEED)
+            advise(fd, start, 0, os.POSIX_FADV_DONTNEED)
 
 
 def _records(points: np.ndarray, normals: np.ndarray):
