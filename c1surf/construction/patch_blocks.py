@@ -69,6 +69,8 @@ class PatchSource:
         self.cache_bytes = DEFAULT_CACHE_BYTES if cache_bytes is None else cache_bytes
         self._cache: OrderedDict = OrderedDict()
         self._cached = 0
+        self._lock = threading.Lock()  # the cache, for blocks asked for by several threads (a streamed tessellation)
+        self._making: dict = {}  # the blocks being made, each by one thread: (kind, g, b) -> Event set when done
         self._groups = []
         for layout in self.layouts:
             groups, first = [], 0
@@ -203,9 +205,30 @@ class PatchSource:
     def _block(self, kind: int, g: int, b: int) -> np.ndarray:
         """(items * per item, coefficients, d) float: the rows of product block b of group g, computed or kept."""
         key = (kind, g, b)
-        if key in self._cache:
-            self._cache.move_to_end(key)
-            return self._cache[key]
+        while True:
+            with self._lock:
+                if key in self._cache:
+                    self._cache.move_to_end(key)
+                    return self._cache[key]
+                making = self._making.get(key)
+                if making is None:  # this thread makes it; one asking for it meanwhile waits for it
+                    making = self._making[key] = threading.Event()
+                    break
+            making.wait()  # then from the cache (or made again, if it has already left it)
+        try:
+            rows = self._made_block(kind, g, b)
+            with self._lock:
+                self._cache[key] = rows
+                self._cached += rows.nbytes
+                while self._cached > self.cache_bytes and len(self._cache) > 1:
+                    self._cached -= self._cache.popitem(last=False)[1].nbytes
+        finally:
+            with self._lock:
+                del self._making[key]
+            making.set()
+        return rows
+
+    def _made_block(self, kind: int, g: int, b: int) -> np.ndarray:
         group = self._groups[kind][g]
         start, stop = int(group.starts[b]), int(group.starts[b + 1])
         d = self.refined.shape[1]
@@ -213,12 +236,7 @@ class PatchSource:
         with blas_on_one_thread(group.held):
             product_block(self.refined, group.slots, group.weights, start, stop, out,
                           None if self.rational else self.origin)
-        rows = out.reshape(-1, self.layouts[kind].coefficients, d)
-        self._cache[key] = rows
-        self._cached += rows.nbytes
-        while self._cached > self.cache_bytes and len(self._cache) > 1:
-            self._cached -= self._cache.popitem(last=False)[1].nbytes
-        return rows
+        return out.reshape(-1, self.layouts[kind].coefficients, d)
 
 
 _local = threading.local()

@@ -141,3 +141,30 @@ def test_span_rows_of_an_open_mesh_keep_only_the_kept_patches(open_mesh_surfaces
     eager, lazy = open_mesh_surfaces
     assert lazy.patch_source().layouts[1].keep is not None  # the case: bicubic patches kept at real corners only
     _span_rows_equal_the_arrays(lazy.patch_source(), (eager.biquadratic, eager.bicubic))
+
+
+def test_threads_asking_for_the_same_blocks_get_the_arrays(monkeypatch):
+    """A streamed tessellation asks for coefficients from several threads: each block is made by one of them
+    (the others wait for it), the cache stays within its bytes, and every answer is the in-memory array's."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    _small_blocks(monkeypatch, True)
+    eager, lazy = _surfaces("high_valence")
+    source = lazy.patch_source(cache_bytes=1 << 13)
+    made = []
+    original = source._made_block
+    monkeypatch.setattr(source, "_made_block", lambda *key: made.append(key) or original(*key))
+    whole = [eager.biquadratic, eager.bicubic]
+
+    def ask(seed):
+        rng = np.random.default_rng(seed)
+        kind = seed % 2
+        order = rng.integers(0, len(whole[kind]), 200)
+        return kind, order, source.coefficients(kind, order)[0]
+
+    with ThreadPoolExecutor(4) as pool:
+        answers = list(pool.map(ask, range(40)))
+    for kind, order, coefficients in answers:
+        assert np.array_equal(coefficients, whole[kind][order])
+    assert source._cached <= max(1 << 13, max(rows.nbytes for rows in source._cache.values()))
+    assert not source._making and len(made) >= len(source._cache)

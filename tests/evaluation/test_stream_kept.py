@@ -65,3 +65,20 @@ def test_a_stream_without_sources_refuses_patch_files_and_rational_surfaces_are_
                        lazy_patches=True)
     with pytest.raises(ValueError, match="rational"):
         StreamedSurface(rational)
+
+
+def test_jobs_on_threads_come_in_order_and_errors_reach_the_caller():
+    from c1surf.evaluation.stream.welded import in_order_on_threads
+
+    assert list(in_order_on_threads(range(100), lambda j: j * j, per_task=3)) == [j * j for j in range(100)]
+
+    def fails(j):
+        if j == 57:
+            raise ValueError("job 57")
+        return j
+
+    seen = []
+    with pytest.raises(ValueError, match="job 57"):
+        for value in in_order_on_threads(range(100), fails, per_task=4):
+            seen.append(value)
+    assert seen == list(range(len(seen))) and len(seen) <= 57
