@@ -12,6 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..arrays import column_bounds
 from ..mesh.errors import TopologyError
 from ..mesh.halfedges import HalfEdgeMesh
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX
@@ -243,7 +244,11 @@ class Surface:
         # Every stage is affine (its rows sum to 1) and commutes with translations, so
         # the stages run on points centred on their bounding box and the centre is added
         # back: round-off then scales with the model's size, not its distance from the origin.
-        origin = (points.min(axis=0) + points.max(axis=0)) / 2 if points.size else np.zeros(points.shape[1])
+        if points.size:
+            low, high = column_bounds(points)
+            origin = (low + high) / 2
+        else:
+            origin = np.zeros(points.shape[1])
         x = points - origin
         if self.weights is not None:
             x = np.concatenate([x * self.weights[:, None], self.weights[:, None]], axis=1)

@@ -19,6 +19,7 @@ import os
 
 import numpy as np
 
+from ....arrays import column_bounds
 from ....evaluation.stream.spool import SpooledTessellation
 
 __all__ = ["write_glb_stream"]
@@ -39,7 +40,7 @@ class _Bounds:
     def add_vertices(self, positions: np.ndarray, normals: np.ndarray) -> None:
         for k, values in enumerate((positions, normals)):
             if values.shape[0]:
-                low, high = values.min(axis=0), values.max(axis=0)
+                low, high = column_bounds(values)
                 self.low[k] = low if self.low[k] is None else np.minimum(self.low[k], low)
                 self.high[k] = high if self.high[k] is None else np.maximum(self.high[k], high)
         self.same = self.same and np.array_equal(positions.view(np.uint32), normals.view(np.uint32))
