@@ -181,10 +181,13 @@ class PatchSource:
         if layout.keep is not None:  # kept patches -> all patches of the block (from its first)
             p0 = np.searchsorted(layout.kept_rows(), group.first + start * group.per_item)
             patch = np.take(layout.kept_rows(), patch + p0) - (group.first + start * group.per_item)
-        item, within = np.divmod(patch, group.per_item)
         # the product is (r, items, d): row (patch within its item) * k * k + coefficient, column item
-        out = np.take(product.reshape(-1, self.refined.shape[1]),
-                      (within * layout.coefficients + coefficient) * (stop - start) + item, axis=0)
+        if group.per_item == 1:  # a patch per item (A2): no second division
+            index = coefficient * (stop - start) + patch
+        else:
+            item, within = np.divmod(patch, group.per_item)
+            index = (within * layout.coefficients + coefficient) * (stop - start) + item
+        out = np.take(product.reshape(-1, self.refined.shape[1]), index, axis=0)
         if not inside:
             out += self.origin
         return out
