@@ -72,6 +72,18 @@ def test_ply_blocks_of_one_records_array_write_its_bytes(tmp_path):
     assert (tmp_path / "first.ply").read_bytes() == whole  # the faces written first, after the vertices' room
 
 
+def test_ply_faces_first_without_pwrite(tmp_path, monkeypatch):
+    """Where there is no ``os.pwrite`` (Windows) the faces are written before the vertices: the same bytes."""
+    rng = np.random.default_rng(5)
+    records, triangles = rng.standard_normal((50, 6)), rng.integers(0, 50, (30, 3)).astype(np.int32)
+    monkeypatch.delattr("os.pwrite", raising=False)
+    blocks = [(records[a : a + 7, :3], records[a : a + 7, 3:]) for a in range(0, 50, 7)]
+    write_ply_blocks(tmp_path / "first.ply", 50, 30, blocks, [triangles[:11], triangles[11:]], triangles_first=True)
+    write_ply(tmp_path / "whole.ply", TriangleMesh(records[:, :3], triangles, records[:, 3:]))
+    assert (tmp_path / "first.ply").read_bytes() == (tmp_path / "whole.ply").read_bytes()
+    assert not _face_threads()
+
+
 def _face_threads() -> list:
     return [t for t in threading.enumerate() if t.name == "ply faces"]
 

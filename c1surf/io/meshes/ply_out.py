@@ -91,8 +91,10 @@ def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, tri
     vertex_blocks : iterable of (points (c, >= 3), normals (c, 3)) float, in vertex order
     triangle_blocks : iterable of (t, 3) int, in order
     float32 : positions and normals as ``float``
-    triangles_first : write the faces first (after the room of the vertices), when the triangle blocks do
-        not depend on the vertex blocks having run: their pages go to the disk meanwhile
+    triangles_first : the triangle blocks do not depend on the vertex blocks having run: the faces are
+        written at their place after the vertices' room by a thread of their own (``_FaceWriter``: the two
+        iterables are then read on different threads) while the caller's thread computes and writes the
+        vertices, or before them where there is no ``os.pwrite``
     """
     real = "<f4" if float32 else "<f8"
     names = [(axis, real) for axis in ("x", "y", "z", "nx", "ny", "nz")]
@@ -100,10 +102,17 @@ def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, tri
     with open(path, "wb") as f:
         f.write(_header([(name, dtype, None) for name, dtype in names], n_vertices, n_triangles, ("c1surf",)))
         f.flush()
-        faces = None
-        if triangles_first:  # integers only: written by a thread of their own while the vertices are computed
-            faces = _FaceWriter(f.fileno(), f.tell() + n_vertices * 6 * np.dtype(real).itemsize, triangle_blocks)
+        faces, faces_at = None, f.tell() + n_vertices * 6 * np.dtype(real).itemsize
+        if triangles_first and hasattr(os, "pwrite"):  # integers only: by a thread of their own meanwhile
+            faces = _FaceWriter(f.fileno(), faces_at, triangle_blocks)
             faces.start()
+        elif triangles_first:  # no os.pwrite (Windows): the faces first, then the vertices in the room left
+            vertices_at = f.tell()
+            f.seek(faces_at)
+            for triangles in triangle_blocks:
+                f.write(_face_bytes(triangles))
+                written[1] += triangles.shape[0]
+            f.seek(vertices_at)
         try:
             for points, normals in vertex_blocks:
                 records = None if float32 else _records(points, normals)
