@@ -271,7 +271,8 @@ def test_refined_halfedges_by_arithmetic_match_a_fresh_sort(path):
 @pytest.mark.parametrize("path", [SAMPLES / p.name for p in sorted(SAMPLES.glob("*.obj"))] + OPEN_SHARED[:2], ids=str)
 def test_second_step_ratios_by_blocks_match_the_whole(path):
     """The second step's ratios made by blocks of faces (one broadcast value when all equal) are the whole
-    computation's, bit for bit."""
+    computation's, bit for bit: for one ratio everywhere (the default: made per face size) and for ratios
+    that differ from corner to corner (V-cells take their minimum)."""
     from c1surf.construction.refine.doo_sabin import FACE_FROM_VERTEX
     from c1surf.construction.stencils.blend import second_step_ratios
     from c1surf.construction.stencils.blend import second_step_corner_ratios
@@ -279,11 +280,13 @@ def test_second_step_ratios_by_blocks_match_the_whole(path):
     surface = surface_of(path if isinstance(path, Path) else shared_mesh(path))
     topology = surface.topology
     is_vertex_cell = topology.faces1.kind == FACE_FROM_VERTEX
-    corner_ratio = surface.stage("doo_sabin_1").ratio
-    whole = second_step_corner_ratios(topology.level1, is_vertex_cell, corner_ratio)
-    for block in (1, 7, 1 << 20):
-        by_blocks = second_step_ratios(topology.level1, is_vertex_cell, corner_ratio, block=block)
-        np.testing.assert_array_equal(by_blocks.view(np.int64), whole.view(np.int64))
+    default = surface.stage("doo_sabin_1").ratio
+    varied = np.random.default_rng(3).uniform(0.1, 0.9, default.shape)
+    for corner_ratio in (default, varied):
+        whole = second_step_corner_ratios(topology.level1, is_vertex_cell, corner_ratio)
+        for block in (1, 7, 1 << 20):
+            by_blocks = second_step_ratios(topology.level1, is_vertex_cell, corner_ratio, block=block)
+            np.testing.assert_array_equal(by_blocks.view(np.int64), whole.view(np.int64))
 
 
 def test_a_large_mesh_build_lets_the_twin_go(monkeypatch):

@@ -106,15 +106,18 @@ def second_step_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, corner_
     never made."""
     offsets, n_faces = level1.face_offsets, level1.n_faces
     whole, first = None, None
+    alike = _one_value(corner_ratio)
     for f0 in range(0, n_faces, block):
         f1 = min(n_faces, f0 + block)
         h0, h1 = int(offsets[f0]), int(offsets[f1])
         part = HalfEdgeMesh(level1.n_vertices, level1.face_sizes[f0:f1], None, level1.origin[h0:h1], None, None, None,
                             None)  # its face and offsets are made from its sizes, numbered from f0
-        ratio = second_step_corner_ratios(part, is_vertex_cell[f0:f1], corner_ratio)
+        ratio = (second_step_corner_ratios(part, is_vertex_cell[f0:f1], corner_ratio) if alike is None
+                 else _alike_second_step_ratios(part, alike))
         if whole is None:
             first = ratio[:1].copy() if first is None else first
-            if np.all(ratio.view(np.int64) == first.view(np.int64)[0]):
+            same = ratio[:1] if ratio.strides[0] == 0 else ratio  # a broadcast value: its first entry says it
+            if np.all(same.view(np.int64) == first.view(np.int64)[0]):
                 continue  # the same bits so far
             whole = np.empty(level1.n_halfedges)
             whole[:h0] = first[0]
@@ -122,3 +125,27 @@ def second_step_ratios(level1: HalfEdgeMesh, is_vertex_cell: np.ndarray, corner_
     if whole is None:
         return np.zeros(0) if first is None else np.broadcast_to(first, (level1.n_halfedges,))
     return whole
+
+
+def _one_value(ratio: np.ndarray) -> np.ndarray | None:
+    """(1,) float: the value of every entry of ``ratio`` (H,) when they all have its bits (one blend ratio
+    everywhere, the default), else None."""
+    ratio = np.asarray(ratio, dtype=np.float64)
+    if ratio.size == 0:
+        return None
+    if ratio.ndim == 1 and ratio.strides[0] == 0:  # broadcast already (doo_sabin.compact_ratio)
+        return ratio[:1].copy()
+    bits = ratio.reshape(-1).view(np.int64)
+    return ratio.reshape(-1)[:1].copy() if np.all(bits == bits[0]) else None
+
+
+def _alike_second_step_ratios(level1: HalfEdgeMesh, value: np.ndarray) -> np.ndarray:
+    """``second_step_corner_ratios`` when every input corner has the ratio ``value`` (1,), with its bits: a V-cell's
+    minimum is that value too, so a corner's ratio is ``value (1 - cos(2 pi / n))`` of its face's size n alone,
+    made per face and spread to the corners (one value broadcast when every face has one size: a quad mesh's
+    second step, 0.1-0.2 s of gathers and temporaries of 2.9 M corners on the 180,000-quad torus)."""
+    sizes = level1.face_sizes
+    per_face = value * (1.0 - np.cos(2.0 * np.pi / sizes))  # the products of second_step_corner_ratios, face by face
+    if per_face.size and np.all(sizes == sizes[0]):
+        return np.broadcast_to(per_face[:1], (level1.n_halfedges,))
+    return np.repeat(per_face, sizes)
