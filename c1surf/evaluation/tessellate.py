@@ -3,10 +3,9 @@
 Patches are dual to the refined mesh (see ``patches``): patch corners are
 centroids of refined faces and patch sides cross refined edges. So the welded
 vertex numbering is index arithmetic on plain per-patch arrays (corner ids,
-side edge ids and directions: ``adjacency.PatchAdjacency``): one vertex per
-corner, N-2 per edge (in its own direction), (N-2)^2 per patch. No distance
-search. The arrays are stored in patch files, so ``c1surf tessellate``
-rebuilds exactly the mesh ``convert`` writes.
+side edge ids and directions: ``adjacency.PatchAdjacency``): one vertex per corner, N-2 per
+edge (in its own direction), (N-2)^2 per patch. No distance search. The arrays are stored in
+patch files, so ``c1surf tessellate`` rebuilds exactly the mesh ``convert`` writes.
 
 The output runs to gigabytes (N = 8 on a million patches: 49M points and
 normals, 98M triangles), so speed is set by bytes written: every vertex is
@@ -24,7 +23,7 @@ from functools import partial
 import numpy as np
 
 from ..parallel import run_tasks
-from .adjacency import PatchAdjacency, patch_adjacency, side_offsets
+from .adjacency import PatchAdjacency, adjacency_from_corner_labels, corner_labels, patch_adjacency, side_offsets
 from .bezier import bernstein_basis, evaluate_grid, tensor_basis, unit_normals
 from .rational import dehomogenize, evaluate_rational, homogeneous
 
@@ -110,16 +109,17 @@ def tessellate(patch_groups, refined, frames: np.ndarray, resolution: int = 8, w
 
     Returns
     -------
-    Tessellation (the same as ``tessellate_patches(patch_groups, patch_adjacency(refined, frames), resolution)``)
+    Tessellation (the same as ``tessellate_patches(patch_groups, patch_adjacency(refined, frames), resolution)``;
+    at resolution 2 the samples are the corners, so only corners are numbered, half the work, as streamed)
     """
-    return tessellate_patches(patch_groups, patch_adjacency(refined, frames), resolution, weights)
+    adjacency = (adjacency_from_corner_labels(corner_labels(refined.face, frames)) if resolution == 2
+                 else patch_adjacency(refined, frames))
+    return tessellate_patches(patch_groups, adjacency, resolution, weights)
 
 
 def tessellate_patches(patch_groups, adjacency: PatchAdjacency, resolution: int = 8, weights=None) -> Tessellation:
-    """Sample patches on a welded grid given by plain adjacency arrays.
-
-    ``convert`` and ``tessellate`` both call this with the same arrays (from
-    the construction or from a patch file), so their outputs are identical.
+    """Sample patches on a welded grid given by plain adjacency arrays (``convert`` and ``tessellate``
+    both call this with the same arrays, from the construction or a patch file: identical outputs).
 
     Parameters
     ----------

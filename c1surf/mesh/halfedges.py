@@ -304,12 +304,16 @@ def component_roots(n: int, a: np.ndarray, b: np.ndarray) -> np.ndarray:
     return parent
 
 
-def interior_vertices(mesh: HalfEdgeMesh) -> np.ndarray:
-    """(V,) bool: used vertices not on a boundary edge (their rotation closes)."""
-    interior = np.bincount(mesh.origin, minlength=mesh.n_vertices) > 0
-    boundary = mesh.twin < 0
-    interior[mesh.origin[boundary]] = False
-    interior[mesh.dest[boundary]] = False
+def interior_vertices(mesh: HalfEdgeMesh, valence: np.ndarray | None = None) -> np.ndarray:
+    """(V,) bool: used vertices not on a boundary edge (their rotation closes).
+
+    valence : (V,) int, ``vertex_valences(mesh)`` if the caller has it (not counted again)
+    """
+    interior = (vertex_valences(mesh) if valence is None else valence) > 0
+    boundary = np.flatnonzero(mesh.twin < 0)
+    if boundary.size:  # the ends of boundary half-edges only (not ``dest`` of every half-edge)
+        interior[mesh.origin[boundary]] = False
+        interior[mesh.origin[mesh.next[boundary]]] = False
     return interior
 
 
@@ -337,12 +341,21 @@ def outgoing_rings(mesh: HalfEdgeMesh, index=np.int64):
         concatenated in the order of ``vertices``
     """
     valence = vertex_valences(mesh)
-    vertices = np.flatnonzero(interior_vertices(mesh))
+    vertices = np.flatnonzero(interior_vertices(mesh, valence))
     sizes = valence[vertices]
-    offsets = np.concatenate([[0], np.cumsum(sizes)])
     # Start each ring at the vertex's first half-edge, then walk the rotation:
     # one vectorized step per ring position, over the rings still that long.
     first = first_outgoing(mesh)
+    if sizes.size and sizes.min() == sizes.max():  # one valence (4 in a closed Doo-Sabin refined mesh)
+        # rings side by side as rows: no offsets, no selection of the rings still that long
+        rows = np.empty((vertices.size, int(sizes[0])), dtype=index)
+        current = first[vertices]
+        for k in range(rows.shape[1]):
+            rows[:, k] = current
+            if k + 1 < rows.shape[1]:
+                current = mesh.rotate(current)
+        return vertices, sizes, rows.reshape(-1)
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
     ring = np.empty(offsets[-1], dtype=index)
     current = first[vertices]
     active = np.arange(vertices.size)

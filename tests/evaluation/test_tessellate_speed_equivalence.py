@@ -22,7 +22,7 @@ from c1surf.evaluation.adjacency import PatchAdjacency, _first_appearance, _firs
 from c1surf.evaluation.bezier import bernstein_basis
 from c1surf.evaluation.rational import evaluate_rational, homogeneous
 from c1surf.construction.surface import Surface
-from c1surf.evaluation.tessellate import Tessellation, tessellate_patches, welded_grid_from_ids
+from c1surf.evaluation.tessellate import Tessellation, tessellate, tessellate_patches, welded_grid_from_ids
 from c1surf.io.meshes.obj import read_obj
 
 from conftest import SAMPLES, fan, grid, open_cylinder, surface_of
@@ -151,6 +151,23 @@ def test_rational_matches_reference(n):
             start += len(g)
     homogeneous_groups = [homogeneous(g, w) for g, w in zip(groups, patch_weights)]
     assert_matches_reference(tess, homogeneous_groups, adjacency, n, (normals, condition))
+
+
+@pytest.mark.parametrize("name", MIXED + list(OPEN) + ["rational"])
+def test_tessellate_at_resolution_2_numbers_corners_only(name):
+    """``tessellate`` at N = 2 numbers the corners alone (no side labels): bit for bit the tessellation of the
+    whole adjacency, rational patches too."""
+    if name == "rational":
+        mesh = read_obj(SAMPLES / "twisted.obj")
+        s = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points,
+                    weights=np.random.default_rng(3).uniform(0.5, 2.0, mesh.n_vertices))
+    else:
+        s = surface(name)
+    groups = [s.biquadratic, s.bicubic]
+    whole = tessellate_patches(groups, patch_adjacency(s.refined, s.frames), 2, s.patch_weights)
+    corners_only = tessellate(groups, s.refined, s.frames, 2, s.patch_weights)
+    for key in ("points", "normals", "triangles", "grid"):
+        assert np.array_equal(getattr(whole, key), getattr(corners_only, key)), key
 
 
 @pytest.mark.parametrize("n", RESOLUTIONS)
