@@ -24,7 +24,7 @@ NOTE = re.compile(r"measured chordal error ([0-9.eE+-]+)")
 
 
 def _measured(reference: MeshDistance, scale: float, points, triangles) -> float:
-    return float(reference(chordal_samples(points, triangles)).max() / scale)
+    return reference.max_distance(chordal_samples(points, triangles)) / scale
 
 
 def _uniform_sweep(job, scratch, error_of, goal: float, stop: int) -> list[dict]:
