@@ -18,8 +18,10 @@ from functools import partial
 import numpy as np
 
 from ...mesh.halfedges import HalfEdgeMesh, outgoing_rings
+from ...parallel import run_tasks
 
 FACE_FROM_FACE, FACE_FROM_EDGE, FACE_FROM_VERTEX = 0, 1, 2
+THREADED_HALFEDGES = 1 << 25  # refined meshes below this many half-edges make next and twin on two threads
 
 
 @dataclass(frozen=True)
@@ -125,9 +127,13 @@ def refined_halfedges(mesh: HalfEdgeMesh, faces: RefinedFaces) -> HalfEdgeMesh:
     index = faces.face_vertices.dtype
     n_fine = faces.face_vertices.size
     rep = _edge_halfedges(mesh, index)  # the E-faces' coarse half-edges (their ``parent``, which may be None)
-    nxt = _refined_next(mesh, faces.face_sizes[mesh.n_faces + rep.size :], rep.size, n_fine, index)
-    twin = _refined_twin(mesh, rep, faces.face_vertices)
-    del rep
+    ring_sizes = faces.face_sizes[mesh.n_faces + rep.size :]
+    tasks = [partial(_refined_next, mesh, ring_sizes, rep.size, n_fine, index),
+             partial(_refined_twin, mesh, rep, faces.face_vertices)]
+    # independent, so two tasks below the sizes whose every temporary counts (the largest meshes' peak is set
+    # by their half-edge arrays: there one after the other, each step's temporaries gone before the next)
+    nxt, twin = run_tasks(tasks) if n_fine < THREADED_HALFEDGES else [task() for task in tasks]
+    del rep, tasks
     # face offsets, face and prev: made when first read (the twice-refined mesh's offsets and face are read
     # once the stages are gone, if at all: 1.5 GB for the 4,000,000-quad torus); twin can be made again
     return HalfEdgeMesh(int(mesh.n_halfedges), faces.face_sizes, None, faces.face_vertices, None, nxt, None, twin,
