@@ -101,7 +101,8 @@ def make_inputs(directory: Path, args) -> list[dict]:
 
 
 def repeats_for(faces: int, resolution: int, repeats: int) -> int:
-    """One process for outputs above 400,000 faces at -r 2 (minutes each), ``repeats`` below."""
+    """One process for outputs above 400,000 faces at -r 2 (minutes each), ``repeats`` below: the in-memory
+    worker and the peers. c1surf's whole-process conversions at -r 2 always take ``repeats`` (``measure_c1surf``)."""
     return 1 if faces * resolution**2 > 1_600_000 else repeats
 
 
@@ -125,9 +126,14 @@ def convert_process(item: dict, options: list, args) -> dict:
     return result
 
 
-def measure_c1surf(item: dict, args, count: int) -> dict:
-    """c1surf on one input: the command line (whole process) and, up to --max-memory-faces, the in-memory worker."""
-    entry = {"process": repeated(lambda: convert_process(item, ["-r", "2"], args), count)}
+def measure_c1surf(item: dict, args, count: int, process_count: int | None = None) -> dict:
+    """c1surf on one input: the command line (whole process) and, up to --max-memory-faces, the in-memory worker.
+
+    ``count`` processes of the worker, ``process_count`` (default ``count``) of the command line: the time per
+    face target reads the whole-process medians up to 4,000,000 faces, and one process of the largest tori
+    varied by a third between runs on this machine (its first touches of memory cost what the host makes them)
+    """
+    entry = {"process": repeated(lambda: convert_process(item, ["-r", "2"], args), process_count or count)}
     if item["faces"] > args.max_memory_faces:
         reason = f"skipped: in-memory worker above {args.max_memory_faces:,} faces"
         entry.update(ok=False, skipped=reason, error=reason)
@@ -172,8 +178,10 @@ def measure_speed(inputs, tools, args, repeats: int) -> list[dict]:
             if tool != "c1surf" and item["faces"] > args.max_peer_faces:
                 continue
             count = repeats_for(item["faces"], 2, repeats)
-            measure = measure_c1surf if tool == "c1surf" else lambda *a: measure_peer(a[0], tool, *a[1:])
-            entry = guarded(measure, item, args, count)
+            if tool == "c1surf":
+                entry = guarded(measure_c1surf, item, args, count, repeats)
+            else:
+                entry = guarded(measure_peer, item, tool, args, count)
             entry.setdefault("process", {"ok": False, "error": entry.get("error")})
             entry.update(input=item["name"], tool=tool, faces=item["faces"])
             runs.append(entry)
