@@ -49,3 +49,12 @@ def test_bench_quick_smoke(tmp_path):
         f = fidelity[("torus-quad-1000", tool)]
         assert f["ok"] and 0 <= f["mean"] <= f["max"] < 0.01 and 0.95 < f["volume_ratio"] < 1.0, f
     assert (tmp_path / "plot.png").stat().st_size > 0
+
+
+def test_bench_floors_runs():
+    """bench/floors.py (what bounds update_points) on a small torus: it runs and prints its four readings."""
+    done = subprocess.run([sys.executable, str(ROOT / "bench" / "floors.py"), "--grid", "20", "10", "--repeats", "1"],
+                          check=True, capture_output=True, text=True, timeout=120)
+    lines = done.stdout.splitlines()
+    assert lines[0].startswith("3,200 biquadratic patches") and len(lines) == 5, done.stdout
+    assert lines[2].startswith("update_points:") and lines[4].startswith("floor, gather 9 points per patch")
