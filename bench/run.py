@@ -131,7 +131,7 @@ def measure_c1surf(item: dict, args, count: int, process_count: int | None = Non
 
     ``count`` processes of the worker, ``process_count`` (default ``count``) of the command line: the time per
     face target reads the whole-process medians up to 4,000,000 faces, and one process of the largest tori
-    varied by a third between runs on this machine (its first touches of memory cost what the host makes them)
+    varied by a third between runs on this machine (its first touches of memory cost what the host makes them).
     """
     entry = {"process": repeated(lambda: convert_process(item, ["-r", "2"], args), process_count or count)}
     if item["faces"] > args.max_memory_faces:
