@@ -31,7 +31,7 @@ patch file carries no adjacency, all use it).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property
+from functools import cached_property, partial
 
 import numpy as np
 
@@ -239,15 +239,15 @@ def _label_type(parts, table: np.ndarray):
 
 
 def corner_labels(face: np.ndarray, frames) -> np.ndarray:
-    """(P, 4) int: the refined face at each patch corner (``patch_adjacency``'s corner labels, before renumbering).
-
-    face : (H,) int, the refined mesh's ``face``; frames : as ``patch_adjacency``'s
-    """
+    """(P, 4) int: the refined face at each patch corner (``patch_adjacency``'s corner labels, before renumbering),
+    by blocks of rows on the thread pool. face : (H,) int, the refined mesh's ``face``; frames : as ``patch_adjacency``'s"""
     face, parts = np.asarray(face), _frame_parts(frames)
     corners = np.empty((sum(part.shape[0] for part in parts), 4), dtype=_label_type(parts, face))
-    for a, block in _row_blocks(parts):
+
+    def fill(a: int, block: np.ndarray) -> None:  # a task per block: its rows only
         gathered = np.take(face, block)  # face(e2), face(e3), face(e0), face(e1): one take, then two copies
         corners[a : a + block.shape[0], :2], corners[a : a + block.shape[0], 2:] = gathered[:, 2:], gathered[:, :2]
+    run_tasks([partial(fill, a, block) for a, block in _row_blocks(parts)])
     return corners
 
 
@@ -310,13 +310,10 @@ def _row_blocks(parts):
 
 def _renumber(flat: np.ndarray) -> np.ndarray:
     """Renumber the labels ``flat`` (n,) int in place, 0, 1, 2, ... in order of first appearance (as
-    ``_first_appearances``); return first (k,) int (``flat``'s dtype), the position where id i appears first
-    (increasing).
-
-    Labels that are not small non-negative integers (``_first_appearances``' sorting case) are renumbered
-    through it; others with a (max label + 1,) table of ``flat``'s dtype and an (n + 1,) bool one, every
-    pass by blocks (no temporary of n or k entries).
-    """
+    ``_first_appearances``, which takes the labels that are not small non-negative integers); return first (k,)
+    int (``flat``'s dtype), the increasing positions where each id appears first. Small labels: a (max label + 1,)
+    table of ``flat``'s dtype and an (n + 1,) bool one, every pass by blocks (no temporary of n or k entries), the
+    last pass on the thread pool."""
     n = flat.size
     if n == 0:
         return np.zeros(0, dtype=flat.dtype)
@@ -342,8 +339,10 @@ def _renumber(flat: np.ndarray) -> np.ndarray:
     for a in range(0, first.size, block):
         z = min(a + block, first.size)
         new_id[np.take(flat, first[a:z])] = np.arange(a, z, dtype=flat.dtype)
-    for a in range(0, n, block):
+
+    def rename(a: int) -> None:  # a block of labels, a task of its own, replaced by their new ids
         flat[a : a + block] = np.take(new_id, flat[a : a + block])
+    run_tasks([partial(rename, a) for a in range(0, n, block)])
     return first
 
 

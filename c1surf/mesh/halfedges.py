@@ -12,6 +12,8 @@ from typing import Callable
 
 import numpy as np
 
+_REPEATED_FACES = 1 << 24  # fewer faces than this make ``face`` by np.repeat (its temporary: at most 128 MB)
+
 
 
 @dataclass(frozen=True)
@@ -77,10 +79,12 @@ class HalfEdgeMesh:
     def face(self) -> np.ndarray:
         """(H,) int (``origin``'s type), face each half-edge belongs to: face f repeated face_sizes[f] times."""
         if self._face is None:
-            # a 1 where each face but the first starts, summed up: np.repeat would make its repeats intp (a
-            # temporary of 8 bytes a face: 0.5 GB for the 4,000,000-quad torus's twice-refined mesh)
-            face = np.zeros(self.origin.size, dtype=self.origin.dtype)
-            if face.size:
+            if self.face_sizes.size < _REPEATED_FACES:  # 3x faster than the sums below (0.018 s against 0.05 s
+                # for the 180,000-quad torus's twice-refined mesh), with a temporary of 8 bytes a face
+                face = np.repeat(np.arange(self.face_sizes.size, dtype=self.origin.dtype), self.face_sizes)
+            else:  # a 1 where each face but the first starts, summed up: np.repeat makes its repeats intp (that
+                # temporary would be 0.5 GB for the 4,000,000-quad torus's twice-refined mesh)
+                face = np.zeros(self.origin.size, dtype=self.origin.dtype)
                 face[np.cumsum(self.face_sizes[:-1], dtype=self.origin.dtype)] = 1
                 np.cumsum(face, out=face)
             object.__setattr__(self, "_face", face)
