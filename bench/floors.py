@@ -61,8 +61,8 @@ def main(argv=None) -> None:
 
     def gather(a: int, b: int) -> None:
         for lo in range(a, b, 1 << 14):  # blocks in cache, as the kernels work
-            np.take(refined, slots[lo : min(b, lo + (1 << 14))], axis=0, out=out[lo : min(b, lo + (1 << 14))],
-                    mode="clip")
+            hi = min(b, lo + (1 << 14))
+            np.take(refined, slots[lo:hi], axis=0, out=out[lo:hi], mode="clip")
 
     fill = _median(lambda: for_each_range(len(out), lambda a, b: out[a:b].fill(1.0), minimum=1), args.repeats)
     gathered = _median(lambda: for_each_range(len(out), gather, minimum=1), args.repeats)
