@@ -1,55 +1,175 @@
-"""Python API: read a mesh file, build its surface, tessellate, check.
+"""Python API: the one road from a file to a Surface, and tessellating and checking it.
 
-    >>> from c1surf.api import surface_from_file
-    >>> surface, mesh = surface_from_file("sample_meshes/cube.obj", blend=0.5)
+    >>> from c1surf.api import load_surface, InputOptions, SurfaceOptions
+    >>> surface, report = load_surface("sample_meshes/cube.obj", SurfaceOptions(blend=0.5), InputOptions(weld=0.0))
     >>> surface.bicubic.shape            # (Nc, 4, 4, 3) Bezier coefficients
-    >>> surface.update_points(mesh.points * 2)   # same connectivity, new geometry
+    >>> report.notes                     # what was repaired or ignored, one line each
+    >>> surface.update_points(report.mesh.points * 2)   # same connectivity, new geometry
     >>> S = surface.stencil()            # the whole construction as one sparse matrix: S @ points
+
+``load_surface`` reads the mesh (``io``), reads its sidecar files, prepares it (``prepare``: welding, repeated faces,
+valence-2 vertices, sheets, crease sectors, sharp features) and builds the ``Surface`` (``construction``); every
+command that builds a surface from a mesh file goes through it. ``load_patches`` gives the patches of either a patch
+file or a mesh file (``check``, ``measure``, ``render``).
 """
 from __future__ import annotations
 
-from .evaluation.smoothness import measure_smoothness
+import os
+from dataclasses import dataclass, field, fields
+from pathlib import Path
+
 from .construction.surface import Surface, SurfaceOptions, build_surface
+from .errors import MeshInputError
 from .evaluation.adjacency import patch_adjacency
+from .evaluation.patch_set import PatchSet, surface_patch_set
+from .evaluation.smoothness import measure_smoothness
 from .evaluation.tessellate import tessellate
 from .evaluation.tolerance import tessellate_to_tolerance
 from .io.meshes.read import read_mesh
-from .io.meshes.surface_data import prepare_surface_input, surface_data
+from .io.meshes.sidecars import read_blend_file, read_creases_file
+from .io.patches.formats import load_patch_set
+from .io.registry import PATCH_READERS
+from .mesh.errors import TopologyError
+from .prepare.extension_data import Sidecars, SurfaceData
+from .prepare.notes import repair_notes, seam_notes
+from .prepare.options import NON_MANIFOLD_RULES, InputOptions
+from .prepare.pipeline import prepare_mesh
 
+__all__ = ["load_surface", "load_patches", "prepared_input", "surface_from_file", "tessellate_surface", "check_surface",
+           "build_surface", "Surface", "SurfaceOptions", "InputOptions", "LoadReport", "PreparedInput",
+           "NON_MANIFOLD_RULES", "repair_notes", "seam_notes", "topology_error"]
 
-def surface_from_file(path, blend_file=None, weights=None, normals: bool = False, attributes: bool = False,
-                      creases_file=None, crease_angle=None, ignore_tags: bool = False, weld: float | None = 0.0,
-                      **options):
-    """Read ``path`` (OBJ, PLY, OFF, STL), weld it and build its surface.
+@dataclass
+class PreparedInput:
+    """A mesh file read and prepared for the construction (``prepared_input``).
+
+    path : str, the file
+    mesh : io.meshes.mesh_file.MeshFile, as prepared (its report fields say what the preparation changed)
+    data : prepare.extension_data.SurfaceData, the construction's points and extension data
+    options : SurfaceOptions as the input options resolve them (``InputOptions.surface_options``)
+    """
+
+    path: str
+    mesh: object
+    data: SurfaceData
+    options: SurfaceOptions
+
+@dataclass
+class LoadReport:
+    """What ``load_surface`` did besides building the surface.
+
+    path : str; mesh : the prepared MeshFile; data : its SurfaceData (attribute names, colour scale, ...)
+    notes : list of str, one line each on what was repaired or ignored (``c1surf: note:`` on the command line)
+    """
+
+    path: str
+    mesh: object
+    data: SurfaceData
+    notes: list = field(default_factory=list)
+
+def prepared_input(path, surface_options: SurfaceOptions | None = None, input_options: InputOptions | None = None,
+                   keep_degenerate: bool = False) -> PreparedInput:
+    """Read the mesh file ``path`` and its sidecar files and prepare it (``prepare.pipeline.prepare_mesh``).
+
+    ``keep_degenerate``: the reader's (faces that repeat a vertex kept as written, for ``inspect``).
+    Raises MeshInputError (one line: FILE[:LINE]: what and why) for a file that cannot be used, OptionError (a
+    ValueError) for options that contradict each other.
+    """
+    input_options = (input_options or InputOptions()).check()
+    options = input_options.surface_options(surface_options or SurfaceOptions())
+    options.check(vertex_normals=True if input_options.normals else None)  # before reading: OptionError
+    mesh = read_mesh(path, keep_degenerate=keep_degenerate)
+    sidecars = Sidecars()
+    if input_options.creases_file is not None:
+        sidecars = Sidecars(creases=read_creases_file(input_options.creases_file, mesh))
+    if input_options.blend_file is not None:
+        face_blend, vertex_blend = read_blend_file(input_options.blend_file, mesh)
+        sidecars = Sidecars(sidecars.creases, face_blend, vertex_blend)
+    mesh, data = prepare_mesh(mesh, input_options, options.exact_creases, sidecars)
+    return PreparedInput(str(path), mesh, data, options)
+
+def load_surface(path, surface_options: SurfaceOptions | None = None, input_options: InputOptions | None = None, *,
+                 lazy_patches: bool = False, progress=None):
+    """Read, prepare and build the surface of the mesh file ``path`` (OBJ, PLY, OFF, STL).
 
     Parameters
     ----------
-    path : str or Path
-    blend_file : sidecar JSON of per-cell / per-vertex blend ratios (PLY "blend" properties are always used)
-    weights : None (use the file's vertex weights if some differ from 1), True or False: rational patches (A2a)
-    normals : interpolate the file's vertex normals (A1a; sets interpolate_vertices)
-    attributes : carry texture coordinates and colours as extra point columns
-    creases_file : sidecar JSON of creases, corners and holes (the file's own tags are always used)
-    crease_angle : degrees: edges with a larger dihedral angle become infinitely sharp creases
-    ignore_tags : build the smooth surface, without the file's sharp-feature tags
-    weld : welding tolerance relative to the bounding-box diagonal (0: equal positions), or None: the file's vertices
-    **options : SurfaceOptions fields (blend, alpha, beta, tangent_rule, interpolate_vertices, triangles,
-        exact_creases: as ``convert``, C0 creases unless vertices are interpolated)
+    path : str or os.PathLike
+    surface_options : SurfaceOptions (default: the paper's), shape of the construction
+    input_options : InputOptions (default: weld equal positions, the file's tags, C0 creases), what to read and repair
+    lazy_patches : the patch arrays are made on first use (``Surface``; a polynomial surface only)
+    progress : callable(str) or None, told the name of each phase ("reading cube.obj", ...)
 
     Returns
     -------
-    (Surface, MeshFile): the MeshFile as welded (``MeshFile.weld`` says what changed)
-    """
-    mesh = read_mesh(path)
-    if normals:
-        options["interpolate_vertices"] = True
-    options.setdefault("exact_creases", not options.get("interpolate_vertices", False))  # as convert
-    data = surface_data(mesh, blend_file=blend_file, use_weights=weights, normals=normals, attributes=attributes,
-                        creases_file=creases_file, crease_angle=crease_angle, ignore_tags=ignore_tags)
-    mesh, data = prepare_surface_input(mesh, data, weld, options.get("exact_creases", False))
-    surface = Surface(mesh.face_sizes, mesh.face_vertices, data.points, SurfaceOptions(**options), **data.surface_kwargs())
-    return surface, mesh
+    (Surface, LoadReport)
 
+    Raises
+    ------
+    MeshInputError, one line, for a file or mesh the construction cannot use (topology problems name the file's line)
+    """
+    tell = progress or (lambda phase: None)
+    tell(f"reading {path}")
+    prepared = prepared_input(path, surface_options, input_options)
+    mesh, data = prepared.mesh, prepared.data
+    tell(f"building the surface of {mesh.n_faces} faces")
+    kwargs = data.surface_kwargs()
+    lazy = lazy_patches and kwargs["weights"] is None  # a rational surface checks its patch weights when built
+    try:
+        surface = Surface(mesh.face_sizes, mesh.face_vertices, data.points, prepared.options, lazy_patches=lazy, **kwargs)
+    except TopologyError as e:
+        raise topology_error(e, mesh) from None
+    except ValueError as e:  # extension data the construction cannot use (e.g. weights making a patch weight <= 0)
+        raise MeshInputError(mesh.path, str(e)) from None
+    return surface, LoadReport(prepared.path, mesh, data, repair_notes(surface, mesh, data))
+
+def load_patches(path, surface_options: SurfaceOptions | None = None, input_options: InputOptions | None = None,
+                 progress=None):
+    """The patches of a patch file (JSON, NPZ, IGES, STEP: read as they are) or of the surface of a mesh file.
+
+    Returns
+    -------
+    (PatchSet, notes): the notes of ``load_surface`` for a mesh file, [] for a patch file
+    """
+    if Path(path).suffix.lower() in PATCH_READERS:
+        if progress is not None:
+            progress(f"reading the patches of {path}")
+        return load_patch_set(path), []
+    surface, report = load_surface(path, surface_options, input_options, progress=progress)
+    return surface_patch_set(surface, str(path)), report.notes
+
+def topology_error(error: TopologyError, mesh_file) -> MeshInputError:
+    """A construction TopologyError as ``FILE:LINE: message``, with the file's face lines and vertex numbers."""
+    obj = str(mesh_file.path).lower().endswith(".obj")
+    message = error.describe(vertex_base=1 if obj else 0)
+    if obj and error.vertices:
+        message += " (vertex numbers as in the OBJ file, from 1)"
+    lines = []
+    if mesh_file.face_lines is not None and error.faces.size:
+        lines = sorted({int(mesh_file.face_lines[f]) for f in error.faces if 0 <= f < mesh_file.n_faces})
+    if len(lines) > 1:
+        shown = ", ".join(str(x) for x in lines[:8]) + (", ..." if len(lines) > 8 else "")
+        message += f"; faces on lines {shown}"
+    elif error.faces.size and not lines:
+        message += f"; faces {', '.join(str(int(f)) for f in error.faces[:8])} (0-based)"
+    return MeshInputError(mesh_file.path, message, lines[0] if lines else None)
+
+_SURFACE_FIELDS = {f.name for f in fields(SurfaceOptions)}
+_INPUT_FIELDS = {f.name for f in fields(InputOptions)}
+
+def surface_from_file(path, **options):
+    """``load_surface`` with the options as keywords, each a field of SurfaceOptions or InputOptions.
+
+    ``surface_from_file("part.obj", blend=0.3, crease_angle=40, weld=None)``; returns (Surface, MeshFile as prepared).
+    """
+    unknown = set(options) - _SURFACE_FIELDS - _INPUT_FIELDS
+    if unknown:
+        raise TypeError(f"surface_from_file() got unknown options {sorted(unknown)}: fields of SurfaceOptions or "
+                        "InputOptions")
+    surface_options = SurfaceOptions(**{k: v for k, v in options.items() if k in _SURFACE_FIELDS and k != "exact_creases"})
+    input_options = InputOptions(**{k: v for k, v in options.items() if k in _INPUT_FIELDS})
+    surface, report = load_surface(os.fspath(path), surface_options, input_options)
+    return surface, report.mesh
 
 def tessellate_surface(surface: Surface, resolution: int = 8, tolerance: float | None = None):
     """Welded N x N sampling of every patch of ``surface`` (a ``Tessellation``); with ``tolerance``, a
@@ -60,12 +180,8 @@ def tessellate_surface(surface: Surface, resolution: int = 8, tolerance: float |
                                        surface.patch_weights)
     return tessellate(groups, surface.refined, surface.frames, resolution, surface.patch_weights)
 
-
 def check_surface(surface: Surface, samples: int = 11):
     """Independent G1 measurement of ``surface`` (a ``SmoothnessReport``); C0 crease pieces are measured for
     their gap, G1 everywhere else."""
     return measure_smoothness([surface.biquadratic, surface.bicubic], samples=samples, weights=surface.patch_weights,
                               crease_sides=surface.crease_sides)
-
-
-__all__ = ["surface_from_file", "tessellate_surface", "check_surface", "build_surface", "Surface", "SurfaceOptions"]

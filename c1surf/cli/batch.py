@@ -22,10 +22,11 @@ from concurrent.futures import FIRST_COMPLETED, ThreadPoolExecutor, wait
 from pathlib import Path
 
 import click
+from click.core import ParameterSource
 
 from ..io.registry import MESH_READERS, MESH_WRITERS, PATCH_WRITERS, suffix_list
-from .common import friendly_errors, shows_progress, terminal_bar
-from .options import surface_options, weld_options, weld_tolerance
+from .common import friendly_errors, shows_progress, terminal_bar, with_formats
+from .options import input_options, surface_options
 
 
 def expand_inputs(patterns) -> list[Path]:
@@ -54,21 +55,33 @@ def up_to_date(path: Path, outputs) -> bool:
         return False
 
 
-def convert_command(path: Path, outputs, resolution, options, extra) -> list[str]:
-    """Argument list of the child ``c1surf convert`` for one file."""
+def convert_command(path: Path, outputs, resolution, extra) -> list[str]:
+    """Argument list of the child ``c1surf convert`` for one file (``extra``: the options it passes on)."""
     command = [sys.executable, "-m", "c1surf.cli.main", "convert", str(path), "-o", str(outputs[0]), "-r", str(resolution), "-q"]
     for patch_path in outputs[1:]:
         command += ["--patches", str(patch_path)]
-    for name, value in options.items():
-        command += [f"--{name.replace('_', '-')}", str(value)]
     return command + list(extra)
 
 
-def weld_arguments(tolerance: float | None) -> list[str]:
-    """The child ``convert``'s weld options for ``tolerance`` (None: ``--no-weld``; 0, the default: none)."""
-    if tolerance is None:
-        return ["--no-weld"]
-    return ["--weld", repr(tolerance)] if tolerance else []
+def given_arguments(context: click.Context, exclude=()) -> list[str]:
+    """The options given on this command line (not left at their defaults) as ``convert`` takes them again: the
+    surface and input options a batch passes on to every conversion (``exclude``: parameter names not passed)."""
+    arguments = []
+    for param in context.command.params:
+        if not isinstance(param, click.Option) or param.name in exclude:
+            continue
+        if context.get_parameter_source(param.name) in (None, ParameterSource.DEFAULT):
+            continue
+        value, flag = context.params[param.name], max(param.opts, key=len)
+        if param.is_flag and param.secondary_opts:  # --weights/--no-weights
+            arguments.append(flag if value else max(param.secondary_opts, key=len))
+        elif param.is_flag:
+            arguments += [flag] if value else []
+        elif param.nargs > 1:
+            arguments += [flag, *map(repr, value)]
+        else:
+            arguments += [flag, repr(value) if isinstance(value, float) else str(value)]
+    return arguments
 
 
 def failure_line(stderr: str, returncode: int) -> str:
@@ -183,23 +196,24 @@ class NoBar:
               help="Samples per patch side (as in `convert`).")
 @click.option("--float32", is_flag=True, help="Write points and normals as float32 (as in `convert`).")
 @surface_options
-@weld_options
+@input_options
 @click.option("--rebuild", is_flag=True, help="Convert every input, also those whose outputs are newer.")
 @click.option("--shard", default=None, metavar="I/N",
               help="Convert only inputs I, I+N, I+2N, ... of the sorted list (0-based I): one share of a cluster job array.")
 @click.option("--convert-options", "extra", default="",
-              help="More `c1surf convert` options, quoted as one string, e.g. \"--interpolate-vertices\".")
+              help="More `c1surf convert` options, quoted as one string, e.g. \"--curvature\".")
 @click.option("-q", "--quiet", is_flag=True, help="No progress bar (it only appears on a terminal anyway).")
 @friendly_errors
-def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, float32, blend, alpha, beta, tangent_rule,
-          weld, no_weld, rebuild, shard, extra, quiet):
-    """Convert every mesh matching 'GLOB' (quote it; ** recurses) into OUTDIR, -j at a time.
+@with_formats
+def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, rebuild, shard, extra, quiet, **passed_on):
+    """Convert every mesh ({mesh_inputs}) matching 'GLOB' (quote it; ** recurses) into OUTDIR, -j at a time.
 
     Each input becomes OUTDIR/<stem><format> (and OUTDIR/<stem><patch format>
     with --patches). Outputs newer than their input are skipped, so a batch can
     be rerun after an interruption or after adding files. A failing file never
     stops the others; the summary lists one line per failure, and the exit
-    status is 1 if any file failed.
+    status is 1 if any file failed. The surface and input options (and --float32)
+    are passed on to every conversion.
     """
     started = time.perf_counter()
     inputs = select_inputs(patterns, shard)
@@ -207,9 +221,12 @@ def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, floa
     out.mkdir(parents=True, exist_ok=True)
     planned = {path: outputs_for(path, out, mesh_suffix, patch_suffixes) for path in inputs}
     todo = {path: outputs for path, outputs in planned.items() if rebuild or not up_to_date(path, outputs)}
-    options = {"blend": blend, "alpha": alpha, "beta": beta, "tangent_rule": tangent_rule}
-    extra_args = shlex.split(extra) + (["--float32"] if float32 else []) + weld_arguments(weld_tolerance(weld, no_weld))
-    commands = {path: convert_command(path, outputs, resolution, options, extra_args) for path, outputs in todo.items()}
+    # passed_on: --float32, and the surface and input options (built, so checked, by their decorators): each
+    # conversion takes them again as they were given
+    passed = given_arguments(click.get_current_context(), exclude=("out_dir", "jobs", "mesh_suffix", "patch_suffixes", "resolution",
+                                                                  "rebuild", "shard", "extra", "quiet"))
+    extra_args = shlex.split(extra) + passed
+    commands = {path: convert_command(path, outputs, resolution, extra_args) for path, outputs in todo.items()}
     failures = run_conversions(commands, jobs or os.cpu_count() or 1, quiet)
     summarize(len(inputs), len(todo), failures, time.perf_counter() - started)
 

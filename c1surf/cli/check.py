@@ -7,50 +7,42 @@ from pathlib import Path
 import click
 from click.core import ParameterSource
 
-from ..evaluation.patch_set import PatchSet, surface_patch_set
+from ..api import load_patches
 from ..evaluation.smoothness import measure_smoothness
-from ..io.patches.formats import load_patch_set
-from ..io.registry import PATCH_READERS
-from ..io.meshes.read import read_mesh
-from ..io.meshes.surface_data import prepare_surface_input
-from .common import crease_notes, dissolve_notes, file_notes, friendly_errors, weld_notes
-from .convert import build_or_fail, extension_setup
-from .options import extension_options, surface_options, weld_options, weld_tolerance
+from ..io.registry import MESH_READERS, PATCH_READERS
+from .common import echo_notes, friendly_errors, with_formats
+from .options import input_options, surface_options
 
 
-def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
-    """The patches of a patch file, or of the surface of a mesh file built with the options ``shape``.
+def read_or_build(path, surface, inputs, progress=None):
+    """The patches of a patch file, or of the surface of a mesh file built with the options (``api.load_patches``).
 
-    ``shape``: the values of the surface and extension options (``options.py``),
-    keyed by ``convert.extension_setup``'s parameter names; ``weld``: the welding
-    tolerance (``options.weld_tolerance``; None: the file's vertices). The notes on
-    the sharp-feature tags and the welding go to stderr (the commands using this
-    print a report on stdout).
+    The notes on the mesh's repairs and sharp features go to stderr (the commands using this print a report on
+    stdout); ``progress``: a ``Progress`` (its phases), or None.
     """
-    if Path(path).suffix.lower() in PATCH_READERS:
-        return load_patch_set(path)
-    mesh = read_mesh(path)
-    options, data = extension_setup(mesh, None, **shape)
-    mesh, data = prepare_surface_input(mesh, data, weld, options.exact_creases)
-    surface = build_or_fail(mesh, options, data)
-    for note in data.feature_notes + crease_notes(surface) + file_notes(mesh) + weld_notes(mesh.weld) + dissolve_notes(mesh):
-        click.echo(f"c1surf: note: {note}", err=True)
-    return surface_patch_set(surface, str(path))
+    patch_set, notes = load_patches(path, surface, inputs, None if progress is None else progress.phase)
+    echo_notes(notes)
+    return patch_set
 
 
 CREASE_HINT = math.radians(1.0)  # a normal jump no G1 surface has: a crease, most likely
 
 
-def patch_file_crease_angle(shape: dict, weld, no_weld) -> float | None:
+def patch_file_crease_angle(inputs) -> float | None:
     """``--crease-angle`` for a patch file (the edges whose normals jump by more are creases); a note names the
     options given that only a mesh input uses (a patch file is measured as it is)."""
     context = click.get_current_context()
-    given = [name for name in (*shape, "weld", "no_weld") if name != "crease_angle"
-             and context.get_parameter_source(name) not in (None, ParameterSource.DEFAULT)]
+    given = [param.opts[-1] if param.opts[-1].startswith("--") else param.opts[0] for param in context.command.params
+             if param.name in MESH_ONLY and context.get_parameter_source(param.name) not in (None, ParameterSource.DEFAULT)]
     if given:
-        flags = ", ".join("--" + name.replace("_", "-") for name in given)
-        click.echo(f"c1surf: note: {flags}: used only when the input is a mesh, not for a patch file", err=True)
-    return shape.get("crease_angle")
+        click.echo(f"c1surf: note: {', '.join(given)}: used only when the input is a mesh, not for a patch file", err=True)
+    return inputs.crease_angle
+
+
+# the options of surface_options and input_options but --crease-angle (which a patch file takes too)
+MESH_ONLY = ("blend", "alpha", "beta", "tangent_rule", "interpolate_vertices", "triangles", "refinements", "weld",
+             "no_weld", "blend_file", "interpolate_normals", "weights", "attributes", "creases_file", "ignore_tags",
+             "exact_creases", "non_manifold")
 
 
 @click.command()
@@ -62,14 +54,14 @@ def patch_file_crease_angle(shape: dict, weld, no_weld) -> float | None:
 @click.option("--unoriented", is_flag=True,
               help="Compare normals up to sign (tangent-plane continuity of non-orientable surfaces such as a Moebius strip).")
 @surface_options
-@extension_options
-@weld_options
+@input_options
 @friendly_errors
-def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
+@with_formats
+def check(path, tolerance, samples, unoriented, surface, inputs):
     """Check that a surface is G1 (tangent-plane continuous).
 
-    PATCHES is a patch file written by `convert --patches`; a mesh INPUT is
-    converted first (with the surface and weld options below). Shared edges are found
+    PATCHES is a patch file ({patch_inputs}) written by `convert --patches`; a
+    mesh INPUT ({mesh_inputs}) is converted first (with the options below). Shared edges are found
     from the patch geometry alone (matching end and mid points), not from the
     construction's bookkeeping. Prints the largest position gap and normal
     jump and exits 1 when the surface is not G1 to within --tolerance. The
@@ -79,8 +71,8 @@ def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
     edges whose normals jump by more than DEG creases (measured for the gap).
     """
     patch_file = Path(path).suffix.lower() in PATCH_READERS
-    bend = patch_file_crease_angle(shape, weld, no_weld) if patch_file else None
-    patch_set = read_or_build(path, shape, weld_tolerance(weld, no_weld))
+    bend = patch_file_crease_angle(inputs) if patch_file else None
+    patch_set = read_or_build(path, surface, inputs)
     groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     if bend is not None and patch_set.crease_sides is not None:
         click.echo(f"c1surf: note: {path} lists its crease sides: --crease-angle is not used", err=True)

@@ -1,17 +1,22 @@
 """Click options shared by the commands that build a surface."""
 from __future__ import annotations
 
+import functools
 import math
+from dataclasses import dataclass
 
 import click
 from click.core import ParameterSource
 
+from ..api import NON_MANIFOLD_RULES, InputOptions, SurfaceOptions
 from ..construction.surface import TANGENT_RULES, TRIANGLE_RULES
-from .common import Failure
+from ..io.patches.iges_writer import DEFAULT_UNITS, UNITS
+from .common import UsageFailure
 
 
 def surface_options(command):
-    """Add --blend, --alpha, --beta, --tangent-rule to a command."""
+    """Add the construction's options (``SurfaceOptions``: A1, A3, A1a, section 1.3.4, Prop. 1.3.1); the command
+    receives them as one ``surface`` argument."""
     options = [
         click.option("--blend", type=click.FloatRange(0.0, 1.0), default=0.5, show_default=True,
                      help="Doo-Sabin blend ratio alpha_f of every cell (A1): smaller follows the mesh more closely."),
@@ -21,40 +26,43 @@ def surface_options(command):
                      help="Centre point S = S_C + beta (S_P - S_C) of each bicubic cell (section 1.3.3); 0 keeps the cell centroid."),
         click.option("--tangent-rule", type=click.Choice(TANGENT_RULES), default="symmetric", show_default=True,
                      help="Tangent plane at cell centres: 'symmetric' (A3) or 'corners' (A3a, from the C_i only)."),
+        click.option("--interpolate-vertices", is_flag=True,
+                     help="A1a: make the surface pass through every input vertex (needs --beta 0)."),
+        click.option("--triangles", type=click.Choice(TRIANGLE_RULES), default="g1", show_default=True,
+                     help="3-sided cells: 'g1' (A3) or 'parametric' (section 1.3.4: parametrically C1 to the "
+                          "biquadratic patches around)."),
+        click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default="2", show_default=True,
+                     help="Doo-Sabin steps before A2/A3: 2 as in the paper; 0 or 1 when a closed input already "
+                          "satisfies R1-R3 after that many (Prop. 1.3.1); auto: the fewest that work."),
     ]
-    return with_options(command, options)
+
+    def build(refinements, **values):
+        return SurfaceOptions(refinements=refinements if refinements == "auto" else int(refinements), **values)
+
+    return grouped(command, "surface", options, build)
 
 
-def extension_options(command):
-    """Add the options of the paper's extensions (README, "Extensions of the paper")."""
+def input_options(command):
+    """Add the options saying what to read from a mesh file and how to repair it (``InputOptions``: welding, the
+    paper's extensions' data, sharp features); the command receives them as one ``inputs`` argument."""
     options = [
+        click.option("--weld", type=click.FloatRange(0.0, 1.0), default=None, metavar="TOL",
+                     help="Weld vertices closer than TOL times the bounding-box diagonal (default: weld equal "
+                          "positions only, as STL files and seam-split meshes need)."),
+        click.option("--no-weld", is_flag=True,
+                     help="Keep the file's vertices: faces join only where they share a vertex number."),
         click.option("--blend-file", type=click.Path(dir_okay=False), default=None,
                      help='JSON of per-cell and per-vertex blend ratios: {"default": r, "faces": {index or OBJ group: r}, '
                           '"vertices": {index: r}} (0-based). PLY face/vertex properties "blend" are used without it.'),
-        click.option("--interpolate-vertices", is_flag=True,
-                     help="A1a: make the surface pass through every input vertex (needs --beta 0)."),
         click.option("--interpolate-normals", is_flag=True,
                      help="A1a: also give the surface the input's vertex normals there (OBJ vn, PLY nx ny nz); "
                           "implies --interpolate-vertices."),
         click.option("--weights/--no-weights", "weights", default=None,
                      help="A2a: rational patches from the vertex weights (OBJ 'v x y z w', PLY 'weight'); "
                           "default: on when some weight differs from 1."),
-        click.option("--triangles", type=click.Choice(TRIANGLE_RULES), default="g1", show_default=True,
-                     help="3-sided cells: 'g1' (A3) or 'parametric' (section 1.3.4: parametrically C1 to the "
-                          "biquadratic patches around)."),
         click.option("--attributes", is_flag=True,
-                     help="Carry texture coordinates and vertex colours through the construction into the output "
-                          "(.ply or .obj output)."),
-        click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default="2", show_default=True,
-                     help="Doo-Sabin steps before A2/A3: 2 as in the paper; 0 or 1 when a closed input already "
-                          "satisfies R1-R3 after that many (Prop. 1.3.1); auto: the fewest that work."),
-    ]
-    return with_options(feature_options(command), options)
-
-
-def feature_options(command):
-    """Add the sharp-feature options (README, "Sharp features")."""
-    options = [
+                     help="Carry texture coordinates and vertex colours through the construction (into the output "
+                          "of a command that writes a .ply or .obj mesh)."),
         click.option("--creases", "creases_file", type=click.Path(dir_okay=False), default=None,
                      help='JSON of creases, corners and holes besides the file\'s tags: {"creases": [[v0, v1, ..., '
                           'sharpness]], "corners": [[v, sharpness]], "holes": [face, ...]} (indices from 0).'),
@@ -69,28 +77,43 @@ def feature_options(command):
                           "G1 crease: crease ends inside the surface) or, with --g1-creases, all as the sharpest G1 "
                           "crease (a narrow fillet). Patch files list the crease sides; check measures their gap "
                           "(docs/sharp-features.md). --interpolate-vertices/--interpolate-normals imply --g1-creases."),
-        click.option("--non-manifold", type=click.Choice(["sheets", "refuse"]), default="sheets", show_default=True,
+        click.option("--non-manifold", type=click.Choice(NON_MANIFOLD_RULES), default="sheets", show_default=True,
                      help="Edges in more than two faces: cut into manifold sheets that meet along one C0 crease "
                           "(a note names the edges), or refuse the mesh with the one-line error."),
     ]
-    return with_options(command, options)
+
+    def build(weld, no_weld, interpolate_normals, **values):
+        return InputOptions(weld=weld_tolerance(weld, no_weld), normals=interpolate_normals, **values)
+
+    return grouped(command, "inputs", options, build)
 
 
-def resolve_exact_creases(exact_creases: bool | None, interpolate: bool = False) -> bool:
-    """``--exact-creases/--g1-creases`` as given, else C0 creases unless vertices are interpolated (A1a)."""
-    return (not interpolate) if exact_creases is None else bool(exact_creases)
+@dataclass(frozen=True)
+class PatchFileOptions:
+    """How ``--patches`` files are written: IGES units, the IGES B-rep group, merged B-spline pieces (None: the
+    format's default, ``io.registry.Format.merged``)."""
+
+    units: str = DEFAULT_UNITS
+    group: bool = True
+    merge: bool | None = None
 
 
-def weld_options(command):
-    """Add --weld TOL and --no-weld (vertices at one position become one vertex; ``weld_tolerance``)."""
+def patch_file_options(command):
+    """Add --units, --no-group and --merge/--no-merge; the command receives them as one ``patch_files`` argument."""
     options = [
-        click.option("--weld", type=click.FloatRange(0.0, 1.0), default=None, metavar="TOL",
-                     help="Weld vertices closer than TOL times the bounding-box diagonal (default: weld equal "
-                          "positions only, as STL files and seam-split meshes need)."),
-        click.option("--no-weld", is_flag=True,
-                     help="Keep the file's vertices: faces join only where they share a vertex number."),
+        click.option("--units", type=click.Choice(sorted(UNITS)), default=DEFAULT_UNITS, show_default=True,
+                     help="Length unit recorded in an IGES patch file (coordinates are written as they are)."),
+        click.option("--no-group", is_flag=True,
+                     help="IGES patch file: independent surfaces only, without the B-rep (solid or shell sharing its "
+                          "edges) that makes CAD show one object: for readers without IGES B-rep support."),
+        click.option("--merge/--no-merge", default=None,
+                     help="Merge rectangles of biquadratic patches into B-spline surfaces, which IGES and STEP write "
+                          "instead of their patches (CAD opens few large faces) and JSON/NPZ keep beside them "
+                          "(key \"merged\", merged_* arrays). Default: IGES and STEP files merged, JSON and NPZ not; "
+                          "--merge: every patch file; --no-merge: none (one face per patch)."),
     ]
-    return with_options(command, options)
+    return grouped(command, "patch_files", options,
+                   lambda units, no_group, merge: PatchFileOptions(units, not no_group, merge))
 
 
 def weld_tolerance(weld: float | None, no_weld: bool) -> float | None:
@@ -100,17 +123,30 @@ def weld_tolerance(weld: float | None, no_weld: bool) -> float | None:
     return None if no_weld else (weld or 0.0)
 
 
+def grouped(command, name: str, options: list, build):
+    """Decorate ``command`` with click ``options`` whose values reach it as one object: ``name=build(**values)``.
+
+    ``build`` takes the options' parameter names; a ValueError it raises is a usage error (exit 2).
+    """
+    names = [option(lambda: None).__click_params__[0].name for option in options]
+
+    @functools.wraps(command)
+    def wrapper(*args, **kwargs):
+        values = {key: kwargs.pop(key) for key in names}
+        try:
+            kwargs[name] = build(**values)
+        except ValueError as e:
+            raise UsageFailure(str(e)) from None
+        return command(*args, **kwargs)
+
+    return with_options(wrapper, options)
+
+
 def with_options(command, options: list):
     """Decorate ``command`` with click ``options``, listed in the order --help shows them."""
     for option in reversed(options):
         command = option(command)
     return command
-
-
-class UsageFailure(Failure):
-    """A one-line ``c1surf: error:`` for a bad option value, with the exit status of bad usage (2)."""
-
-    exit_code = 2
 
 
 def tolerance_option(command):

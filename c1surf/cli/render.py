@@ -3,31 +3,25 @@ from __future__ import annotations
 
 import os
 import warnings
-from pathlib import Path
+from dataclasses import dataclass
 
 import click
 import numpy as np
 
 from .. import __version__
-from ..construction.surface import SurfaceOptions
+from ..api import load_patches
 from ..evaluation.curvature import CURVATURE_NAMES
-from ..evaluation.patch_set import PatchSet, surface_patch_set
+from ..evaluation.patch_set import PatchSet
 from ..io.atomic import atomic_output
 from ..io.images.exr import write_exr
 from ..io.images.png import write_png
-from ..io.meshes.read import read_mesh
-from ..io.meshes.surface_data import prepare_surface_input
-from ..io.patches.formats import load_patch_set
-from ..io.registry import PATCH_READERS
-from ..render.camera import PROJECTIONS, VIEWS, frame_camera
+from ..render.camera import PROJECTIONS, VIEWS, CameraPlacement, frame_camera
 from ..render.image import GEOMETRY_NAMES, atlas_layout, default_tile, render, render_atlas
 from ..render.pictures import COLORMAPS, curvature_picture, srgb_to_linear, zebra_picture
 from ..render.raycast import default_resolution, patch_grid_mesh
-from ..io.meshes.surface_data import SurfaceData
-from ..io.meshes.tags.features import sharp_features
-from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes
-from .convert import available_memory, build_or_fail
-from .options import resolve_exact_creases, surface_options, weld_options, weld_tolerance
+from ..resources import check_memory
+from .common import Failure, Progress, echo_notes, friendly_errors, output_suffix, with_formats
+from .options import grouped, input_options, surface_options
 
 # EXR channels, in the order listed by `c1surf render --help` (the file sorts them by name).
 EXR_CHANNELS = ("R", "G", "B", "A") + CURVATURE_NAMES + GEOMETRY_NAMES
@@ -36,10 +30,7 @@ BYTES_PER_PIXEL = 450  # float64 buffers, rays, pictures and the EXR copy per pi
 
 def check_image_size(pixels: int) -> None:
     """Refuse an image that would not fit in memory, with the estimate."""
-    needed, available = pixels * BYTES_PER_PIXEL, available_memory()
-    if needed > 0.8 * available:
-        raise Failure(f"an image of {pixels} pixels would need about {needed / 2**30:.1f} GiB but about "
-                      f"{available / 2**30:.1f} GiB is available: lower --size (or --tile with --atlas)")
+    check_memory(pixels * BYTES_PER_PIXEL, f"an image of {pixels} pixels", "lower --size (or --tile with --atlas)", None)
 
 
 def parse_size(text: str) -> tuple[int, int]:
@@ -55,27 +46,36 @@ def parse_size(text: str) -> tuple[int, int]:
     return parts[0], parts[1]
 
 
-def load_patches(input_path, options: SurfaceOptions, quiet: bool, progress: Progress, weld: float | None = 0.0) -> PatchSet:
-    """The patches (with their weights and adjacency) of a mesh (welded with tolerance ``weld``) or patch file."""
-    suffix = Path(input_path).suffix.lower()
-    if suffix in PATCH_READERS:
-        progress.phase(f"reading the patches of {input_path}")
-        patches = load_patch_set(input_path)
-    else:
-        progress.phase(f"reading {input_path}")
-        mesh = read_mesh(input_path)
-        features, notes = sharp_features(mesh, exact_creases=options.exact_creases)  # the file's own creases, corners and holes
-        mesh, data = prepare_surface_input(mesh, SurfaceData(points=mesh.points, features=features, feature_notes=notes),
-                                           weld, options.exact_creases)
-        progress.phase(f"building the surface of {mesh.n_faces} faces")
-        surface = build_or_fail(mesh, options, data)
-        echo_repair_notes(surface, mesh, quiet, data)
-        patches = surface_patch_set(surface, str(input_path))
+def read_patches(input_path, surface, inputs, quiet: bool, progress: Progress) -> PatchSet:
+    """The patches (with their weights and adjacency) of a mesh or patch file (``api.load_patches``), renderable."""
+    patches, notes = load_patches(input_path, surface, inputs, progress.phase)
+    echo_notes(notes, quiet)
     if patches.n_patches == 0:
         raise Failure(f"{input_path}: there are no patches to render")
     if any(max(g.shape[1:3]) > 4 for g in patches.groups):
         raise Failure(f"{input_path}: patches of degree above 3 are not supported")
     return patches
+
+
+@dataclass(frozen=True)
+class Images:
+    """The files ``render`` writes: an EXR (``exr``), a PNG preview (``png``), reflection lines (``zebra``); None: not."""
+
+    exr: str | None = None
+    png: str | None = None
+    zebra: str | None = None
+
+
+@dataclass(frozen=True)
+class Colours:
+    """How ``render`` colours its pictures: the curvature shown (``quantity``), the colour map, its range (LO, HI)
+    or None, and the zebra stripes (pairs per turn, the light lines' axis or None)."""
+
+    quantity: str = "kmax"
+    colormap: str = "viridis"
+    value_range: tuple | None = None
+    stripes: int = 16
+    stripe_axis: tuple | None = None
 
 
 def exr_channels(image, rgb: np.ndarray) -> dict:
@@ -86,8 +86,9 @@ def exr_channels(image, rgb: np.ndarray) -> dict:
     return {name: data[name] for name in EXR_CHANNELS}
 
 
-def check_outputs(output, png_path, zebra_path, value_range) -> None:
+def check_outputs(images: Images, value_range) -> None:
     """Usage errors in the output options: nothing to write, wrong suffixes, one file twice, an empty range."""
+    output, png_path, zebra_path = images.exr, images.png, images.zebra
     if not (output or png_path or zebra_path):
         raise click.UsageError("nothing to write: give -o IMAGE.exr, --png PREVIEW.png and/or --zebra ZEBRA.png")
     if output:
@@ -102,15 +103,15 @@ def check_outputs(output, png_path, zebra_path, value_range) -> None:
         raise click.BadParameter(f"--range needs LO < HI, got {value_range[0]} {value_range[1]}")
 
 
-def place_camera(points: np.ndarray, width: int, height: int, camera: dict):
+def place_camera(points: np.ndarray, width: int, height: int, camera: CameraPlacement):
     """``frame_camera`` with the command's camera options; bad ones become one-line failures."""
     try:
-        return frame_camera(points, width, height, **camera)
+        return frame_camera(points, width, height, placement=camera)
     except ValueError as e:  # eye on the target, surface behind the eye
         raise Failure(str(e)) from None
 
 
-def atlas_image(patches: PatchSet, tile, width: int, height: int, camera: dict, progress: Progress):
+def atlas_image(patches: PatchSet, tile, width: int, height: int, camera: CameraPlacement, progress: Progress):
     """The atlas of the patches, with a camera placed from the control points for its depth."""
     tile = tile or default_tile(patches.n_patches)
     rows, columns = atlas_layout(patches.n_patches, tile)
@@ -121,7 +122,8 @@ def atlas_image(patches: PatchSet, tile, width: int, height: int, camera: dict, 
     return render_atlas(patches, tile, place_camera(control, width, height, camera), progress=progress.advance)
 
 
-def view_image(patches: PatchSet, mesh_resolution, width: int, height: int, camera: dict, progress: Progress):
+def view_image(patches: PatchSet, mesh_resolution, width: int, height: int, camera: CameraPlacement,
+               progress: Progress):
     """The surface seen through a camera that frames the ray-casting mesh."""
     n = mesh_resolution or default_resolution(patches.n_patches)
     progress.phase(f"tessellating {patches.n_patches} patches at {n} x {n} for ray casting")
@@ -158,57 +160,80 @@ def write_atomically(path, input_path, progress: Progress, write) -> None:
             write(tmp)
 
 
+def image_options(command):
+    """-o, --png, --zebra: the command receives them as one ``images`` argument (``Images``)."""
+    return grouped(command, "images", [
+        click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+                     help="EXR image of float32 channels: R G B A (preview, linear), kmax K H k1 k2 (curvature), Z "
+                          "(depth along the view), N.X N.Y N.Z (unit normal), P.X P.Y P.Z (position), patch (-1 = "
+                          "background), u v."),
+        click.option("--png", "png_path", type=click.Path(dir_okay=False), default=None,
+                     help="Also write a shaded preview coloured by curvature, with a colour bar."),
+        click.option("--zebra", "zebra_path", type=click.Path(dir_okay=False), default=None,
+                     help="Also write reflection lines (zebra stripes): continuous on a G1 surface, broken where "
+                          "normals jump."),
+    ], lambda output, png_path, zebra_path: Images(output, png_path, zebra_path))
+
+
+def camera_options(command):
+    """--view, --eye, --target, --up, --projection, --fov, --zoom: one ``camera`` argument (``CameraPlacement``)."""
+    return grouped(command, "camera", [
+        click.option("--view", type=click.Choice(sorted(VIEWS)), default="iso", show_default=True,
+                     help="Camera direction for a Y-up scene (front looks along -Z, top along -Y, side along -X)."),
+        click.option("--eye", type=float, nargs=3, default=None, metavar="X Y Z",
+                     help="Camera position (overrides --view)."),
+        click.option("--target", type=float, nargs=3, default=None, metavar="X Y Z",
+                     help="Point looked at [default: centre of the bounding box]."),
+        click.option("--up", type=float, nargs=3, default=None, metavar="X Y Z",
+                     help="Up direction [default: +Y, or the view's]."),
+        click.option("--projection", type=click.Choice(PROJECTIONS), default="perspective", show_default=True,
+                     help="Pinhole camera, or parallel rays (orthographic: only the direction of --eye/--view counts)."),
+        click.option("--fov", type=click.FloatRange(0.1, 170.0), default=None,
+                     help="Vertical field of view in degrees (perspective) [default: 30, or framing everything with "
+                          "--eye]."),
+        click.option("--zoom", type=click.FloatRange(min=1e-6), default=1.0, show_default=True,
+                     help="Magnify about the image centre (the whole surface is framed at 1)."),
+    ], lambda **values: CameraPlacement(**values))
+
+
+def colour_options(command):
+    """--color-by, --colormap, --range, --stripes, --stripe-axis: one ``colours`` argument (``Colours``)."""
+    return grouped(command, "colours", [
+        click.option("--color-by", "quantity", type=click.Choice(CURVATURE_NAMES), default="kmax", show_default=True,
+                     help="Curvature shown by the colours (R G B and --png)."),
+        click.option("--colormap", type=click.Choice(sorted(COLORMAPS)), default="viridis", show_default=True,
+                     help="'viridis' (perceptual) or 'gray' (the paper's black-to-white ramp)."),
+        click.option("--range", "value_range", type=float, nargs=2, default=None, metavar="LO HI",
+                     help="Colour range [default: 0 to the 98th percentile of |value| on screen; symmetric when "
+                          "signed]."),
+        click.option("--stripes", type=click.IntRange(1, 10000), default=16, show_default=True,
+                     help="--zebra: black and white stripe pairs per turn of the reflected ray."),
+        click.option("--stripe-axis", type=float, nargs=3, default=None, metavar="X Y Z",
+                     help="--zebra: direction of the parallel light lines [default: the camera's up]. Normals that "
+                          "jump across an edge show best with lines along that edge."),
+    ], lambda **values: Colours(**values))
+
+
 @click.command("render")
 @click.argument("input_path", metavar="INPUT|PATCHES", type=click.Path(dir_okay=False))
-@click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
-              help="EXR image of float32 channels: R G B A (preview, linear), kmax K H k1 k2 (curvature), Z (depth "
-                   "along the view), N.X N.Y N.Z (unit normal), P.X P.Y P.Z (position), patch (-1 = background), u v.")
-@click.option("--png", "png_path", type=click.Path(dir_okay=False), default=None,
-              help="Also write a shaded preview coloured by curvature, with a colour bar.")
-@click.option("--zebra", "zebra_path", type=click.Path(dir_okay=False), default=None,
-              help="Also write reflection lines (zebra stripes): continuous on a G1 surface, broken where normals jump.")
-@click.option("--view", type=click.Choice(sorted(VIEWS)), default="iso", show_default=True,
-              help="Camera direction for a Y-up scene (front looks along -Z, top along -Y, side along -X).")
-@click.option("--eye", type=float, nargs=3, default=None, metavar="X Y Z", help="Camera position (overrides --view).")
-@click.option("--target", type=float, nargs=3, default=None, metavar="X Y Z",
-              help="Point looked at [default: centre of the bounding box].")
-@click.option("--up", type=float, nargs=3, default=None, metavar="X Y Z", help="Up direction [default: +Y, or the view's].")
+@image_options
+@camera_options
 @click.option("--size", default="1024x1024", show_default=True, metavar="WxH", help="Image size WIDTHxHEIGHT (or N for N x N).")
-@click.option("--projection", type=click.Choice(PROJECTIONS), default="perspective", show_default=True,
-              help="Pinhole camera, or parallel rays (orthographic: only the direction of --eye/--view counts).")
-@click.option("--fov", type=click.FloatRange(0.1, 170.0), default=None,
-              help="Vertical field of view in degrees (perspective) [default: 30, or framing everything with --eye].")
-@click.option("--zoom", type=click.FloatRange(min=1e-6), default=1.0, show_default=True,
-              help="Magnify about the image centre (the whole surface is framed at 1).")
 @click.option("--atlas", is_flag=True,
               help="Parameter space instead of a view: patch k is a square tile (u to the right, v up), same channels.")
 @click.option("--tile", type=click.IntRange(1, 4096), default=None,
               help="--atlas: pixels per patch side [default: as large as fits about 4 million pixels, at most 32].")
-@click.option("--color-by", "quantity", type=click.Choice(CURVATURE_NAMES), default="kmax", show_default=True,
-              help="Curvature shown by the colours (R G B and --png).")
-@click.option("--colormap", type=click.Choice(sorted(COLORMAPS)), default="viridis", show_default=True,
-              help="'viridis' (perceptual) or 'gray' (the paper's black-to-white ramp).")
-@click.option("--range", "value_range", type=float, nargs=2, default=None, metavar="LO HI",
-              help="Colour range [default: 0 to the 98th percentile of |value| on screen; symmetric when signed].")
-@click.option("--stripes", type=click.IntRange(1, 10000), default=16, show_default=True,
-              help="--zebra: black and white stripe pairs per turn of the reflected ray.")
-@click.option("--stripe-axis", type=float, nargs=3, default=None, metavar="X Y Z",
-              help="--zebra: direction of the parallel light lines [default: the camera's up]. Normals that jump "
-                   "across an edge show best with lines along that edge.")
+@colour_options
 @click.option("--mesh-resolution", type=click.IntRange(2, 64), default=None,
               help="Samples per patch side of the mesh the rays hit first [default: about 600k triangles, 2 to 8]; "
                    "the hit is then moved onto the exact patch by Newton steps.")
 @surface_options
-@weld_options
-@click.option("--exact-creases/--g1-creases", "exact_creases", default=None,
-              help="For a mesh INPUT: infinitely sharp creases as C0 seams (the default) or the sharpest G1 crease, "
-                   "as convert.")
+@input_options
 @click.option("-q", "--quiet", is_flag=True, help="No progress bars (they only appear on a terminal anyway).")
 @friendly_errors
-def render_command(input_path, output, png_path, zebra_path, view, eye, target, up, size, projection, fov, zoom, atlas,
-                   tile, quantity, colormap, value_range, stripes, stripe_axis, mesh_resolution, blend, alpha, beta,
-                   tangent_rule, weld, no_weld, exact_creases, quiet):
-    """Render the surface of INPUT (a mesh: OBJ, PLY, OFF, STL) or PATCHES (a patch file) to images.
+@with_formats
+def render_command(input_path, images, camera, size, atlas, tile, colours, mesh_resolution, surface, inputs, quiet):
+    """Render the surface of INPUT (a mesh: {mesh_inputs}) or PATCHES ({patch_inputs}) to images.
 
     Each pixel's curvature is exact: the pixel's ray hits a tessellation, the hit
     triangle gives the patch and an approximate (u, v), Newton steps move it onto
@@ -216,17 +241,14 @@ def render_command(input_path, output, png_path, zebra_path, view, eye, target, 
     default camera frames the whole surface. Give at least one of -o (EXR),
     --png and --zebra.
     """
-    check_outputs(output, png_path, zebra_path, value_range)
+    check_outputs(images, colours.value_range)
     width, height = parse_size(size)
     if not atlas:
         check_image_size(width * height)
     progress = Progress(quiet)
-    options = SurfaceOptions(blend=blend, alpha=alpha, beta=beta, tangent_rule=tangent_rule,
-                             exact_creases=resolve_exact_creases(exact_creases))
-    patches = load_patches(input_path, options, quiet, progress, weld_tolerance(weld, no_weld))
-    if stripe_axis is not None and not np.linalg.norm(stripe_axis) > 0:
+    patches = read_patches(input_path, surface, inputs, quiet, progress)
+    if colours.stripe_axis is not None and not np.linalg.norm(colours.stripe_axis) > 0:
         raise click.BadParameter("--stripe-axis must not be the zero vector")
-    camera = {"view": view, "eye": eye, "target": target, "up": up, "projection": projection, "fov": fov, "zoom": zoom}
     with warnings.catch_warnings():
         warnings.filterwarnings("ignore", message="embreex is not installed")  # a note below says it
         if atlas:
@@ -235,10 +257,11 @@ def render_command(input_path, output, png_path, zebra_path, view, eye, target, 
             image = view_image(patches, mesh_resolution, width, height, camera, progress)
     if not quiet:
         image_notes(image)
-    picture, rgb, colour_range = curvature_picture(image, quantity, colormap, value_range)
-    write_atomically(output, input_path, progress,
-                     lambda tmp: write_exr(tmp, exr_channels(image, rgb), exr_attributes(image, quantity, colour_range)))
-    write_atomically(png_path, input_path, progress, lambda tmp: write_png(tmp, picture))
-    write_atomically(zebra_path, input_path, progress,
-                     lambda tmp: write_png(tmp, zebra_picture(image, stripes, stripe_axis)))
+    picture, rgb, colour_range = curvature_picture(image, colours.quantity, colours.colormap, colours.value_range)
+    write_atomically(images.exr, input_path, progress,
+                     lambda tmp: write_exr(tmp, exr_channels(image, rgb), exr_attributes(image, colours.quantity,
+                                                                                         colour_range)))
+    write_atomically(images.png, input_path, progress, lambda tmp: write_png(tmp, picture))
+    write_atomically(images.zebra, input_path, progress,
+                     lambda tmp: write_png(tmp, zebra_picture(image, colours.stripes, colours.stripe_axis)))
     progress.done()

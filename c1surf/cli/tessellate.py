@@ -7,7 +7,7 @@ from ..evaluation.tessellate import tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.write import write_triangle_mesh
 from ..io.registry import MESH_WRITERS, PATCH_READERS, suffix_list
-from .common import Failure, Progress, friendly_errors, output_suffix
+from .common import Failure, Progress, friendly_errors, output_suffix, with_formats
 from .convert import check_tessellation_size, tessellate_within
 from .options import tolerance_option, tolerance_value
 
@@ -22,13 +22,14 @@ from .options import tolerance_option, tolerance_value
 @click.option("--force", is_flag=True, help="Write even when the output is estimated not to fit in memory.")
 @click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
+@with_formats
 def tessellate(patches_path, output, resolution, tolerance, force, quiet):
-    """Tessellate the patch file PATCHES (.json, .npz, .igs/.iges) into a triangle mesh.
+    """Tessellate the patch file PATCHES ({patch_inputs}) into a triangle mesh ({mesh_outputs}).
 
     With the same --resolution (or --tolerance), the mesh is byte for byte the
     one `convert` writes for the same surface: JSON and NPZ files store how patches share
     corners and sides, and the welding uses exactly those ids. IGES files
-    store no adjacency; shared corners and sides are then found from the
+    (and STEP files) store no adjacency; shared corners and sides are then found from the
     patch geometry (points within 1e-9 of the bounding box), which for a
     c1surf surface gives the same welding.
     """

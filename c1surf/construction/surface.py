@@ -12,6 +12,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import OptionError
+
 from ..arrays import column_bounds
 from ..mesh.errors import TopologyError
 from ..mesh.halfedges import HalfEdgeMesh
@@ -58,27 +60,49 @@ class SurfaceOptions:
     exact_creases: bool = False
 
     def check(self, vertex_normals=None) -> "SurfaceOptions":
-        """Raise ValueError for a value or combination the construction cannot take; else return self."""
+        """Raise OptionError (a ValueError) for a value or combination the construction cannot take; else return self."""
         if self.tangent_rule not in TANGENT_RULES:
-            raise ValueError(f"tangent rule must be one of {TANGENT_RULES}")
+            raise OptionError(f"tangent rule must be one of {TANGENT_RULES}")
         if self.triangles not in TRIANGLE_RULES:
-            raise ValueError(f"triangles must be one of {TRIANGLE_RULES}")
+            raise OptionError(f"triangles must be one of {TRIANGLE_RULES}")
         if self.refinements not in (0, 1, 2, "auto"):
-            raise ValueError("refinements must be 0, 1, 2 or 'auto'")
+            raise OptionError("refinements must be 0, 1, 2 or 'auto'")
         if self.interpolate_vertices and self.refinements == 0:
-            raise ValueError("vertex interpolation (A1a) needs at least one refinement step")
+            raise OptionError("vertex interpolation (A1a, --interpolate-vertices) needs at least one refinement step "
+                              "(--refinements 1, 2 or auto)")
         if self.interpolate_vertices and self.exact_creases:
-            raise ValueError("vertex interpolation (A1a) is not available with exact creases yet")
+            raise OptionError("vertex interpolation (A1a, --interpolate-vertices/--interpolate-normals) does not work "
+                              "with exact creases (--exact-creases) yet")
         if self.interpolate_vertices and self.beta != 0:
-            raise ValueError("vertex interpolation (A1a) needs beta = 0: beta moves the cell centres off the vertices")
+            raise OptionError("vertex interpolation (A1a, --interpolate-vertices/--interpolate-normals) needs --beta 0: "
+                              "beta moves the cell centres off the vertices")
         if vertex_normals is not None and not self.interpolate_vertices:
-            raise ValueError("vertex normals are interpolated together with the vertices: set interpolate_vertices")
+            raise OptionError("vertex normals are interpolated together with the vertices: set interpolate_vertices")
         if vertex_normals is not None and self.alpha == 0:
-            raise ValueError("vertex normals need alpha > 0 (alpha = 0 leaves no tangent plane at cell centres)")
+            raise OptionError("vertex normals (--interpolate-normals) need --alpha > 0: alpha = 0 leaves no tangent plane "
+                              "at cell centres")
         return self
 
     def hole_rules(self) -> HoleRules:
         return HoleRules(self.triangles, self.alpha, self.beta, self.tangent_rule)
+
+
+@dataclass(frozen=True)
+class ExtensionData:
+    """The per-face and per-vertex inputs of the paper's extensions and of sharp features (``Surface``'s keywords).
+
+    face_blend : (F,) float or None, per-face blend ratio overriding ``options.blend``
+    vertex_blend : (V,) float or None, per-vertex blend ratio (NaN or negative: unset)
+    weights : (V,) float > 0 or None, homogeneous weight of every input point (A2a)
+    vertex_normals : (V, 3) float or None, NaN rows where unset (A1a)
+    features : SharpFeatures or None, creases, corners and holes
+    """
+
+    face_blend: object = None
+    vertex_blend: object = None
+    weights: object = None
+    vertex_normals: object = None
+    features: object = None
 
 
 class Surface:
@@ -90,6 +114,8 @@ class Surface:
     face_vertices : (sum(face_sizes),) int, faces concatenated, counter-clockwise from outside
     points : (V, d) float, d >= 1 (3 for positions; more columns are carried along linearly)
     options : SurfaceOptions
+    lazy_patches : bool, keyword only (below)
+    **extensions : the fields of ``ExtensionData``, keyword only:
     face_blend : (F,) float or None, per-face blend ratio overriding ``options.blend``
     vertex_blend : (V,) float or None, per-vertex blend ratio (NaN or negative: unset),
         used for the corners at that vertex (``stencils.blend``)
@@ -117,8 +143,11 @@ class Surface:
     (``patch_blocks``, ``patch_source``) and never makes them.
     """
 
-    def __init__(self, face_sizes, face_vertices, points, options: SurfaceOptions | None = None, face_blend=None,
-                 vertex_blend=None, weights=None, vertex_normals=None, features=None, lazy_patches: bool = False):
+    def __init__(self, face_sizes, face_vertices, points, options: SurfaceOptions | None = None, *,
+                 lazy_patches: bool = False, **extensions):
+        x = ExtensionData(**extensions)
+        face_blend, vertex_blend, weights, vertex_normals, features = (x.face_blend, x.vertex_blend, x.weights,
+                                                                       x.vertex_normals, x.features)
         self.options = o = (options or SurfaceOptions()).check(vertex_normals)
         self.lazy_patches = bool(lazy_patches)
         points = np.asarray(points, dtype=np.float64)

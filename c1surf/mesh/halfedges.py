@@ -12,6 +12,8 @@ from typing import Callable
 
 import numpy as np
 
+from ..arrays import unique_integers
+
 _REPEATED_FACES = 1 << 24  # fewer faces than this make ``face`` by np.repeat (its temporary: at most 128 MB)
 
 
@@ -369,3 +371,26 @@ def outgoing_rings(mesh: HalfEdgeMesh, index=np.int64):
         ring[offsets[active] + k] = current
         current = mesh.rotate(current)
     return vertices, sizes, ring
+
+
+def mesh_edge_keys(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices: int) -> np.ndarray:
+    """Sorted unique keys ``min * V + max`` of the mesh's undirected edges.
+
+    Parameters
+    ----------
+    face_sizes : ndarray, shape (F,), int
+    face_vertices : ndarray, shape (sum(face_sizes),), int
+    n_vertices : int, V
+
+    Returns
+    -------
+    ndarray, shape (number of edges,), int64
+    """
+    face_vertices = np.asarray(face_vertices, dtype=np.int64)
+    offs = np.zeros(len(face_sizes) + 1, dtype=np.int64)
+    np.cumsum(face_sizes, out=offs[1:])
+    nxt = np.arange(1, face_vertices.size + 1)
+    nonempty = np.asarray(face_sizes) > 0
+    nxt[offs[1:][nonempty] - 1] = offs[:-1][nonempty]
+    a, b = face_vertices, face_vertices[nxt] if face_vertices.size else face_vertices
+    return unique_integers(np.minimum(a, b) * n_vertices + np.maximum(a, b))

@@ -118,15 +118,10 @@ def _frame(forward, up):
     return forward, right, np.cross(right, forward)
 
 
-def frame_camera(points: np.ndarray, width: int, height: int, view: str = "iso", eye=None, target=None, up=None,
-                 projection: str = "perspective", fov: float | None = None, margin: float = 0.04,
-                 zoom: float = 1.0) -> Camera:
-    """A camera that shows all of ``points``.
+@dataclass(frozen=True)
+class CameraPlacement:
+    """Where a camera looks from and how it projects (``frame_camera`` frames the picture around it).
 
-    Parameters
-    ----------
-    points : (n, 3) float, what must be in the picture (e.g. tessellation vertices)
-    width, height : int, pixels
     view : a key of ``VIEWS``; ignored when ``eye`` is given
     eye, target, up : (3,) or None. ``target`` defaults to the centre of the bounding
         box. With ``eye``, a perspective camera stays there and its field of view
@@ -136,11 +131,35 @@ def frame_camera(points: np.ndarray, width: int, height: int, view: str = "iso",
     fov : vertical field of view in degrees (perspective), default 30
     margin : fraction of empty border
     zoom : > 1 magnifies about the image centre (narrower field of view, same eye)
+    """
+
+    view: str = "iso"
+    eye: tuple | None = None
+    target: tuple | None = None
+    up: tuple | None = None
+    projection: str = "perspective"
+    fov: float | None = None
+    margin: float = 0.04
+    zoom: float = 1.0
+
+
+def frame_camera(points: np.ndarray, width: int, height: int, view: str = "iso", **placement) -> Camera:
+    """A camera that shows all of ``points``.
+
+    Parameters
+    ----------
+    points : (n, 3) float, what must be in the picture (e.g. tessellation vertices)
+    width, height : int, pixels
+    view, **placement : the fields of ``CameraPlacement`` (or ``placement=CameraPlacement(...)``)
 
     Returns
     -------
     Camera
     """
+    given = placement.pop("placement", None)
+    p = given if given is not None else CameraPlacement(view=view, **placement)
+    view, eye, target, up, projection, fov, margin, zoom = (p.view, p.eye, p.target, p.up, p.projection, p.fov,
+                                                           p.margin, p.zoom)
     if projection not in PROJECTIONS:
         raise ValueError(f"projection must be one of {PROJECTIONS}")
     pts = np.asarray(points, dtype=np.float64)[:, :3]

@@ -234,8 +234,7 @@ def ray_distance(x: np.ndarray, origins: np.ndarray, directions: np.ndarray) -> 
     return np.linalg.norm(rel - np.einsum("md,md->m", rel, directions)[:, None] * directions, axis=1)
 
 
-def newton_on_rays(sampler: PatchSampler, group: int, index, u, v, origins, directions, steps: int = 8,
-                   tolerance: float = 1e-9):
+def newton_on_rays(sampler: PatchSampler, group: int, index, u, v, rays, steps: int = 8, tolerance: float = 1e-9):
     """Newton steps on ``x(u, v) = o + t d``, one patch per ray, until the parameter step
     is below ``tolerance`` (at most ``steps`` steps).
 
@@ -247,13 +246,14 @@ def newton_on_rays(sampler: PatchSampler, group: int, index, u, v, origins, dire
     ----------
     sampler : PatchSampler of the surface; group : int, the group of every ray's patch
     index : (m,) int, the patch of each ray within the group
-    u, v : (m,) float, start values; origins, directions : (m, 3)
+    u, v : (m,) float, start values; rays : (origins (m, 3), directions (m, 3))
 
     Returns
     -------
     u, v : (m,) float after the steps
     start_distance : (m,) float, distance of the start point from its ray
     """
+    origins, directions = rays
     u, v = np.array(u, dtype=np.float64), np.array(v, dtype=np.float64)
     x, xu, xv = sampler.tangents(group, index, u, v)
     start = ray_distance(x, origins, directions)
@@ -334,7 +334,7 @@ def locate_on_rays(sampler: PatchSampler, adjacency, hits: RayHits, steps: int =
         for g, which in sampler.runs(patch[todo], EVAL_CHUNK):
             idx = todo[which]
             u[idx], v[idx], d0 = newton_on_rays(sampler, g, patch[idx] - sampler.offsets[g], u[idx], v[idx],
-                                                hits.origins[idx], hits.directions[idx], steps)
+                                                (hits.origins[idx], hits.directions[idx]), steps)
             if round_ == 0:
                 start_distance[idx] = d0
                 report(progress, "finding the exact hits", idx.size, patch.size)

@@ -172,11 +172,12 @@ def test_curvature_of_a_rational_surface_is_the_rational_one(tmp_path):
 
 def test_outputs_that_do_not_fit_on_the_disk_are_refused_before_writing(tmp_path, monkeypatch):
     from c1surf.api import surface_from_file, tessellate_surface
+    from c1surf import resources
     from c1surf.cli import convert as convert_module
 
     out, patches = tmp_path / "out.ply", tmp_path / "p.json"
     usage = shutil.disk_usage(tmp_path)
-    monkeypatch.setattr(convert_module.shutil, "disk_usage", lambda folder: usage._replace(free=100_000))
+    monkeypatch.setattr(resources.shutil, "disk_usage", lambda folder: usage._replace(free=100_000))
     args = ["convert", str(SAMPLES / "twisted.obj"), "-o", str(out), "--patches", str(patches), "-r", "8", "-q"]
     result = CliRunner().invoke(main, args)
     assert result.exit_code == 1

@@ -17,6 +17,7 @@ import numpy as np
 import pytest
 from click.testing import CliRunner
 
+from c1surf import resources
 from c1surf.cli import convert as convert_module
 from c1surf.cli.main import main
 from c1surf.construction import patch_blocks
@@ -195,7 +196,7 @@ def test_a_streamed_output_is_refused_on_memory_per_patch_and_on_disk(monkeypatc
     runner = CliRunner()
     result = runner.invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "o.ply"), "-q", "-r", "100000"])
     assert result.exit_code == 1 and "for one patch" in result.output and "--force" in result.output
-    monkeypatch.setattr(convert_module.shutil, "disk_usage", lambda folder: type("U", (), {"free": 10_000})())
+    monkeypatch.setattr(resources.shutil, "disk_usage", lambda folder: type("U", (), {"free": 10_000})())
     result = runner.invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "o.ply"), "-q", "-r", "3"])
     assert result.exit_code == 1 and "MiB but only" in result.output
     assert not list(tmp_path.iterdir())  # nothing written, no temporary file left

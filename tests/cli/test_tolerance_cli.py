@@ -89,9 +89,9 @@ def test_curvature_and_attributes_follow_the_tolerance_mesh(tmp_path):
 
 
 def test_the_memory_guard_counts_the_tolerance_mesh(tmp_path, monkeypatch):
-    from c1surf.cli import convert as convert_module
+    from c1surf import resources
 
-    monkeypatch.setattr(convert_module, "available_memory", lambda: 1 << 20)
+    monkeypatch.setattr(resources, "available_memory", lambda: 1 << 20)
     out = tmp_path / "x.ply"
     result = invoke("convert", SAMPLES / "twisted.obj", "-o", out, "--tolerance", "0.0001", "-q")
     assert result.exit_code == 1 and not out.exists()

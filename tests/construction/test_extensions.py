@@ -36,7 +36,9 @@ from c1surf.construction.stencils.triangles import triangle_hole_coefficients
 from c1surf.io.meshes.obj import read_obj
 from c1surf.io.patches.json_patches import read_patch_set_json
 from c1surf.io.meshes.read import read_mesh
-from c1surf.io.meshes.surface_data import surface_data
+from c1surf.io.meshes.sidecars import read_blend_file
+from c1surf.prepare.extension_data import Sidecars, surface_data
+from c1surf.prepare.options import InputOptions
 
 from conftest import CLOSED_SAMPLES, SAMPLES, polygon_mesh
 from conftest import fan, grid, open_cylinder, single_polygon, slab_with_polygons
@@ -275,7 +277,7 @@ def test_blend_ratios_from_a_sidecar_file_and_from_ply_properties(tmp_path):
     assert mesh.group_names[-1] == "lid"
     blend_file = tmp_path / "blend.json"
     blend_file.write_text(json.dumps({"default": 0.2, "faces": {"0": 0.9, "lid": 0.4}, "vertices": {"3": 0.05}}))
-    data = surface_data(mesh, blend_file=blend_file)
+    data = surface_data(mesh, InputOptions(), sidecars=Sidecars(None, *read_blend_file(blend_file, mesh)))
     expected = np.where(mesh.face_groups == mesh.group_names.index("lid"), 0.4, 0.2)
     expected[0] = 0.9
     np.testing.assert_array_equal(data.face_blend, expected)
@@ -290,7 +292,7 @@ def test_blend_ratios_from_a_sidecar_file_and_from_ply_properties(tmp_path):
     from plyfile import PlyElement
 
     PlyData([PlyElement.describe(vertex, "vertex"), PlyElement.describe(face, "face")], text=True).write(str(ply))
-    from_ply = surface_data(read_mesh(ply))
+    from_ply = surface_data(read_mesh(ply), InputOptions())
     np.testing.assert_array_equal(from_ply.face_blend, data.face_blend)
     np.testing.assert_array_equal(np.isnan(from_ply.vertex_blend), np.isnan(data.vertex_blend))
     # and through the command line: the same surface both ways
@@ -831,7 +833,7 @@ def test_attributes_are_written_to_ply_and_obj(tmp_path):
     lines += ["f " + " ".join(f"{v + 1}/{v + 1}" for v in mesh.face_vertices[offsets[f] : offsets[f + 1]]) for f in range(mesh.n_faces)]
     src = tmp_path / "a.obj"
     src.write_text("\n".join(lines) + "\n")
-    data = surface_data(read_mesh(src), attributes=True)
+    data = surface_data(read_mesh(src), InputOptions(attributes=True))
     assert data.attribute_names == ["u", "v", "red", "green", "blue"] and data.colour_scale == 1.0
     ply, obj = tmp_path / "out.ply", tmp_path / "out.obj"
     assert run("convert", src, "-o", ply, "--attributes", "-r", 4).exit_code == 0

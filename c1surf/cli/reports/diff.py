@@ -9,7 +9,7 @@ from ...evaluation.compare import compare_meshes, compare_patch_sets
 from ...io.meshes.read import read_mesh
 from ...io.patches.formats import load_patch_set
 from ...io.registry import MESH_READERS, PATCH_READERS, suffix_list
-from ..common import Failure, friendly_errors
+from ..common import Failure, friendly_errors, with_formats
 
 
 @click.command()
@@ -18,8 +18,9 @@ from ..common import Failure, friendly_errors
 @click.option("--tolerance", type=click.FloatRange(0.0, None), default=1e-12, show_default=True,
               help="Largest coefficient (or vertex) move accepted as equal, relative to the bounding-box diagonal of A.")
 @friendly_errors
+@with_formats
 def diff(first, second, tolerance):
-    """Compare two patch files (any format c1surf reads) or two meshes (OBJ, PLY).
+    """Compare two patch files ({patch_inputs}) or two meshes ({mesh_inputs}).
 
     Structure first: patch counts and degrees, weights, merged pieces (meshes:
     vertex and face counts, face sizes and vertices); then every control point

@@ -15,9 +15,9 @@ import math
 import click
 import numpy as np
 
+from ...api import prepared_input, repair_notes, seam_notes, topology_error
 from ...construction.topology import build_topology
-from ...io.meshes.surface_data import SurfaceData, prepare_surface_input
-from ...io.meshes.tags.features import sharp_features
+from ...errors import ResourceRefusal
 from ...evaluation.adjacency import patch_adjacency
 from ...io.errors import MeshInputError
 from ...io.meshes.mesh_file import collapse_repeated_corners
@@ -26,8 +26,10 @@ from ...io.registry import MESH_WRITERS
 from ...mesh.errors import TopologyError
 from ...mesh.repair import prepare_topology
 from ...mesh.statistics import degenerate_faces, histogram, mesh_statistics
-from ..common import Failure, friendly_errors, repair_notes, seam_notes, topology_failure
-from ..convert import check_tessellation_size, tessellation_bytes
+from ...resources import tessellation_bytes
+from ..common import friendly_errors, with_formats
+from ..convert import check_tessellation_size
+from ..options import input_options, surface_options
 
 PLY_HEADER_BYTES = 250  # about: the header of convert's binary PLY (xyz and normals as double)
 PLY_VERTEX_BYTES = 6 * 8  # x y z nx ny nz, double
@@ -39,24 +41,24 @@ REPAIR_KEYS = ("flipped_faces", "split_vertices", "unused_vertices", "components
 @click.argument("input_path", metavar="INPUT", type=click.Path(dir_okay=False))
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="The --resolution of the conversion the output sizes are estimated for.")
-@click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default="2", show_default=True,
-              help="The --refinements of the conversion (the patch counts depend on it).")
-@click.option("--exact-creases/--g1-creases", "exact_creases", default=True, show_default=True,
-              help="Plan the C0 seams of `convert` (the default; the notes say which infinitely sharp creases become "
-                   "seams; the patch counts follow) or its --g1-creases surface.")
 @click.option("--json", "as_json", is_flag=True, help="Print one JSON object (keys: README, \"Inspecting a mesh\").")
+@surface_options
+@input_options
 @friendly_errors
-def inspect(input_path, resolution, refinements, exact_creases, as_json):
-    """Report what c1surf sees in the mesh INPUT and what `convert` would do with it.
+@with_formats
+def inspect(input_path, resolution, as_json, surface, inputs):
+    """Report what c1surf sees in the mesh INPUT ({mesh_inputs}) and what `convert` would do with it.
 
     Counts (faces by size, valences, boundary loops, components with their
     Euler characteristic and genus, non-manifold edges, pinched, valence-2 and
     unused vertices, degenerate faces, sharp-feature tags), the repairs the
     conversion makes, whether it refuses the mesh and why, the patch counts and
-    the output sizes at --resolution. Exits 0 for a refused mesh too; 1 only
-    when the file cannot be read.
+    the output sizes at --resolution. The surface and input options are
+    those of the conversion planned (the patch counts depend on --refinements,
+    the C0 seams on --exact-creases/--g1-creases). Exits 0 for a refused mesh
+    too; 1 only when the file cannot be read.
     """
-    report = inspection(input_path, resolution, refinements if refinements == "auto" else int(refinements), exact_creases)
+    report = inspection(input_path, resolution, surface, inputs)
     if as_json:
         click.echo(json.dumps(report, indent=2))
     else:
@@ -64,26 +66,25 @@ def inspect(input_path, resolution, refinements, exact_creases, as_json):
             click.echo(line)
 
 
-def inspection(path, resolution: int, refinements, exact_creases: bool = False) -> dict:
+def inspection(path, resolution: int, surface=None, inputs=None) -> dict:
     """The report of ``c1surf inspect`` as a JSON-ready dict (keys: README, "Inspecting a mesh").
 
+    ``surface``, ``inputs``: the SurfaceOptions and InputOptions of the conversion planned (defaults: convert's).
     Raises MeshInputError (through ``read_mesh``) only for a file that cannot be read at all.
     """
     raw = read_mesh(path, keep_degenerate=True)
     degenerate = degenerate_faces(raw.face_sizes, raw.face_vertices)
     mesh, refusal = converted_mesh(raw, degenerate.size > 0)
     stats = mesh_statistics(*usable_faces(mesh.face_sizes, mesh.face_vertices), mesh.n_vertices)
-    topology, repairs = None, None
-    features, feature_notes = sharp_features(mesh, exact_creases=exact_creases)  # the file's tags, as convert honours them
-    data = SurfaceData(mesh.points, features=features, feature_notes=feature_notes)
-    built = mesh
+    topology, repairs, built, data, exact_creases = None, None, mesh, None, False
     if refusal is None:
-        try:  # welded and with its valence-2 vertices dissolved, as convert builds it
-            built, data = prepare_surface_input(mesh, data, 0.0, exact_creases)
+        try:  # welded and with its valence-2 vertices dissolved, as convert builds it (api.prepared_input)
+            prepared = prepared_input(path, surface, inputs)
+            built, data, exact_creases = prepared.mesh, prepared.data, prepared.options.exact_creases
         except MeshInputError as e:
             refusal = str(e)
     if refusal is None:
-        topology, repairs, refusal = plan(built, refinements, data.features, exact_creases)
+        topology, repairs, refusal = plan(built, prepared.options.refinements, data.features, exact_creases)
     outputs = None
     if topology is not None:
         outputs = output_sizes(topology, resolution)
@@ -91,7 +92,7 @@ def inspection(path, resolution: int, refinements, exact_creases: bool = False) 
         outputs["in_memory_refusal"] = None
         try:
             check_tessellation_size(outputs["patches"], resolution, force=False)
-        except Failure as e:  # the memory guard of an in-memory conversion
+        except ResourceRefusal as e:  # the memory guard of an in-memory conversion
             outputs["in_memory_refusal"] = e.message
     return {
         "file": str(path),
@@ -112,7 +113,7 @@ def inspection(path, resolution: int, refinements, exact_creases: bool = False) 
 def planned_notes(topology, built, data, exact_creases: bool) -> list[str]:
     """The notes ``convert`` would print: the sharp features', the C0 seams' (``--exact-creases``), the repairs'."""
     if topology is None:
-        return list(data.feature_notes)
+        return [] if data is None else list(data.feature_notes)
     notes = repair_notes(topology, built, data)  # the feature notes first
     at = len(data.feature_notes)
     notes[at:at] = seam_notes(exact_creases, data.features, topology)
@@ -153,7 +154,7 @@ def plan(mesh, refinements, features=None, exact_creases: bool = False):
         topology = build_topology(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices, refinements,
                                   features=features, exact_creases=exact_creases)
     except TopologyError as e:
-        return None, repairs_before(mesh), topology_failure(e, mesh).message
+        return None, repairs_before(mesh), str(topology_error(e, mesh))
     return topology, {key: topology.repairs[key] for key in REPAIR_KEYS}, None
 
 

@@ -7,8 +7,8 @@ import click
 
 from ...evaluation.measure import AREA_RTOL, MassProperties, mass_properties
 from ..check import read_or_build
-from ..common import friendly_errors
-from ..options import extension_options, surface_options
+from ..common import friendly_errors, with_formats
+from ..options import input_options, surface_options
 
 
 @click.command()
@@ -17,13 +17,14 @@ from ..options import extension_options, surface_options
               help='Print one JSON object: "area", "volume", "centroid" (3 numbers), "inertia" (3 x 3), "closed", '
                    '"area_error", "reason" (why volume, centroid and inertia are null) and "note".')
 @surface_options
-@extension_options
+@input_options
 @friendly_errors
-def measure(path, as_json, **shape):
+@with_formats
+def measure(path, as_json, surface, inputs):
     """Surface area and, for a closed surface, enclosed volume, centroid and inertia tensor.
 
-    PATCHES is a patch file (any format c1surf reads); an OBJ/PLY INPUT is
-    converted first, as by `check` (with the surface options below). Computed
+    PATCHES is a patch file ({patch_inputs}); a mesh INPUT ({mesh_inputs}) is
+    converted first, as by `check` (with the options below). Computed
     from the exact patches by Gauss-Legendre quadrature: the volume (divergence
     theorem), centroid and inertia of polynomial patches exactly up to rounding,
     the area (and the moments of rational patches) adaptively to about 1e-13
@@ -31,7 +32,7 @@ def measure(path, as_json, **shape):
     centroid. A surface is closed when every patch side is shared by two
     consistently oriented patches; an open one has no volume.
     """
-    patch_set = read_or_build(path, shape)
+    patch_set = read_or_build(path, surface, inputs)
     adjacency = patch_set.welding()
     result = mass_properties(patch_set.groups, adjacency.edges, adjacency.reversed, patch_set.weights)
     if as_json:

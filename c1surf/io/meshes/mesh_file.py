@@ -1,20 +1,22 @@
-"""The in-memory result of reading a polygon mesh file."""
+"""The in-memory result of reading a polygon mesh file, and the checks its readers share.
+
+Everything that changes the mesh after reading (welding, repeated faces, valence-2 vertices, sheets, crease
+sectors) is the input preparation's (``c1surf.prepare``), which takes a MeshFile and returns another.
+"""
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 
 import numpy as np
 
 from ...arrays import unique_integers
-from ...mesh.creases.sectors import merge_crease_sectors
-from ...mesh.duplicate_faces import repeated_faces
-from ...mesh.valence_two import dissolve_valence_two
-from ...mesh.weld import collapse_repeated_corners, weld_vertices
+from ...mesh.creases.tags import SharpTags
+from ...mesh.weld import collapse_repeated_corners
 from ..errors import MeshInputError
-from .tags.record import SharpTags
 
-__all__ = ["MeshFile", "WeldReport", "weld_mesh_file", "collapse_repeated_corners"]
+__all__ = ["MeshFile", "collapse_repeated_corners", "collapse_repeated_corners_or_refuse", "refuse_repeated_vertex",
+           "find_repeated_vertex"]
 
 
 @dataclass(eq=False)  # eq on numpy fields would be ambiguous
@@ -60,29 +62,29 @@ class MeshFile:
         Group names in order of first use by a face.
     tags : SharpTags
         Sharp-feature tags (OBJ ``t`` lines, PLY ``edge`` creases and vertex
-        ``corner``/``sharpness``), read and checked; ``tags.features.sharp_features``
+        ``corner``/``sharpness``), read and checked; ``prepare.features.sharp_features``
         turns them into the construction's ``SharpFeatures``. Empty when the file has none.
     collapsed_corners : int
         Repeated corners (``f a b c c``) the reader dropped.
-    weld : WeldReport or None
-        What ``weld_mesh_file`` changed; None for a mesh as read.
+    weld : prepare.mesh_edits.WeldReport or None
+        What welding changed (``prepare.mesh_edits.weld_mesh_file``); None for a mesh as read.
     dissolved_vertices : ndarray, shape (k,), int64
-        Interior valence-2 vertices taken out of their faces (``dissolve_mesh_file``).
+        Interior valence-2 vertices taken out of their faces (``prepare.mesh_edits.dissolve_mesh_file``).
     repeated_faces : int
-        Faces dropped as later copies of another face (``drop_repeated_faces``, ``mesh.duplicate_faces``).
+        Faces dropped as later copies of another face (``prepare.mesh_edits.drop_repeated_faces``).
     non_manifold_edges : ndarray, shape (k, 2), int64, or None
         Edges in more than two faces, cut into sheets with vertex copies appended to ``points``
-        (``io.meshes.surface_data.split_surface_sheets``, ``mesh.creases.non_manifold``).
+        (``prepare.sheets.split_surface_sheets``, ``mesh.creases.non_manifold``).
     non_manifold_seams : int
         Of those, the edges the sheets meet along (C0 seams); the others only touch.
     sector_merge : tuple (merged faces, polygons, seam vertices (k,) int, crease edges merged away (d, 2) int) or None
-        Crease sectors merged into polygons for exact C0 creases (``merge_sector_faces``,
+        Crease sectors merged into polygons for exact C0 creases (``prepare.mesh_edits.merge_sector_faces``,
         ``mesh.creases.sectors``); None when nothing was merged.
     reader_notes : list of str
         One line each on input the reader ignored or dropped (OBJ ``l``/``p``
         records, ``vt``/``vn`` indices that name no record, degenerate PLY
         strip triangles), printed by the CLI as ``c1surf: note:`` lines
-        (``cli.common.repair_notes``).
+        (``prepare.notes.repair_notes``).
     """
 
     path: str
@@ -99,7 +101,7 @@ class MeshFile:
     collapsed_corners: int = 0
     group_names: list[str] = field(default_factory=list)
     tags: SharpTags = field(default_factory=SharpTags)
-    weld: "WeldReport | None" = None
+    weld: object = None
     reader_notes: list[str] = field(default_factory=list)
     dissolved_vertices: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     repeated_faces: int = 0
@@ -128,117 +130,6 @@ class MeshFile:
         offs = np.zeros(len(self.face_sizes) + 1, dtype=np.int64)
         np.cumsum(self.face_sizes, out=offs[1:])
         return offs
-
-
-@dataclass(frozen=True)
-class WeldReport:
-    """What welding changed in a MeshFile (``c1surf: note:`` lines).
-
-    tolerance : float, relative to the bounding-box diagonal; 0 for equal positions
-    welded_vertices : int, used vertices merged into another one at their position
-    unwelded_vertices : int, positions kept as several vertices so that no edge lies in more than two faces
-    dropped_faces : int, faces welding left with fewer than 3 corners
-    """
-
-    tolerance: float = 0.0
-    welded_vertices: int = 0
-    unwelded_vertices: int = 0
-    dropped_faces: int = 0
-
-
-def drop_repeated_faces(mesh: MeshFile):
-    """The mesh without faces that repeat an earlier face (``mesh.duplicate_faces.repeated_faces``).
-
-    Returns
-    -------
-    mesh : MeshFile with ``repeated_faces`` set (per-face data of the dropped faces removed)
-    kept_faces : (F,) bool
-    """
-    repeated = repeated_faces(mesh.face_sizes, mesh.face_vertices)
-    kept = ~repeated
-    if not repeated.any():
-        return mesh, kept
-    return _keep_faces(mesh, kept, mesh.face_vertices[np.repeat(kept, mesh.face_sizes)], mesh.face_sizes[kept],
-                       repeated_faces=int(repeated.sum())), kept
-
-
-def _keep_faces(mesh: MeshFile, kept: np.ndarray, face_vertices: np.ndarray, face_sizes: np.ndarray, **fields) -> MeshFile:
-    """``mesh`` with new faces, the per-face data of the faces ``kept`` (F,) bool, and ``fields`` set."""
-    per_face = {name: None if values is None else values[kept]
-                for name, values in (("face_lines", mesh.face_lines), ("face_groups", mesh.face_groups))}
-    return replace(mesh, face_sizes=face_sizes, face_vertices=face_vertices, **per_face,
-                   face_attributes={k: v[kept] for k, v in mesh.face_attributes.items()}, **fields)
-
-
-def dissolve_mesh_file(mesh: MeshFile, keep: np.ndarray | None = None):
-    """The mesh with its interior valence-2 vertices dissolved (``mesh.valence_two.dissolve_valence_two``).
-
-    Returns
-    -------
-    mesh : MeshFile with ``dissolved_vertices`` set (per-face data of dropped faces removed)
-    kept_faces : (F,) bool, which faces remain
-
-    Raises
-    ------
-    MeshInputError when no face is left (back-to-back face pairs)
-    """
-    sizes, vertices, kept, dissolved = dissolve_valence_two(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices,
-                                                            keep=keep)
-    if dissolved.size == 0:
-        return mesh, kept
-    if sizes.size == 0:
-        raise MeshInputError(mesh.path, f"every vertex is an interior vertex of valence 2 ({dissolved.size}): the faces "
-                             "are back-to-back pairs (each face listed with both orientations), which enclose nothing "
-                             "to smooth")
-    dissolved = np.union1d(mesh.dissolved_vertices, dissolved)  # a second pass (after merging sectors) adds its own
-    return _keep_faces(mesh, kept, vertices, sizes, dissolved_vertices=dissolved), kept
-
-
-def merge_sector_faces(mesh: MeshFile, sharp_edges: np.ndarray, tagged_corners: np.ndarray,
-                       face_keys: np.ndarray | None = None, protected_edges: np.ndarray | None = None):
-    """The mesh with the faces of too large crease sectors merged (``mesh.creases.sectors.merge_crease_sectors``).
-
-    Returns
-    -------
-    mesh : MeshFile with ``sector_merge`` set (per-face data of the merged polygons: their lowest face's)
-    kept_faces : (F,) bool, which faces remain (None: nothing was merged)
-    """
-    merge = merge_crease_sectors(mesh.face_sizes, mesh.face_vertices, mesh.n_vertices, sharp_edges, tagged_corners,
-                                 face_keys, protected_edges)
-    if merge is None:
-        return mesh, None
-    report = (merge.merged_faces, merge.polygons, merge.vertices, merge.lost_creases)
-    return _keep_faces(mesh, merge.kept, merge.face_vertices, merge.face_sizes, sector_merge=report), merge.kept
-
-
-def weld_mesh_file(mesh: MeshFile, tolerance: float = 0.0, keys: np.ndarray | None = None):
-    """The mesh with its coincident vertices welded (``mesh.weld.weld_vertices``).
-
-    Points and per-vertex data are kept as read: faces refer to the lowest-numbered
-    vertex of each welded position, so vertex numbers stay the file's (and so do the
-    vertex numbers of ``tags``; their face numbers do not follow dropped faces). Texture
-    coordinates, normals and colours are per vertex in a MeshFile: a welded
-    vertex has those of its representative, unless ``keys`` keeps the vertices
-    whose data differ apart.
-
-    Parameters
-    ----------
-    mesh : MeshFile
-    tolerance : float >= 0, relative to the bounding-box diagonal (0: equal positions)
-    keys : (V, k) float or None, per-vertex data that must be equal to weld
-
-    Returns
-    -------
-    mesh : MeshFile, with ``weld`` set (per-face data of dropped faces removed)
-    kept_faces : (F,) bool, which faces of the input remain
-    """
-    sizes, vertices, kept, report = weld_vertices(mesh.points, mesh.face_sizes, mesh.face_vertices, tolerance, keys)
-    per_face = {name: None if values is None else values[kept]
-                for name, values in (("face_lines", mesh.face_lines), ("face_groups", mesh.face_groups))}
-    welded = replace(mesh, face_sizes=sizes, face_vertices=vertices, **per_face,
-                     face_attributes={k: v[kept] for k, v in mesh.face_attributes.items()},
-                     weld=WeldReport(tolerance=float(tolerance), **report))
-    return welded, kept
 
 
 def collapse_repeated_corners_or_refuse(face_sizes, face_vertices, path, line_of_face):

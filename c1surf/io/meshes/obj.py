@@ -34,7 +34,7 @@ __all__ = ["read_obj", "parse_obj"]
 _KEYWORD = {V: "v", VT: "vt", VN: "vn"}
 
 
-def read_obj(path, keep_degenerate: bool = False) -> MeshFile:
+def read_obj(path, *, keep_degenerate: bool = False) -> MeshFile:
     """Read a Wavefront OBJ polygon mesh without triangulating it.
 
     Parameters

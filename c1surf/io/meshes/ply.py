@@ -35,7 +35,7 @@ _RESERVED_VERTEX = {"x", "y", "z", "nx", "ny", "nz", "weight"}
 _HEAD_BYTES = 1 << 16
 
 
-def read_ply(path, keep_degenerate: bool = False) -> MeshFile:
+def read_ply(path, *, keep_degenerate: bool = False) -> MeshFile:
     """Read a PLY polygon mesh (ASCII or binary) without triangulating it.
 
     Parameters

@@ -12,10 +12,10 @@ from .mesh_file import MeshFile
 __all__ = ["read_mesh"]
 
 
-def read_mesh(path, keep_degenerate: bool = False) -> MeshFile:
+def read_mesh(path, *, keep_degenerate: bool = False) -> MeshFile:
     """Read a polygon mesh of a format in ``MESH_READERS`` (OBJ, PLY, STL, OFF; suffix decides, any letter case).
 
-    The vertices are as in the file; welding is a separate step (``mesh_file.weld_mesh_file``).
+    The vertices are as in the file; welding is a separate step of the input preparation (``prepare.mesh_edits.weld_mesh_file``).
 
     Parameters
     ----------
@@ -53,5 +53,4 @@ def read_mesh(path, keep_degenerate: bool = False) -> MeshFile:
         raise MeshInputError(
             path_str, "cannot read the file (permission denied): check its "
             "permissions")
-    reader = MESH_READERS[suffix].function
-    return reader(path_str, keep_degenerate=True) if keep_degenerate else reader(path_str)
+    return MESH_READERS[suffix].function(path_str, keep_degenerate=keep_degenerate)

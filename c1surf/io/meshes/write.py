@@ -19,10 +19,13 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..registry import MESH_WRITERS, suffix_of
-from .surface_data import COLOUR_NAMES
+
+# vertex colour properties as the readers name them (``prepare.extension_data`` carries them as point columns)
+COLOUR_NAMES = ("red", "green", "blue", "alpha")
 
 __all__ = ["TriangleMesh", "write_mesh", "write_streamed_mesh", "write_triangle_mesh", "write_attribute_mesh",
            "write_stl", "write_glb", "write_off"]
+
 
 @dataclass
 class TriangleMesh:
@@ -103,8 +106,8 @@ def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals
     write_mesh(path, mesh, suffix, float32)
 
 
-def write_attribute_mesh(path, points, triangles, normals, attributes, names, colour_scale: float = 255.0,
-                         suffix: str | None = None, float32: bool = False) -> None:
+def write_attribute_mesh(path, points, triangles, normals, attributes, names, *, colour_scale: float = 255.0,
+                         **options) -> None:
     """Write a triangle mesh with texture coordinates and/or colours (``convert --attributes``).
 
     Parameters
@@ -112,8 +115,8 @@ def write_attribute_mesh(path, points, triangles, normals, attributes, names, co
     points : (V, 3) float; triangles : (T, 3) int; normals : (V, 3) float or None
     attributes : (V, k) float, columns named by ``names`` ("u", "v", "red", "green", "blue", "alpha")
     colour_scale : 255 when colours are 0..255, 1 when 0..1
-    suffix : ".ply" or ".obj" (default: the path's)
-    float32 : positions (and normals, texture coordinates) at float32 precision
+    **options : ``write_mesh``'s: suffix (".ply" or ".obj"; default: the path's), float32 (positions, normals and
+        texture coordinates at float32 precision)
     """
     attributes, names = np.asarray(attributes, dtype=np.float64), list(names)
     uv = attributes[:, names.index("u") : names.index("u") + 2] if "u" in names else None
@@ -121,7 +124,7 @@ def write_attribute_mesh(path, points, triangles, normals, attributes, names, co
     colours = np.clip(attributes[:, picked] / colour_scale, 0.0, 1.0) if picked else None
     mesh = TriangleMesh(np.asarray(points, dtype=np.float64)[:, :3], np.asarray(triangles, dtype=np.int64), normals,
                         uv=uv, colours=colours, colour_names=tuple(names[k] for k in picked))
-    write_mesh(path, mesh, suffix, float32)
+    write_mesh(path, mesh, **options)
 
 
 def _trimesh_export(path, mesh: TriangleMesh, file_type: str, **options) -> None:

@@ -48,19 +48,19 @@ def checked_weights(path, what: str, weights, shape: tuple) -> np.ndarray:
     return w
 
 
-def checked_piece(path, k: int, points, weights, knots_u, knots_v, patches, rotation, n_biquadratic: int) -> MergedPiece:
+def checked_piece(path, k: int, points, weights, knots, patches, rotation, n_biquadratic: int) -> MergedPiece:
     """A MergedPiece from the arrays a patch file gives for merged piece ``k``.
 
     Parameters
     ----------
     points : (m + 2, n + 2, 3) float; weights : (m + 2, n + 2) float or None
-    knots_u : (m + 5,) float; knots_v : (n + 5,) float, those of ``merged.clamped_knots``
+    knots : (knots_u (m + 5,) float, knots_v (n + 5,) float), those of ``merged.clamped_knots``
     patches, rotation : (m, n) int, biquadratic patch numbers (< ``n_biquadratic``) and quarter turns 0..3
     """
     what = f"merged piece {k}"
     try:
         points = np.asarray(points, dtype=np.float64)
-        knots_u, knots_v = (np.asarray(x, dtype=np.float64).ravel() for x in (knots_u, knots_v))
+        knots_u, knots_v = (np.asarray(x, dtype=np.float64).ravel() for x in knots)
         patches, rotation = (np.asarray(x, dtype=np.int64) for x in (patches, rotation))
     except (TypeError, ValueError) as e:
         raise MeshInputError(str(path), f"{what}: malformed ({e})") from None

@@ -204,14 +204,13 @@ def de_records(
     pd_ptr: np.ndarray,
     pd_cnt: np.ndarray,
     form: np.ndarray,
-    status: Sequence[bytes],
-    status_idx: np.ndarray,
-    labels: Sequence[bytes],
-    label_idx: np.ndarray,
+    status: tuple,
+    labels: tuple,
     subscript: np.ndarray,
 ) -> bytes:
     """The Directory Entry section: two records per entity (type, parameter pointer and line count, form,
-    status, label, subscript); ``status`` and ``labels`` are tables indexed by ``status_idx`` / ``label_idx``."""
+    status, label, subscript); ``status`` and ``labels`` are (table of bytes, (E,) index into it) pairs."""
+    (status, status_idx), (labels, label_idx) = status, labels
     e = etype.size
     rows = np.full((2 * e, RECORD), SPACE, dtype=np.uint8)
     l1 = rows[0::2]

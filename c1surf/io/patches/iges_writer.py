@@ -32,6 +32,7 @@ from __future__ import annotations
 import datetime as _dt
 import os
 import textwrap
+from dataclasses import dataclass
 from typing import Any, Mapping, Sequence
 
 import numpy as np
@@ -438,7 +439,7 @@ def _directory(pdw: ParameterWriter, bspline: np.ndarray, group_form: int, brep=
         etype, form, subscript = np.r_[etype, brep.etype], np.r_[form, brep.form], np.r_[subscript, brep.subscript]
         status_idx, label_idx = np.r_[status_idx, len(status) + brep.status], np.r_[label_idx, len(labels) + brep.label]
         status, labels = status + list(brep.STATUS), labels + list(brep.LABELS)
-    return de_records(etype, pdw.pd_ptr, pdw.pd_cnt, form, status, status_idx, labels, label_idx, subscript)
+    return de_records(etype, pdw.pd_ptr, pdw.pd_cnt, form, (status, status_idx), (labels, label_idx), subscript)
 
 
 def _write_sections(fh, start_lines: list[str], global_lines: list[str], normalised: tuple, bspline: np.ndarray,
@@ -471,20 +472,27 @@ def _write_sections(fh, start_lines: list[str], global_lines: list[str], normali
     fh.truncate()
 
 
+@dataclass(frozen=True)
+class IgesHeader:
+    """What the Start and Global sections of ``write_iges`` say (see its docstring for the defaults)."""
+
+    author: str = "c1surf"
+    description: str | None = None
+    organization: str = ""
+    file_name: str | None = None
+    product_id: str | None = None
+    timestamp: Any = None
+    resolution: float | None = None
+
+
 def write_iges(
     path: str | os.PathLike,
     surfaces: Sequence[Mapping[str, Any]],
     *,
     units: str = "mm",
     group: bool | str = True,
-    author: str = "c1surf",
-    description: str | None = None,
-    organization: str = "",
-    file_name: str | None = None,
-    product_id: str | None = None,
-    timestamp: Any = None,
-    resolution: float | None = None,
     brep: Any = None,
+    **header,
 ) -> None:
     """Write ``surfaces`` to ``path`` as an IGES 5.3 file.
 
@@ -511,7 +519,12 @@ def write_iges(
     diagonal (1e-9 if that is 0).
 
     ``path``: a seekable regular file (Parameter Data is written before the Directory).
+    ``**header``: the fields of ``IgesHeader`` (author, description, organization, file_name, product_id,
+    timestamp, resolution).
     """
+    h = IgesHeader(**header)
+    author, description, organization, file_name = h.author, h.description, h.organization, h.file_name
+    product_id, timestamp, resolution = h.product_id, h.timestamp, h.resolution
     ukey = str(units).lower()
     if ukey not in UNITS:
         raise ValueError(f"unknown units {units!r}; use one of {sorted(UNITS)}")

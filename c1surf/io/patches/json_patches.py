@@ -190,7 +190,7 @@ def _merged(path, documents, patches) -> list:
         if not isinstance(piece, dict) or any(key not in piece for key in _PIECE_KEYS):
             raise MeshInputError(str(path), f"merged piece {k}: needs {', '.join(_PIECE_KEYS)}")
         points, knots_u, knots_v, patches_, rotation = (piece[key] for key in _PIECE_KEYS)
-        pieces.append(checked_piece(path, k, points, piece.get("weights"), knots_u, knots_v, patches_, rotation,
+        pieces.append(checked_piece(path, k, points, piece.get("weights"), (knots_u, knots_v), patches_, rotation,
                                     n_biquadratic))
     return pieces
 

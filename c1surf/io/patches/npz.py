@@ -296,7 +296,7 @@ def _merged(path, data: dict, n_biquadratic: int) -> list:
     try:
         return [checked_piece(path, k, parts["merged_points"][k].reshape(mk + 2, nk + 2, 3),
                               parts["merged_weights"][k].reshape(mk + 2, nk + 2) if "merged_weights" in parts else None,
-                              parts["merged_knots_u"][k], parts["merged_knots_v"][k],
+                              (parts["merged_knots_u"][k], parts["merged_knots_v"][k]),
                               parts["merged_patches"][k].reshape(mk, nk), parts["merged_rotation"][k].reshape(mk, nk),
                               n_biquadratic)
                 for k, (mk, nk) in enumerate(spans.tolist())]

@@ -25,12 +25,14 @@ __all__ = ["read_off", "parse_off"]
 HEADERS = frozenset({b"OFF", b"COFF", b"NOFF", b"CNOFF", b"NCOFF"})  # the extra values of C and N are ignored
 
 
-def read_off(path) -> MeshFile:
+def read_off(path, *, keep_degenerate: bool = False) -> MeshFile:
     """Read an OFF polygon mesh without triangulating it.
 
     Parameters
     ----------
     path : str or os.PathLike
+    keep_degenerate : keep faces that repeat a vertex as written (no collapse, no refusal;
+        ``c1surf inspect`` reports them)
 
     Returns
     -------
@@ -48,16 +50,17 @@ def read_off(path) -> MeshFile:
             data = fh.read()
     except OSError as exc:
         raise MeshInputError(path, f"cannot read the file ({exc.strerror or exc}): check the path and its permissions") from None
-    return parse_off(data, path)
+    return parse_off(data, path, keep_degenerate=keep_degenerate)
 
 
-def parse_off(data: bytes, path="<memory>") -> MeshFile:
+def parse_off(data: bytes, path="<memory>", *, keep_degenerate: bool = False) -> MeshFile:
     """Parse OFF text given as bytes; see :func:`read_off`.
 
     Parameters
     ----------
     data : bytes, the whole file
     path : str, the name used in messages and stored in the result
+    keep_degenerate : as in :func:`read_off`
     """
     path = os.fspath(path)
     lines, tokens = _content_lines(data)
@@ -73,8 +76,10 @@ def parse_off(data: bytes, path="<memory>") -> MeshFile:
     face_lines = np.asarray(lines[first + n_vertices:first + n_vertices + n_faces], dtype=np.int64)
     sizes, face_vertices = _faces(face_lines, tokens[first + n_vertices:first + n_vertices + n_faces], n_vertices, path)
     line_of = lambda f: int(face_lines[f])  # noqa: E731
-    sizes, face_vertices, _, collapsed = collapse_repeated_corners_or_refuse(sizes, face_vertices, path, line_of)
-    refuse_repeated_vertex(sizes, face_vertices, path, line_of, lambda f: "face")
+    collapsed = 0
+    if not keep_degenerate:
+        sizes, face_vertices, _, collapsed = collapse_repeated_corners_or_refuse(sizes, face_vertices, path, line_of)
+        refuse_repeated_vertex(sizes, face_vertices, path, line_of, lambda f: "face")
     return MeshFile(path=path, points=points, face_sizes=sizes, face_vertices=face_vertices, face_lines=face_lines,
                     collapsed_corners=collapsed)
 

@@ -2,7 +2,7 @@
 
 STL has no shared vertices: every facet lists its three corners. The reader
 keeps them as they are (trimesh's STL loader, not ``trimesh.load``, which would
-merge them); c1surf's welding (``io.meshes.mesh_file.weld_mesh_file``) joins the
+merge them); c1surf's welding (``prepare.mesh_edits.weld_mesh_file``) joins the
 triangles into a surface, and ``--no-weld`` leaves them apart.
 """
 from __future__ import annotations
@@ -22,12 +22,14 @@ __all__ = ["read_stl"]
 _FACET = re.compile(rb"^[ \t]*facet\b", re.IGNORECASE | re.MULTILINE)
 
 
-def read_stl(path) -> MeshFile:
+def read_stl(path, *, keep_degenerate: bool = False) -> MeshFile:
     """Read an ASCII or binary STL file as separate triangles.
 
     Parameters
     ----------
     path : str or os.PathLike
+    keep_degenerate : accepted for the readers' common signature: every facet has its own three corners, so
+        no face repeats a vertex before welding (``prepare``)
 
     Returns
     -------
