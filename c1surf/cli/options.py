@@ -26,7 +26,7 @@ def surface_options(command):
 
 
 def extension_options(command):
-    """Add the options of the paper's extensions (README, "Extensions of the paper")."""
+    """Add the options of the paper's extensions (docs/paper-notes.md, "Extensions of the paper")."""
     options = [
         click.option("--blend-file", type=click.Path(dir_okay=False), default=None,
                      help='JSON of per-cell and per-vertex blend ratios: {"default": r, "faces": {index or OBJ group: r}, '
@@ -53,7 +53,7 @@ def extension_options(command):
 
 
 def feature_options(command):
-    """Add the sharp-feature options (README, "Sharp features")."""
+    """Add the sharp-feature options (docs/sharp-features.md)."""
     options = [
         click.option("--creases", "creases_file", type=click.Path(dir_okay=False), default=None,
                      help='JSON of creases, corners and holes besides the file\'s tags: {"creases": [[v0, v1, ..., '

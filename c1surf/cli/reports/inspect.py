@@ -1,7 +1,7 @@
 """``c1surf inspect``: what c1surf sees in a mesh file and what ``convert`` will do with it, without converting.
 
 The report is one dict (``inspection``), printed as text or, with ``--json``, as
-one JSON object whose keys the README documents ("Inspecting a mesh"). It runs
+one JSON object whose keys docs/cli.md documents ("Inspecting a mesh"). It runs
 the same steps ``convert`` runs up to the topology (the reader, the repairs of
 ``mesh.repair``, ``construction.topology.build_topology``: integers only) and
 stops before any geometry.
@@ -44,7 +44,7 @@ REPAIR_KEYS = ("flipped_faces", "split_vertices", "unused_vertices", "components
 @click.option("--exact-creases/--g1-creases", "exact_creases", default=True, show_default=True,
               help="Plan the C0 seams of `convert` (the default; the notes say which infinitely sharp creases become "
                    "seams; the patch counts follow) or its --g1-creases surface.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (keys: README, \"Inspecting a mesh\").")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (keys: docs/cli.md, \"Inspecting a mesh\").")
 @friendly_errors
 def inspect(input_path, resolution, refinements, exact_creases, as_json):
     """Report what c1surf sees in the mesh INPUT and what `convert` would do with it.
@@ -65,7 +65,7 @@ def inspect(input_path, resolution, refinements, exact_creases, as_json):
 
 
 def inspection(path, resolution: int, refinements, exact_creases: bool = False) -> dict:
-    """The report of ``c1surf inspect`` as a JSON-ready dict (keys: README, "Inspecting a mesh").
+    """The report of ``c1surf inspect`` as a JSON-ready dict (keys: docs/cli.md, "Inspecting a mesh").
 
     Raises MeshInputError (through ``read_mesh``) only for a file that cannot be read at all.
     """
