@@ -10,7 +10,7 @@ every patch (the same guarantee --tolerance gives) and its triangles.
     .venv/bin/python bench/tolerance.py                      # sample meshes and spot, T = 1e-3 and 1e-4
     .venv/bin/python bench/tolerance.py --tolerance 1e-3 sample_meshes/twisted.obj
 
-Prints a Markdown table (the README's).
+Prints a Markdown table (docs/tessellation.md's).
 """
 from __future__ import annotations
 

@@ -44,7 +44,8 @@ def surface_options(command):
 
 def input_options(command):
     """Add the options saying what to read from a mesh file and how to repair it (``InputOptions``: welding, the
-    paper's extensions' data, sharp features); the command receives them as one ``inputs`` argument."""
+    paper's extensions' data (docs/paper-notes.md), sharp features (docs/sharp-features.md)); the command receives
+    them as one ``inputs`` argument."""
     options = [
         click.option("--weld", type=click.FloatRange(0.0, 1.0), default=None, metavar="TOL",
                      help="Weld vertices closer than TOL times the bounding-box diagonal (default: weld equal "

@@ -1,4 +1,4 @@
-"""Regenerate the README pictures: `.venv/bin/python docs/images/make_images.py`.
+"""Regenerate the pictures of the README and docs/: `.venv/bin/python docs/images/make_images.py`.
 
 Curvature previews and reflection lines of sample meshes, and a close-up of the
 reflection lines of a surface with the paper's misprinted P_12 next to the

@@ -7,7 +7,7 @@ as well, keeps the normal jump of the mesh at the origin: below 1e-11 rad
 remove is the rounding of the *output* coefficients, which are absolute
 coordinates: a unit-size mesh moved by 1e6 without scaling has coefficients
 rounded to 1e-10 of its size, and its patches measure 1e-9 to 1e-8 rad
-(README, "Round-off"); the test below shows that this is the coefficients'
+(docs/paper-notes.md, "Round-off"); the test below shows that this is the coefficients'
 rounding and not the construction, by measuring the same surface built at
 the origin and moved after.
 """

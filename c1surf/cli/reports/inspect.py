@@ -1,7 +1,7 @@
 """``c1surf inspect``: what c1surf sees in a mesh file and what ``convert`` will do with it, without converting.
 
 The report is one dict (``inspection``), printed as text or, with ``--json``, as
-one JSON object whose keys the README documents ("Inspecting a mesh"). It runs
+one JSON object whose keys docs/cli.md documents ("Inspecting a mesh"). It runs
 the same steps ``convert`` runs up to the topology (the reader, the repairs of
 ``mesh.repair``, ``construction.topology.build_topology``: integers only) and
 stops before any geometry.
@@ -41,7 +41,7 @@ REPAIR_KEYS = ("flipped_faces", "split_vertices", "unused_vertices", "components
 @click.argument("input_path", metavar="INPUT", type=click.Path(dir_okay=False))
 @click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
               help="The --resolution of the conversion the output sizes are estimated for.")
-@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (keys: README, \"Inspecting a mesh\").")
+@click.option("--json", "as_json", is_flag=True, help="Print one JSON object (keys: docs/cli.md, \"Inspecting a mesh\").")
 @surface_options
 @input_options
 @friendly_errors
@@ -67,7 +67,7 @@ def inspect(input_path, resolution, as_json, surface, inputs):
 
 
 def inspection(path, resolution: int, surface=None, inputs=None) -> dict:
-    """The report of ``c1surf inspect`` as a JSON-ready dict (keys: README, "Inspecting a mesh").
+    """The report of ``c1surf inspect`` as a JSON-ready dict (keys: docs/cli.md, "Inspecting a mesh").
 
     ``surface``, ``inputs``: the SurfaceOptions and InputOptions of the conversion planned (defaults: convert's).
     Raises MeshInputError (through ``read_mesh``) only for a file that cannot be read at all.
