@@ -1,0 +1,167 @@
+"""Footpoints: the closest point on the exact patches of every scan sample.
+
+A start grid (every patch sampled on k x k parameters, each sample carrying its (patch, u, v))
+gives, through a k-d tree, a few candidate patches per sample: those of its nearest grid samples.
+On each candidate, vectorised Newton steps on |x(u, v) - p|^2 with the parameters held in
+[0, 1]^2 (a parameter on its bound whose gradient points outwards is held there, the other one
+steps alone) find the closest point of that patch; the nearest of the candidates is the footpoint.
+Trying several patches lets samples near a patch side land on the patch across it.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from ..evaluation.bezier import evaluate_patches, patch_columns, raise_degree, sample_derivatives
+
+__all__ = ["Footpoints", "PatchSet", "patch_set", "project_points"]
+
+ORDERS = ((0, 0), (1, 0), (0, 1), (2, 0), (1, 1), (0, 2))
+
+
+@dataclass(frozen=True)
+class Footpoints:
+    """The projections of m scan samples.
+
+    patch : (m,) int, patch index (biquadratic first, then bicubic: the order of ``Surface.frames``)
+    u, v : (m,) float in [0, 1], the parameters on that patch
+    points : (m, 3) float, the surface points x(patch, u, v)
+    distance : (m,) float, |points - samples|
+    """
+
+    patch: np.ndarray
+    u: np.ndarray
+    v: np.ndarray
+    points: np.ndarray
+    distance: np.ndarray
+
+
+@dataclass(frozen=True)
+class PatchSet:
+    """Every patch of a surface as a bicubic (degree elevation leaves the surface unchanged).
+
+    columns : (4, 4, 3, P) float, ``bezier.patch_columns`` of the bicubic forms
+    grid : (P k k, 3) float, the start samples, patch by patch, (u_a, v_b) row-major
+    grid_u, grid_v : (k k,) float, the parameters of one patch's start samples
+    tree : cKDTree of ``grid``
+    """
+
+    columns: np.ndarray
+    grid: np.ndarray
+    grid_u: np.ndarray
+    grid_v: np.ndarray
+    tree: cKDTree
+
+    @property
+    def n_patches(self) -> int:
+        return int(self.columns.shape[-1])
+
+
+def patch_set(biquadratic: np.ndarray, bicubic: np.ndarray, resolution: int = 5) -> PatchSet:
+    """The ``PatchSet`` of a surface's patches.
+
+    Parameters
+    ----------
+    biquadratic : (Nq, 3, 3, 3) float; bicubic : (Nc, 4, 4, 3) float (``Surface.biquadratic``, ``bicubic``)
+    resolution : int >= 2, start samples per patch side
+    """
+    cubic = np.concatenate([raise_degree(np.asarray(biquadratic)[..., :3], 3, 3), np.asarray(bicubic)[..., :3]])
+    t = np.linspace(0.0, 1.0, int(resolution))
+    grid = evaluate_patches(cubic, t, t).reshape(-1, 3)
+    grid_u, grid_v = (a.ravel() for a in np.meshgrid(t, t, indexing="ij"))
+    return PatchSet(patch_columns(cubic), grid, grid_u, grid_v, cKDTree(grid))
+
+
+def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, steps: int = 8) -> Footpoints:
+    """Project every sample onto the nearest of its candidate patches.
+
+    Parameters
+    ----------
+    patches : PatchSet
+    samples : (m, 3) float
+    candidates : int >= 1, distinct patches tried per sample
+    steps : int >= 1, Newton steps on each
+
+    Returns
+    -------
+    Footpoints
+    """
+    samples = np.asarray(samples, dtype=np.float64)
+    m, per_patch = samples.shape[0], patches.grid_u.size
+    near = min(3 * candidates, patches.grid.shape[0])
+    _, index = patches.tree.query(samples, k=near)
+    index = index.reshape(m, near)
+    patch = index // per_patch
+    # keep the first sample of each distinct patch, in order of distance, up to ``candidates`` of them
+    repeated = np.zeros(patch.shape, dtype=bool)
+    for j in range(1, near):
+        repeated[:, j] = (patch[:, :j] == patch[:, j : j + 1]).any(axis=1)
+    rank = np.cumsum(~repeated, axis=1) - 1
+    chosen = ~repeated & (rank < candidates)
+    rows, cols = np.nonzero(chosen)
+    start = index[rows, cols]
+    u, v = patches.grid_u[start % per_patch], patches.grid_v[start % per_patch]
+    patch_of = patch[rows, cols]
+    u, v, x = newton_projection(patches.columns, patch_of, u, v, samples[rows], steps)
+    distance = np.sqrt(np.einsum("ij,ij->i", x - samples[rows], x - samples[rows]))
+    # the nearest candidate of each sample: rows are sorted, so a lexicographic sort picks it
+    order = np.lexsort((distance, rows))
+    first = np.ones(order.size, dtype=bool)
+    first[1:] = rows[order][1:] != rows[order][:-1]
+    best = order[first]
+    return Footpoints(patch_of[best], u[best], v[best], x[best], distance[best])
+
+
+def newton_projection(columns: np.ndarray, patch: np.ndarray, u: np.ndarray, v: np.ndarray, samples: np.ndarray,
+                      steps: int = 8):
+    """Newton steps on f(u, v) = |x(u, v) - p|^2 / 2 within [0, 1]^2, one (patch, u, v, p) each.
+
+    Parameters
+    ----------
+    columns : (4, 4, 3, P) float, ``patch_columns`` of bicubic patches
+    patch : (n,) int; u, v : (n,) float, the starts; samples : (n, 3) float, the points p
+    steps : int
+
+    Returns
+    -------
+    u, v : (n,) float, the parameters reached; x : (n, 3) float, the patch points there
+
+    The Hessian is the full one, [x_u.x_u + r.x_uu, ...], where it is positive definite, else the
+    Gauss-Newton one (its first part). A parameter on its bound with the gradient pointing out of
+    [0, 1] is held there (the other steps alone along that side); steps are limited to half the domain.
+    """
+    u, v = u.astype(np.float64).copy(), v.astype(np.float64).copy()
+    for _ in range(int(steps)):
+        d = sample_derivatives(columns, patch, u, v, ORDERS)
+        r = d[(0, 0)] - samples
+        xu, xv = d[(1, 0)], d[(0, 1)]
+        gu, gv = _dot(xu, r), _dot(xv, r)
+        a, b, c = _dot(xu, xu), _dot(xu, xv), _dot(xv, xv)
+        fa, fb, fc = a + _dot(d[(2, 0)], r), b + _dot(d[(1, 1)], r), c + _dot(d[(0, 2)], r)
+        full = (fa > 0) & (fa * fc - fb * fb > 1e-12 * (a * c + 1e-300))
+        a, b, c = np.where(full, fa, a), np.where(full, fb, b), np.where(full, fc, c)
+        hold_u = ((u <= 0) & (gu > 0)) | ((u >= 1) & (gu < 0))
+        hold_v = ((v <= 0) & (gv > 0)) | ((v >= 1) & (gv < 0))
+        tiny = 1e-300
+        det = a * c - b * b
+        both = ~hold_u & ~hold_v & (np.abs(det) > 1e-14 * (a * c + tiny))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            du = np.where(both, (-c * gu + b * gv) / np.where(both, det, 1.0), 0.0)
+            dv = np.where(both, (b * gu - a * gv) / np.where(both, det, 1.0), 0.0)
+            alone_u = ~hold_u & ~both  # v held (or a singular 2 x 2): u steps alone
+            alone_v = hold_u & ~hold_v
+            du = np.where(alone_u, -gu / np.maximum(a, tiny), du)
+            dv = np.where(alone_v, -gv / np.maximum(c, tiny), dv)
+        du = np.nan_to_num(du, nan=0.0, posinf=0.0, neginf=0.0)
+        dv = np.nan_to_num(dv, nan=0.0, posinf=0.0, neginf=0.0)
+        scale = np.minimum(1.0, 0.5 / np.maximum(np.maximum(np.abs(du), np.abs(dv)), tiny))
+        u = np.clip(u + scale * du, 0.0, 1.0)
+        v = np.clip(v + scale * dv, 0.0, 1.0)
+    x = sample_derivatives(columns, patch, u, v, ((0, 0),))[(0, 0)]
+    return u, v, np.ascontiguousarray(x)
+
+
+def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return np.einsum("ij,ij->i", a, b)

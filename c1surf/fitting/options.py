@@ -1,0 +1,66 @@
+"""The controls of the fit: weights of the least-squares terms, iterations, stop rule."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["FitOptions", "SOLVERS"]
+
+SOLVERS = ("auto", "cholesky", "superlu", "cg")
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """How ``iterate.fit_surface_points`` moves the control points.
+
+    The energy minimised at fixed footpoints (``system``) is, with X the (V, 3) control points,
+    r_i = x(patch_i, u_i, v_i) - p_i the residual of scan vertex i and n_i its unit normal,
+
+        E(X) = plane / m sum_i (n_i . r_i)^2 + point / m sum_i |r_i|^2 + fairness / V sum_v |(L X)_v|^2
+
+    with L the umbrella Laplacian of the control mesh ((L X)_v = X_v minus the mean of its neighbours).
+    Dividing by m and V makes the weights independent of the number of scan vertices and of control
+    points; every term is a squared length, so the minimiser scales with the model (multiply the scan
+    and the control mesh by s and the fitted points are multiplied by s).
+
+    plane : float >= 0, weight of the point-to-plane term (1, as the prototype)
+    point : float >= 0, weight of the point-to-point term (0.1: the point-to-plane term alone leaves
+        the control points free to slide along the surface)
+    fairness : float >= 0, weight of the umbrella term. The default 1e-3 moves a control point by about
+        1e-3 of its Laplacian where the scan pins it, so it costs no measurable accuracy, but it holds the
+        control points that the scan leaves (nearly) free, where folds would start (thin parts, a
+        control mesh finer than the scan). 0: pure least squares (exact recovery of a surface's own
+        control points, ``tests/fitting``)
+    max_iterations : int >= 1, rounds of footpoints + solve
+    stop : float >= 0, stop when the scan-to-surface RMS improves by less than this fraction in a round
+    candidates : int >= 1, patches tried per scan vertex (those of its nearest start samples)
+    newton_steps : int >= 1, Newton steps per footpoint projection
+    start_resolution : int >= 2, samples per patch side of the start grid of the projections
+    solver : "auto" (the sparse Cholesky factorisation, ``cholespy``, when installed; else SuperLU),
+        "cholesky", "superlu" or "cg" (conjugate gradients warm-started at the current points)
+    """
+
+    plane: float = 1.0
+    point: float = 0.1
+    fairness: float = 1e-3
+    max_iterations: int = 10
+    stop: float = 1e-3
+    candidates: int = 3
+    newton_steps: int = 8
+    start_resolution: int = 5
+    solver: str = "auto"
+
+    def check(self) -> "FitOptions":
+        """Raise ValueError for a value the fit cannot take; else return self."""
+        for name in ("plane", "point", "fairness", "stop"):
+            value = getattr(self, name)
+            if not (value >= 0 and value < float("inf")):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if self.plane + self.point <= 0:
+            raise ValueError("plane + point must be > 0: without a data term nothing is fitted")
+        for name, low in (("max_iterations", 1), ("candidates", 1), ("newton_steps", 1), ("start_resolution", 2)):
+            value = getattr(self, name)
+            if int(value) != value or value < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+        if self.solver not in SOLVERS:
+            raise ValueError(f"solver must be one of {SOLVERS}, got {self.solver!r}")
+        return self
