@@ -65,64 +65,81 @@ def patch_set(biquadratic: np.ndarray, bicubic: np.ndarray, resolution: int = 5)
     Parameters
     ----------
     biquadratic : (Nq, 3, 3, 3) float; bicubic : (Nc, 4, 4, 3) float (``Surface.biquadratic``, ``bicubic``)
-    resolution : int >= 2, start samples per patch side
+    resolution : int >= 1, start samples per patch side (at the centres of a k x k grid of cells)
     """
     cubic = np.concatenate([raise_degree(np.asarray(biquadratic)[..., :3], 3, 3), np.asarray(bicubic)[..., :3]])
-    t = np.linspace(0.0, 1.0, int(resolution))
+    t = (np.arange(int(resolution)) + 0.5) / int(resolution)  # cell centres: the nearest is inside its patch
     grid = evaluate_patches(cubic, t, t).reshape(-1, 3)
     grid_u, grid_v = (a.ravel() for a in np.meshgrid(t, t, indexing="ij"))
     return PatchSet(patch_columns(cubic), grid, grid_u, grid_v, cKDTree(grid))
 
 
-def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, steps: int = 8) -> Footpoints:
+def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, steps: int = 8,
+                   start: Footpoints | None = None) -> Footpoints:
     """Project every sample onto the nearest of its candidate patches.
 
     Parameters
     ----------
     patches : PatchSet
     samples : (m, 3) float
-    candidates : int >= 1, distinct patches tried per sample
-    steps : int >= 1, Newton steps on each
+    candidates : int >= 1, distinct patches tried per sample where the first one is in doubt
+    steps : int >= 1, most Newton steps on each
+    start : Footpoints or None, the previous round's projections (same samples): the first patch tried
 
     Returns
     -------
     Footpoints
+
+    The first patch tried is ``start``'s, else that of the nearest start sample. Only where its
+    footpoint is in doubt (on a side of the patch's domain, or farther than the nearest start
+    sample) are the other candidates (the patches of the next nearest start samples) tried.
     """
     samples = np.asarray(samples, dtype=np.float64)
     m, per_patch = samples.shape[0], patches.grid_u.size
+    grid_distance, nearest = patches.tree.query(samples)
+    if start is None:
+        patch, u, v = nearest // per_patch, patches.grid_u[nearest % per_patch], patches.grid_v[nearest % per_patch]
+    else:
+        patch, u, v = start.patch, start.u, start.v
+    u, v, x = newton_projection(patches.columns, patch, u, v, samples, steps)
+    distance = _norm(x - samples)
+    doubt = np.nonzero((np.minimum(u, v) <= 0) | (np.maximum(u, v) >= 1) | (distance > grid_distance))[0]
+    if doubt.size == 0 or candidates == 1:
+        return Footpoints(patch, u, v, x, distance)
+    # the other patches among the nearest start samples: the first sample of each distinct patch, up to candidates
     near = min(3 * candidates, patches.grid.shape[0])
-    _, index = patches.tree.query(samples, k=near)
-    index = index.reshape(m, near)
-    patch = index // per_patch
-    # keep the first sample of each distinct patch, in order of distance, up to ``candidates`` of them
-    repeated = np.zeros(patch.shape, dtype=bool)
+    index = patches.tree.query(samples[doubt], k=near)[1].reshape(doubt.size, near)
+    grid_patch = index // per_patch
+    repeated = grid_patch == patch[doubt][:, None]
     for j in range(1, near):
-        repeated[:, j] = (patch[:, :j] == patch[:, j : j + 1]).any(axis=1)
-    rank = np.cumsum(~repeated, axis=1) - 1
-    chosen = ~repeated & (rank < candidates)
-    rows, cols = np.nonzero(chosen)
-    start = index[rows, cols]
-    u, v = patches.grid_u[start % per_patch], patches.grid_v[start % per_patch]
-    patch_of = patch[rows, cols]
-    u, v, x = newton_projection(patches.columns, patch_of, u, v, samples[rows], steps)
-    distance = np.sqrt(np.einsum("ij,ij->i", x - samples[rows], x - samples[rows]))
-    # the nearest candidate of each sample: rows are sorted, so a lexicographic sort picks it
-    order = np.lexsort((distance, rows))
+        repeated[:, j] |= (grid_patch[:, :j] == grid_patch[:, j : j + 1]).any(axis=1)
+    rank = np.cumsum(~repeated, axis=1)
+    rows, cols = np.nonzero(~repeated & (rank < candidates))
+    tried = index[rows, cols]
+    which = doubt[rows]
+    cu, cv, cx = newton_projection(patches.columns, tried // per_patch, patches.grid_u[tried % per_patch],
+                                   patches.grid_v[tried % per_patch], samples[which], steps)
+    cd = _norm(cx - samples[which])
+    order = np.lexsort((cd, which))  # the nearest candidate of each sample
     first = np.ones(order.size, dtype=bool)
-    first[1:] = rows[order][1:] != rows[order][:-1]
+    first[1:] = which[order][1:] != which[order][:-1]
     best = order[first]
-    return Footpoints(patch_of[best], u[best], v[best], x[best], distance[best])
+    better = best[cd[best] < distance[which[best]]]
+    k = which[better]
+    patch, u, v, x, distance = patch.copy(), u.copy(), v.copy(), x.copy(), distance.copy()
+    patch[k], u[k], v[k], x[k], distance[k] = tried[better] // per_patch, cu[better], cv[better], cx[better], cd[better]
+    return Footpoints(patch, u, v, x, distance)
 
 
 def newton_projection(columns: np.ndarray, patch: np.ndarray, u: np.ndarray, v: np.ndarray, samples: np.ndarray,
-                      steps: int = 8):
+                      steps: int = 8, tolerance: float = 1e-12):
     """Newton steps on f(u, v) = |x(u, v) - p|^2 / 2 within [0, 1]^2, one (patch, u, v, p) each.
 
     Parameters
     ----------
     columns : (4, 4, 3, P) float, ``patch_columns`` of bicubic patches
     patch : (n,) int; u, v : (n,) float, the starts; samples : (n, 3) float, the points p
-    steps : int
+    steps : int, most steps; a sample stops once its step is below ``tolerance`` (in parameters)
 
     Returns
     -------
@@ -132,35 +149,50 @@ def newton_projection(columns: np.ndarray, patch: np.ndarray, u: np.ndarray, v: 
     Gauss-Newton one (its first part). A parameter on its bound with the gradient pointing out of
     [0, 1] is held there (the other steps alone along that side); steps are limited to half the domain.
     """
+    patch = np.asarray(patch)
     u, v = u.astype(np.float64).copy(), v.astype(np.float64).copy()
+    active = np.arange(u.size)
     for _ in range(int(steps)):
-        d = sample_derivatives(columns, patch, u, v, ORDERS)
-        r = d[(0, 0)] - samples
-        xu, xv = d[(1, 0)], d[(0, 1)]
-        gu, gv = _dot(xu, r), _dot(xv, r)
-        a, b, c = _dot(xu, xu), _dot(xu, xv), _dot(xv, xv)
-        fa, fb, fc = a + _dot(d[(2, 0)], r), b + _dot(d[(1, 1)], r), c + _dot(d[(0, 2)], r)
-        full = (fa > 0) & (fa * fc - fb * fb > 1e-12 * (a * c + 1e-300))
-        a, b, c = np.where(full, fa, a), np.where(full, fb, b), np.where(full, fc, c)
-        hold_u = ((u <= 0) & (gu > 0)) | ((u >= 1) & (gu < 0))
-        hold_v = ((v <= 0) & (gv > 0)) | ((v >= 1) & (gv < 0))
-        tiny = 1e-300
-        det = a * c - b * b
-        both = ~hold_u & ~hold_v & (np.abs(det) > 1e-14 * (a * c + tiny))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            du = np.where(both, (-c * gu + b * gv) / np.where(both, det, 1.0), 0.0)
-            dv = np.where(both, (b * gu - a * gv) / np.where(both, det, 1.0), 0.0)
-            alone_u = ~hold_u & ~both  # v held (or a singular 2 x 2): u steps alone
-            alone_v = hold_u & ~hold_v
-            du = np.where(alone_u, -gu / np.maximum(a, tiny), du)
-            dv = np.where(alone_v, -gv / np.maximum(c, tiny), dv)
-        du = np.nan_to_num(du, nan=0.0, posinf=0.0, neginf=0.0)
-        dv = np.nan_to_num(dv, nan=0.0, posinf=0.0, neginf=0.0)
-        scale = np.minimum(1.0, 0.5 / np.maximum(np.maximum(np.abs(du), np.abs(dv)), tiny))
-        u = np.clip(u + scale * du, 0.0, 1.0)
-        v = np.clip(v + scale * dv, 0.0, 1.0)
+        if active.size == 0:
+            break
+        du, dv = _newton_step(columns, patch[active], u[active], v[active], samples[active])
+        u[active] = np.clip(u[active] + du, 0.0, 1.0)
+        v[active] = np.clip(v[active] + dv, 0.0, 1.0)
+        active = active[np.maximum(np.abs(du), np.abs(dv)) > tolerance]
     x = sample_derivatives(columns, patch, u, v, ((0, 0),))[(0, 0)]
     return u, v, np.ascontiguousarray(x)
+
+
+def _newton_step(columns, patch, u, v, samples):
+    """(du, dv): one projected Newton step of ``newton_projection`` at each sample."""
+    d = sample_derivatives(columns, patch, u, v, ORDERS)
+    r = d[(0, 0)] - samples
+    xu, xv = d[(1, 0)], d[(0, 1)]
+    gu, gv = _dot(xu, r), _dot(xv, r)
+    a, b, c = _dot(xu, xu), _dot(xu, xv), _dot(xv, xv)
+    fa, fb, fc = a + _dot(d[(2, 0)], r), b + _dot(d[(1, 1)], r), c + _dot(d[(0, 2)], r)
+    full = (fa > 0) & (fa * fc - fb * fb > 1e-12 * (a * c + 1e-300))
+    a, b, c = np.where(full, fa, a), np.where(full, fb, b), np.where(full, fc, c)
+    hold_u = ((u <= 0) & (gu > 0)) | ((u >= 1) & (gu < 0))
+    hold_v = ((v <= 0) & (gv > 0)) | ((v >= 1) & (gv < 0))
+    tiny = 1e-300
+    det = a * c - b * b
+    both = ~hold_u & ~hold_v & (np.abs(det) > 1e-14 * (a * c + tiny))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        du = np.where(both, (-c * gu + b * gv) / np.where(both, det, 1.0), 0.0)
+        dv = np.where(both, (b * gu - a * gv) / np.where(both, det, 1.0), 0.0)
+        alone_u = ~hold_u & ~both  # v held (or a singular 2 x 2): u steps alone
+        alone_v = hold_u & ~hold_v
+        du = np.where(alone_u, -gu / np.maximum(a, tiny), du)
+        dv = np.where(alone_v, -gv / np.maximum(c, tiny), dv)
+    du = np.nan_to_num(du, nan=0.0, posinf=0.0, neginf=0.0)
+    dv = np.nan_to_num(dv, nan=0.0, posinf=0.0, neginf=0.0)
+    scale = np.minimum(1.0, 0.5 / np.maximum(np.maximum(np.abs(du), np.abs(dv)), tiny))
+    return scale * du, scale * dv
+
+
+def _norm(x: np.ndarray) -> np.ndarray:
+    return np.sqrt(np.einsum("ij,ij->i", x, x))
 
 
 def _dot(a: np.ndarray, b: np.ndarray) -> np.ndarray:

@@ -59,10 +59,11 @@ def control_edges(surface: Surface) -> np.ndarray:
     return np.stack([t.vertex_source[a[real]], t.vertex_source[b[real]]], axis=1)
 
 
-def project_scan(surface: Surface, scan_points: np.ndarray, options: FitOptions) -> Footpoints:
-    """The footpoints of ``scan_points`` on ``surface``'s exact patches (``footpoints.project_points``)."""
+def project_scan(surface: Surface, scan_points: np.ndarray, options: FitOptions, start: Footpoints | None = None) -> Footpoints:
+    """The footpoints of ``scan_points`` on ``surface``'s exact patches (``footpoints.project_points``;
+    ``start``: the previous round's, where the Newton steps begin)."""
     patches = patch_set(surface.biquadratic, surface.bicubic, options.start_resolution)
-    return project_points(patches, scan_points, options.candidates, options.newton_steps)
+    return project_points(patches, scan_points, options.candidates, options.newton_steps, start)
 
 
 def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: FitOptions | None = None,
@@ -114,7 +115,7 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
         start = clock("solve", start)
         surface.update_points(points)
         start = clock("update", start)
-        new_feet = project_scan(surface, samples, options)
+        new_feet = project_scan(surface, samples, options, feet)
         start = clock("footpoints", start)
         stats = distance_stats(new_feet.distance, diagonal)
         previous = history[-1]["rms"]

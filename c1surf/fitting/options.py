@@ -34,7 +34,7 @@ class FitOptions:
     stop : float >= 0, stop when the scan-to-surface RMS improves by less than this fraction in a round
     candidates : int >= 1, patches tried per scan vertex (those of its nearest start samples)
     newton_steps : int >= 1, Newton steps per footpoint projection
-    start_resolution : int >= 2, samples per patch side of the start grid of the projections
+    start_resolution : int >= 1, samples per patch side of the start grid of the projections
     solver : "auto" (the sparse Cholesky factorisation, ``cholespy``, when installed; else SuperLU),
         "cholesky", "superlu" or "cg" (conjugate gradients warm-started at the current points)
     """
@@ -46,7 +46,7 @@ class FitOptions:
     stop: float = 1e-3
     candidates: int = 3
     newton_steps: int = 8
-    start_resolution: int = 5
+    start_resolution: int = 4
     solver: str = "auto"
 
     def check(self) -> "FitOptions":
@@ -57,7 +57,7 @@ class FitOptions:
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
         if self.plane + self.point <= 0:
             raise ValueError("plane + point must be > 0: without a data term nothing is fitted")
-        for name, low in (("max_iterations", 1), ("candidates", 1), ("newton_steps", 1), ("start_resolution", 2)):
+        for name, low in (("max_iterations", 1), ("candidates", 1), ("newton_steps", 1), ("start_resolution", 1)):
             value = getattr(self, name)
             if int(value) != value or value < low:
                 raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
