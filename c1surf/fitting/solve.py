@@ -15,6 +15,33 @@ import scipy.sparse as sp
 __all__ = ["solve", "available_solver"]
 
 
+CG_TOLERANCE = 1e-12
+
+
+def _coordinate_preconditioner(N: sp.csr_matrix):
+    """kron(M, I_3)^-1 as a LinearOperator, M the mean of N's three (V, V) coordinate blocks, factored once
+    (cholespy; without it the diagonal of N): the point-to-plane coupling is all it leaves to the iterations,
+    and M has a ninth of N's entries and far less fill."""
+    from scipy.sparse.linalg import LinearOperator
+
+    n = N.shape[0]
+    try:
+        from cholespy import CholeskySolverD, MatrixType
+    except ImportError:
+        inverse = 1.0 / N.diagonal()
+        return LinearOperator((n, n), matvec=lambda r: inverse * r.ravel())
+    M = ((N[0::3, 0::3] + N[1::3, 1::3] + N[2::3, 2::3]) / 3).tocsr()
+    factor = CholeskySolverD(M.shape[0], M.indptr.astype(np.int32), M.indices.astype(np.int32),
+                             np.ascontiguousarray(M.data, dtype=np.float64), MatrixType.CSR)
+
+    def apply(r):
+        out = np.zeros((M.shape[0], 3))
+        factor.solve(np.array(r, dtype=np.float64).reshape(-1, 3), out)
+        return out.ravel()
+
+    return LinearOperator((n, n), matvec=apply)
+
+
 def available_solver(name: str) -> str:
     """The solver ``name`` ("auto": cholesky when cholespy imports, else superlu) resolves to."""
     if name != "auto":
@@ -54,10 +81,9 @@ def solve(N: sp.csr_matrix, b: np.ndarray, start: np.ndarray, method: str = "aut
 
         return splu(sp.csc_matrix(N), permc_spec="MMD_AT_PLUS_A", options={"SymmetricMode": True}).solve(b)
     if method == "cg":
-        from scipy.sparse.linalg import cg
+        from scipy.sparse.linalg import LinearOperator, cg
 
-        diagonal = N.diagonal()
-        preconditioner = sp.diags(1.0 / diagonal)
-        x, info = cg(N, b, x0=start, rtol=1e-12, atol=0.0, maxiter=20 * N.shape[0], M=preconditioner)
+        x, info = cg(N, b, x0=start, rtol=CG_TOLERANCE, atol=0.0, maxiter=20 * N.shape[0],
+                     M=_coordinate_preconditioner(N))
         return x
     raise ValueError(f"unknown solver {method!r}")

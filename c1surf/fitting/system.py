@@ -8,7 +8,7 @@ of ``options.FitOptions`` is a quadratic form in X. The point-to-plane term coup
 coordinates, so the unknowns are x = X.ravel() (3 V, coordinate fastest) and the normal equations
 are N x = b with N = sum of
 
-    plane / m  P^T P        P (m x 3V): entry (i, 3a + c) = A_ia n_ic
+    plane / m  P^T P        P (m x 3V): entry (i, 3a + c) = A_ia n_ic (built as six A^T diag A blocks)
     point / m  A^T A (x) I_3
     fairness / V  L^T L (x) I_3       L the umbrella Laplacian of the control mesh
     damping I                         damping = 1e-12 of N's mean diagonal, towards the current points
@@ -97,15 +97,29 @@ def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray,
     plane, point, fairness : float, the weights of ``FitOptions``
     """
     m, n_vertices = A.shape
-    coo = A.tocoo()
-    rows = np.repeat(coo.row, 3)
-    cols = (3 * coo.col[:, None] + np.arange(3)).ravel()
-    vals = (coo.data[:, None] * normals[coo.row]).ravel()
-    P = sp.csr_matrix((vals, (rows, cols)), shape=(m, 3 * n_vertices))
-    eye3 = sp.identity(3, format="csr")
-    N = (plane / m) * (P.T @ P)
-    N = N + sp.kron((point / m) * (A.T @ A) + (fairness / n_vertices) * (laplacian.T @ laplacian), eye3, format="csr")
-    b = (plane / m) * (P.T @ np.einsum("ij,ij->i", normals, samples)) + (point / m) * (A.T @ samples).ravel()
+    # block (c, d) of N's data part: A^T diag(plane n_c n_d + point [c = d]) A / m (six products, A has
+    # about ten entries a row), placed at rows 3 a + c, columns 3 b + d
+    blocks = {}
+    AT = A.T.tocsr()
+    row_of_entry = np.repeat(np.arange(m), np.diff(A.indptr))
+    for c in range(3):
+        for d in range(c, 3):
+            weight = (plane / m) * normals[:, c] * normals[:, d] + (point / m if c == d else 0.0)
+            scaled = sp.csr_matrix((A.data * weight[row_of_entry], A.indices, A.indptr), shape=A.shape)
+            blocks[c, d] = (AT @ scaled).tocoo()
+    fair = ((fairness / n_vertices) * (laplacian.T @ laplacian)).tocoo()
+    rows, cols, vals = [], [], []
+    for c in range(3):
+        for d in range(3):
+            block = blocks[min(c, d), max(c, d)]
+            block_rows, block_cols = (block.row, block.col) if c <= d else (block.col, block.row)
+            rows += [3 * block_rows + c, 3 * fair.row + c] if c == d else [3 * block_rows + c]
+            cols += [3 * block_cols + d, 3 * fair.col + d] if c == d else [3 * block_cols + d]
+            vals += [block.data, fair.data] if c == d else [block.data]
+    N = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(3 * n_vertices, 3 * n_vertices))
+    offset = np.einsum("ij,ij->i", normals, samples)
+    b = ((plane / m) * (AT @ (normals * offset[:, None])) + (point / m) * (AT @ samples)).ravel()
     damping = DAMPING * float(N.diagonal().mean())
     N = (N + damping * sp.identity(3 * n_vertices, format="csr")).tocsr()
     b = b + damping * np.asarray(current, dtype=np.float64).ravel()
