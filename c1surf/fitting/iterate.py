@@ -29,7 +29,8 @@ class FitResult:
     points : (V, 3) float, the fitted control points (the surface is ``surface.update_points(points)``:
         ``fit_surface_points`` leaves the surface there)
     history : list of dict, one per projection: "iteration" (0 = the start), scan-to-surface
-        "rms", "p99", "max" (absolute) and "relative_*" (over the scan's bounding-box diagonal)
+        "rms", "p99", "max" (absolute) and "relative_*" (over the scan's bounding-box diagonal),
+        "seconds" (that round's, its projection included)
     footpoints : Footpoints of the scan's vertices on the fitted surface
     timings : dict, seconds per stage summed over the rounds: "footpoints", "system", "solve", "update"
     solver : str, the solver used
@@ -104,14 +105,20 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
     current = np.array(surface.points[:, :3], dtype=np.float64)
     feet = project_scan(surface, samples, options)
     start = clock("footpoints", start)
-    history = [dict(iteration=0, **distance_stats(feet.distance, diagonal))]
+    history = [dict(iteration=0, **distance_stats(feet.distance, diagonal), seconds=sum(timings.values()))]
     stopped = "max_iterations"
     for iteration in range(1, options.max_iterations + 1):
+        round_start = sum(timings.values())
         A = basis_rows(feet, surface.quad_frames.shape[0], surface.stencil().shape[0]) @ surface.stencil()
         N, b = normal_equations(A.tocsr(), samples, normals, laplacian, current, options.plane, options.point,
                                 options.fairness)
         start = clock("system", start)
         points = solve(N, b, current.ravel(), method).reshape(n_vertices, 3)
+        if not np.all(np.isfinite(points)) and method != "superlu":  # a factorisation that broke down
+            method = "superlu"
+            points = solve(N, b, current.ravel(), method).reshape(n_vertices, 3)
+        if not np.all(np.isfinite(points)):
+            raise ValueError("the fitting system is singular: no finite control points solve it")
         start = clock("solve", start)
         surface.update_points(points)
         start = clock("update", start)
@@ -125,7 +132,7 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
             surface.update_points(current)
             stopped = "worse"
             break
-        history.append(dict(iteration=iteration, **stats))
+        history.append(dict(iteration=iteration, **stats, seconds=sum(timings.values()) - round_start))
         current, feet = points, new_feet
         if previous - stats["rms"] <= options.stop * previous:
             stopped = "converged"
