@@ -90,8 +90,15 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
     samples = np.asarray(scan_points, dtype=np.float64)
     if samples.ndim != 2 or samples.shape[1] != 3 or samples.shape[0] == 0:
         raise ValueError(f"expected scan points of shape (m, 3), got {samples.shape}")
+    if surface.points.shape[1] != 3:
+        raise ValueError(f"fitting needs a surface of 3D points, this one carries {surface.points.shape[1]} columns")
+    triangles = np.asarray(scan_triangles)
+    if triangles.ndim != 2 or triangles.shape[1] != 3 or triangles.size == 0:
+        raise ValueError(f"expected scan triangles of shape (t, 3), got {triangles.shape}")
+    if triangles.min() < 0 or triangles.max() >= samples.shape[0]:
+        raise ValueError("a scan triangle refers to a vertex that does not exist")
     diagonal = float(np.linalg.norm(samples.max(axis=0) - samples.min(axis=0)))
-    normals = vertex_normals(samples, scan_triangles)
+    normals = vertex_normals(samples, triangles)
     n_vertices = surface.n_input_vertices
     laplacian = umbrella_laplacian(control_edges(surface), n_vertices)
     method = available_solver(options.solver)

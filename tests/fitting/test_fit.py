@@ -140,3 +140,11 @@ def test_solvers_agree(solver):
     fitted = fit_surface_points(Surface(sizes, vertices, points), scan_points, scan_triangles,
                                 FitOptions(max_iterations=2, stop=0.0, solver=solver)).points
     assert np.abs(fitted - reference).max() < 1e-8 * _size(points)
+
+
+@pytest.mark.parametrize("scan", [(np.zeros((0, 3)), np.zeros((0, 3), int)), (np.zeros((4, 3)), np.array([[0, 1, 7]])),
+                                  (np.zeros((4, 2)), np.array([[0, 1, 2]]))])
+def test_bad_scans_are_refused(scan):
+    sizes, vertices, points = _control("cube.obj")
+    with pytest.raises(ValueError):
+        fit_surface_points(Surface(sizes, vertices, points), *scan, FitOptions())
