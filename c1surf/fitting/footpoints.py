@@ -40,15 +40,17 @@ class Footpoints:
 
 @dataclass(frozen=True)
 class PatchSet:
-    """Every patch of a surface as a bicubic (degree elevation leaves the surface unchanged).
+    """Every patch of a surface, for Newton steps (each in its degree) and a start grid.
 
-    columns : (4, 4, 3, P) float, ``bezier.patch_columns`` of the bicubic forms
+    quadratic : (3, 3, 3, Nq) float, ``bezier.patch_columns`` of the biquadratic patches
+    cubic : (4, 4, 3, Nc) float, the same of the bicubic ones (patch Nq + k is bicubic k)
     grid : (P k k, 3) float, the start samples, patch by patch, (u_a, v_b) row-major
     grid_u, grid_v : (k k,) float, the parameters of one patch's start samples
     tree : cKDTree of ``grid``
     """
 
-    columns: np.ndarray
+    quadratic: np.ndarray
+    cubic: np.ndarray
     grid: np.ndarray
     grid_u: np.ndarray
     grid_v: np.ndarray
@@ -56,7 +58,20 @@ class PatchSet:
 
     @property
     def n_patches(self) -> int:
-        return int(self.columns.shape[-1])
+        return int(self.quadratic.shape[-1] + self.cubic.shape[-1])
+
+    def derivatives(self, patch: np.ndarray, u: np.ndarray, v: np.ndarray, orders) -> dict:
+        """``bezier.sample_derivatives`` at one (patch, u, v) each, every patch in its own degree:
+        dict (a, b) -> (n, 3) float."""
+        n_quad = self.quadratic.shape[-1]
+        kinds = [(self.quadratic, np.nonzero(patch < n_quad)[0], 0), (self.cubic, np.nonzero(patch >= n_quad)[0], n_quad)]
+        out = {order: np.empty((patch.size, 3)) for order in orders}
+        for columns, rows, first in kinds:
+            if rows.size:
+                part = sample_derivatives(columns, patch[rows] - first, u[rows], v[rows], orders)
+                for order in orders:
+                    out[order][rows] = part[order]
+        return out
 
 
 def patch_set(biquadratic: np.ndarray, bicubic: np.ndarray, resolution: int = 5) -> PatchSet:
@@ -67,11 +82,12 @@ def patch_set(biquadratic: np.ndarray, bicubic: np.ndarray, resolution: int = 5)
     biquadratic : (Nq, 3, 3, 3) float; bicubic : (Nc, 4, 4, 3) float (``Surface.biquadratic``, ``bicubic``)
     resolution : int >= 1, start samples per patch side (at the centres of a k x k grid of cells)
     """
-    cubic = np.concatenate([raise_degree(np.asarray(biquadratic)[..., :3], 3, 3), np.asarray(bicubic)[..., :3]])
+    quadratic, cubic = np.asarray(biquadratic)[..., :3], np.asarray(bicubic)[..., :3]
+    grid_cubic = np.concatenate([raise_degree(quadratic, 3, 3), cubic])
     t = (np.arange(int(resolution)) + 0.5) / int(resolution)  # cell centres: the nearest is inside its patch
-    grid = evaluate_patches(cubic, t, t).reshape(-1, 3)
+    grid = evaluate_patches(grid_cubic, t, t).reshape(-1, 3)
     grid_u, grid_v = (a.ravel() for a in np.meshgrid(t, t, indexing="ij"))
-    return PatchSet(patch_columns(cubic), grid, grid_u, grid_v, cKDTree(grid))
+    return PatchSet(patch_columns(quadratic), patch_columns(cubic), grid, grid_u, grid_v, cKDTree(grid))
 
 
 def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, steps: int = 8,
@@ -101,7 +117,7 @@ def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, 
         patch, u, v = nearest // per_patch, patches.grid_u[nearest % per_patch], patches.grid_v[nearest % per_patch]
     else:
         patch, u, v = start.patch, start.u, start.v
-    u, v, x = newton_projection(patches.columns, patch, u, v, samples, steps)
+    u, v, x = newton_projection(patches, patch, u, v, samples, steps)
     distance = _norm(x - samples)
     doubt = np.nonzero((np.minimum(u, v) <= 0) | (np.maximum(u, v) >= 1) | (distance > grid_distance))[0]
     if doubt.size == 0 or candidates == 1:
@@ -117,7 +133,7 @@ def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, 
     rows, cols = np.nonzero(~repeated & (rank < candidates))
     tried = index[rows, cols]
     which = doubt[rows]
-    cu, cv, cx = newton_projection(patches.columns, tried // per_patch, patches.grid_u[tried % per_patch],
+    cu, cv, cx = newton_projection(patches, tried // per_patch, patches.grid_u[tried % per_patch],
                                    patches.grid_v[tried % per_patch], samples[which], steps)
     cd = _norm(cx - samples[which])
     order = np.lexsort((cd, which))  # the nearest candidate of each sample
@@ -131,13 +147,13 @@ def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, 
     return Footpoints(patch, u, v, x, distance)
 
 
-def newton_projection(columns: np.ndarray, patch: np.ndarray, u: np.ndarray, v: np.ndarray, samples: np.ndarray,
+def newton_projection(patches: PatchSet, patch: np.ndarray, u: np.ndarray, v: np.ndarray, samples: np.ndarray,
                       steps: int = 8, tolerance: float = 1e-12):
     """Newton steps on f(u, v) = |x(u, v) - p|^2 / 2 within [0, 1]^2, one (patch, u, v, p) each.
 
     Parameters
     ----------
-    columns : (4, 4, 3, P) float, ``patch_columns`` of bicubic patches
+    patches : PatchSet
     patch : (n,) int; u, v : (n,) float, the starts; samples : (n, 3) float, the points p
     steps : int, most steps; a sample stops once its step is below ``tolerance`` (in parameters)
 
@@ -155,17 +171,17 @@ def newton_projection(columns: np.ndarray, patch: np.ndarray, u: np.ndarray, v: 
     for _ in range(int(steps)):
         if active.size == 0:
             break
-        du, dv = _newton_step(columns, patch[active], u[active], v[active], samples[active])
+        du, dv = _newton_step(patches, patch[active], u[active], v[active], samples[active])
         u[active] = np.clip(u[active] + du, 0.0, 1.0)
         v[active] = np.clip(v[active] + dv, 0.0, 1.0)
         active = active[np.maximum(np.abs(du), np.abs(dv)) > tolerance]
-    x = sample_derivatives(columns, patch, u, v, ((0, 0),))[(0, 0)]
+    x = patches.derivatives(patch, u, v, ((0, 0),))[(0, 0)]
     return u, v, np.ascontiguousarray(x)
 
 
-def _newton_step(columns, patch, u, v, samples):
+def _newton_step(patches: PatchSet, patch, u, v, samples):
     """(du, dv): one projected Newton step of ``newton_projection`` at each sample."""
-    d = sample_derivatives(columns, patch, u, v, ORDERS)
+    d = patches.derivatives(patch, u, v, ORDERS)
     r = d[(0, 0)] - samples
     xu, xv = d[(1, 0)], d[(0, 1)]
     gu, gv = _dot(xu, r), _dot(xv, r)
