@@ -148,3 +148,18 @@ def test_bad_scans_are_refused(scan):
     sizes, vertices, points = _control("cube.obj")
     with pytest.raises(ValueError):
         fit_surface_points(Surface(sizes, vertices, points), *scan, FitOptions())
+
+
+def test_the_fit_follows_a_change_of_scale_and_position():
+    """Every term is a squared length and the weights are divided by the counts: scaling and moving the
+    scan and the control mesh together scales and moves the fitted points alike."""
+    sizes, vertices, points = _control("cube.obj")
+    scan_points, scan_triangles = _sphere_scan(points, 2)
+    options = FitOptions(max_iterations=3, stop=0.0)
+    reference = fit_surface_points(Surface(sizes, vertices, points), scan_points, scan_triangles, options)
+    scale, shift = 250.0, np.array([1e3, -40.0, 7.0])
+    moved = fit_surface_points(Surface(sizes, vertices, scale * points + shift), scale * scan_points + shift,
+                               scan_triangles, options)
+    assert np.abs(moved.points - (scale * reference.points + shift)).max() < 1e-9 * scale * _size(points)
+    assert [h["relative_rms"] for h in moved.history] == pytest.approx([h["relative_rms"] for h in reference.history],
+                                                                        rel=1e-9)
