@@ -15,6 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..evaluation.tessellate import tessellate
+from ..parallel import thread_count
 
 __all__ = ["Deviation", "distance_stats", "two_sided_deviation", "surface_to_scan", "closest_on_triangles",
            "point_triangle_closest", "bounding_diagonal"]
@@ -98,7 +99,7 @@ def closest_on_triangles(queries, points, triangles, chunk: int = 1 << 15):
     centroid = corners.mean(axis=1)
     radius = np.sqrt(((corners - centroid[:, None]) ** 2).sum(axis=2)).max(axis=1)
     used = np.unique(triangles)
-    d0, _ = cKDTree(points[used]).query(queries)
+    d0, _ = cKDTree(points[used]).query(queries, workers=thread_count())
     best = np.full(queries.shape[0], np.inf)
     closest = np.zeros_like(queries)
     level = np.floor(np.log2(np.maximum(radius, 1e-300)))

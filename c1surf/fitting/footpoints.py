@@ -15,6 +15,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from ..evaluation.bezier import evaluate_patches, patch_columns, raise_degree, sample_derivatives
+from ..parallel import thread_count
 
 __all__ = ["Footpoints", "PatchSet", "patch_set", "project_points"]
 
@@ -112,7 +113,7 @@ def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, 
     """
     samples = np.asarray(samples, dtype=np.float64)
     m, per_patch = samples.shape[0], patches.grid_u.size
-    grid_distance, nearest = patches.tree.query(samples)
+    grid_distance, nearest = patches.tree.query(samples, workers=thread_count())
     if start is None:
         patch, u, v = nearest // per_patch, patches.grid_u[nearest % per_patch], patches.grid_v[nearest % per_patch]
     else:
@@ -124,7 +125,7 @@ def project_points(patches: PatchSet, samples: np.ndarray, candidates: int = 3, 
         return Footpoints(patch, u, v, x, distance)
     # the other patches among the nearest start samples: the first sample of each distinct patch, up to candidates
     near = min(3 * candidates, patches.grid.shape[0])
-    index = patches.tree.query(samples[doubt], k=near)[1].reshape(doubt.size, near)
+    index = patches.tree.query(samples[doubt], k=near, workers=thread_count())[1].reshape(doubt.size, near)
     grid_patch = index // per_patch
     repeated = grid_patch == patch[doubt][:, None]
     for j in range(1, near):
