@@ -16,8 +16,9 @@ from scipy.spatial import cKDTree
 
 from ..evaluation.tessellate import tessellate
 from ..parallel import thread_count
+from .footpoints import patch_set
 
-__all__ = ["Deviation", "distance_stats", "two_sided_deviation", "surface_to_scan", "closest_on_triangles",
+__all__ = ["Deviation", "distance_stats", "two_sided_deviation", "surface_to_scan", "signed_scan_to_surface", "closest_on_triangles",
            "point_triangle_closest", "bounding_diagonal"]
 
 
@@ -67,6 +68,17 @@ def two_sided_deviation(surface, scan_points, scan_triangles, footpoints, resolu
     back = surface_to_scan(surface, scan_points, scan_triangles, resolution)
     return Deviation(footpoints.distance, back, diagonal, distance_stats(footpoints.distance, diagonal),
                      distance_stats(back, diagonal))
+
+
+def signed_scan_to_surface(surface, scan_points, footpoints) -> np.ndarray:
+    """(m,) float: the scan-to-surface distances signed by the side of the surface, positive where the scan
+    vertex lies on the side the surface normal x_u x x_v points to (outside for a control mesh
+    numbered counter-clockwise from outside): the usual colouring of a deviation map."""
+    patches = patch_set(surface.biquadratic, surface.bicubic, 1)
+    d = patches.derivatives(footpoints.patch, footpoints.u, footpoints.v, ((1, 0), (0, 1)))
+    side = np.einsum("ij,ij->i", np.asarray(scan_points, dtype=np.float64) - footpoints.points,
+                     np.cross(d[(1, 0)], d[(0, 1)]))
+    return np.where(side < 0, -footpoints.distance, footpoints.distance)
 
 
 def surface_to_scan(surface, scan_points, scan_triangles, resolution: int = 4) -> np.ndarray:

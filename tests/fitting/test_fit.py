@@ -9,7 +9,7 @@ from scipy.spatial import cKDTree
 from c1surf.construction.surface import Surface
 from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.evaluation.tessellate import tessellate
-from c1surf.fitting.deviation import closest_on_triangles, surface_to_scan, two_sided_deviation
+from c1surf.fitting.deviation import closest_on_triangles, signed_scan_to_surface, surface_to_scan, two_sided_deviation
 from c1surf.fitting.iterate import fit_surface_points, project_scan
 from c1surf.fitting.options import FitOptions
 from c1surf.io.meshes.obj import read_obj
@@ -163,3 +163,17 @@ def test_the_fit_follows_a_change_of_scale_and_position():
     assert np.abs(moved.points - (scale * reference.points + shift)).max() < 1e-9 * scale * _size(points)
     assert [h["relative_rms"] for h in moved.history] == pytest.approx([h["relative_rms"] for h in reference.history],
                                                                         rel=1e-9)
+
+
+def test_signed_distances_are_positive_outside():
+    """A sphere scan around the cube's surface is outside it (positive), one shrunk into it inside (negative)."""
+    sizes, vertices, points = _control("cube.obj")
+    surface = Surface(sizes, vertices, points)
+    for factor, sign in ((1.0, 1.0), (0.1, -1.0)):
+        centre = np.zeros(3)
+        scan_points, _ = _sphere_scan(points, 1)
+        scan_points = centre + factor * (scan_points - centre)
+        feet = project_scan(surface, scan_points, FitOptions())
+        signed = signed_scan_to_surface(surface, scan_points, feet)
+        assert np.array_equal(np.abs(signed), feet.distance)
+        assert np.all(sign * signed > 0)
