@@ -94,7 +94,8 @@ def main(argv):
     for name, stats in (("scan to surface", deviation.scan_stats), ("surface to scan", deviation.surface_stats)):
         print(f"  {name}: RMS {stats['relative_rms']:.2e} p99 {stats['relative_p99']:.2e} "
               f"max {stats['relative_max']:.2e} of the diagonal {deviation.diagonal:.4g}")
-    print(f"  G1: normal jump {smooth.max_normal_jump:.1e} rad, gap {smooth.max_gap:.1e} on {smooth.shared_edges} edges")
+    print(f"  G1: normal jump {smooth.max_normal_jump:.1e} rad, gap {smooth.max_gap:.1e} "
+          f"on {smooth.shared_edges} edges")
 
 
 if __name__ == "__main__":

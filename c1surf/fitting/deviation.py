@@ -18,7 +18,8 @@ from ..evaluation.tessellate import tessellate
 from ..parallel import thread_count
 from .footpoints import patch_set
 
-__all__ = ["Deviation", "distance_stats", "two_sided_deviation", "surface_to_scan", "signed_scan_to_surface", "closest_on_triangles",
+__all__ = ["Deviation", "distance_stats", "two_sided_deviation", "surface_to_scan",
+           "signed_scan_to_surface", "closest_on_triangles",
            "point_triangle_closest", "bounding_diagonal"]
 
 

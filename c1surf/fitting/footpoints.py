@@ -65,7 +65,8 @@ class PatchSet:
         """``bezier.sample_derivatives`` at one (patch, u, v) each, every patch in its own degree:
         dict (a, b) -> (n, 3) float."""
         n_quad = self.quadratic.shape[-1]
-        kinds = [(self.quadratic, np.nonzero(patch < n_quad)[0], 0), (self.cubic, np.nonzero(patch >= n_quad)[0], n_quad)]
+        kinds = [(self.quadratic, np.nonzero(patch < n_quad)[0], 0),
+                 (self.cubic, np.nonzero(patch >= n_quad)[0], n_quad)]
         out = {order: np.empty((patch.size, 3)) for order in orders}
         for columns, rows, first in kinds:
             if rows.size:
@@ -75,7 +76,7 @@ class PatchSet:
         return out
 
 
-def patch_set(biquadratic: np.ndarray, bicubic: np.ndarray, resolution: int = 5) -> PatchSet:
+def patch_set(biquadratic: np.ndarray, bicubic: np.ndarray, resolution: int = 4) -> PatchSet:
     """The ``PatchSet`` of a surface's patches.
 
     Parameters

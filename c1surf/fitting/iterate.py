@@ -60,7 +60,8 @@ def control_edges(surface: Surface) -> np.ndarray:
     return np.stack([t.vertex_source[a[real]], t.vertex_source[b[real]]], axis=1)
 
 
-def project_scan(surface: Surface, scan_points: np.ndarray, options: FitOptions, start: Footpoints | None = None) -> Footpoints:
+def project_scan(surface: Surface, scan_points: np.ndarray, options: FitOptions,
+                 start: Footpoints | None = None) -> Footpoints:
     """The footpoints of ``scan_points`` on ``surface``'s exact patches (``footpoints.project_points``;
     ``start``: the previous round's, where the Newton steps begin)."""
     patches = patch_set(surface.biquadratic, surface.bicubic, options.start_resolution)
