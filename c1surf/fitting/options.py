@@ -1,0 +1,76 @@
+"""The controls of the fit: weights of the least-squares terms, iterations, stop rule."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+__all__ = ["FitOptions", "SOLVERS"]
+
+SOLVERS = ("auto", "cholesky", "superlu", "cg")
+
+
+@dataclass(frozen=True)
+class FitOptions:
+    """How ``iterate.fit_surface_points`` moves the control points.
+
+    The energy minimised at fixed footpoints (``system``) is, with X the (V, 3) control points,
+    r_i = x(patch_i, u_i, v_i) - p_i the residual of scan vertex i and n_i its unit normal,
+
+        E(X) = plane / m sum_i (n_i . r_i)^2 + point / m sum_i |r_i|^2 + fairness / V sum_v |(L X)_v|^2
+
+    with L the umbrella Laplacian of the control mesh ((L X)_v = X_v minus the mean of its neighbours).
+    Dividing by m and V makes the weights independent of the number of scan vertices and of control
+    points; every term is a squared length, so the minimiser scales with the model (multiply the scan
+    and the control mesh by s and the fitted points are multiplied by s).
+
+    plane : float >= 0, weight of the point-to-plane term (1, as the prototype)
+    point : float >= 0, weight of the point-to-point term: the point-to-plane term alone leaves the
+        control points free to slide along the surface. 0.01, not the prototype's 0.1: the footpoints lag
+        one round behind, so this term drags the surface tangentially and slows the convergence
+        (spot with its own 180-face control mesh, 10 rounds: scan-to-surface RMS 6.8e-4 of the diagonal
+        at 0.01, 8.3e-4 at 0.1; on a surface's own samples 0.1 converges linearly, 0 quadratically)
+    fairness : float >= 0, weight of the umbrella term. The umbrella operator is dimensionless (its
+        large eigenvalues are O(1) on any mesh), so against the data term's stiffness of about 1 per
+        control point the default 1e-3 barely moves the control points the scan pins, and holds those
+        it leaves (nearly) free, where folds and bulges between samples start. Measured on spot's scan
+        (11,533 vertices; RMS / max of the diagonal, scan to surface, then surface to scan):
+        own control mesh (188 vertices, 2,928 patches): 0: 6.6e-4 / 2.3e-3 RMS, surface-to-scan max
+        3.0e-2 (bulges); 1e-3: 6.8e-4, surface-to-scan max 6.3e-3; 1e-2: 1.0e-3 (the term shrinks a
+        coarse control mesh); that mesh split into 732 quads: 1e-3: 1.7e-4, surface-to-scan max
+        1.4e-2 (four samples a patch); 1e-2: 2.1e-4, surface-to-scan max 3.2e-3. Raise it where the
+        scan has few samples per patch. 0: pure least squares (exact recovery of a surface's own
+        control points, ``tests/fitting``)
+    max_iterations : int >= 1, rounds of footpoints + solve
+    stop : float >= 0, stop when the scan-to-surface RMS improves by less than this fraction in a round
+        (1e-2: spot's rounds 7-10 with its own control mesh gain 0.2-0.9 % each, 1.5 % together)
+    candidates : int >= 1, patches tried per scan vertex (those of its nearest start samples)
+    newton_steps : int >= 1, Newton steps per footpoint projection
+    start_resolution : int >= 1, samples per patch side of the start grid of the projections
+    solver : "auto" (= "cg": conjugate gradients warm-started at the current points, the fastest measured,
+        ``solve``), "cg", "cholesky" (needs ``cholespy``) or "superlu"
+    """
+
+    plane: float = 1.0
+    point: float = 0.01
+    fairness: float = 1e-3
+    max_iterations: int = 10
+    stop: float = 1e-2
+    candidates: int = 3
+    newton_steps: int = 8
+    start_resolution: int = 4
+    solver: str = "auto"
+
+    def check(self) -> "FitOptions":
+        """Raise ValueError for a value the fit cannot take; else return self."""
+        for name in ("plane", "point", "fairness", "stop"):
+            value = getattr(self, name)
+            if not (value >= 0 and value < float("inf")):
+                raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")
+        if self.plane + self.point <= 0:
+            raise ValueError("plane + point must be > 0: without a data term nothing is fitted")
+        for name, low in (("max_iterations", 1), ("candidates", 1), ("newton_steps", 1), ("start_resolution", 1)):
+            value = getattr(self, name)
+            if int(value) != value or value < low:
+                raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+        if self.solver not in SOLVERS:
+            raise ValueError(f"solver must be one of {SOLVERS}, got {self.solver!r}")
+        return self
