@@ -15,8 +15,10 @@ file or a mesh file (``check``, ``measure``, ``render``).
 from __future__ import annotations
 
 import os
-from dataclasses import dataclass, field, fields
+from dataclasses import dataclass, field, fields, replace
 from pathlib import Path
+
+import numpy as np
 
 from .construction.surface import Surface, SurfaceOptions, build_surface
 from .errors import MeshInputError
@@ -25,17 +27,21 @@ from .evaluation.patch_set import PatchSet, surface_patch_set
 from .evaluation.smoothness import measure_smoothness
 from .evaluation.tessellate import tessellate
 from .evaluation.tolerance import tessellate_to_tolerance
+from .fitting.control_mesh import ControlMesh
+from .fitting.scan_fit import ScanFitOptions, check_scan, fit_scan
 from .io.meshes.read import read_mesh
 from .io.meshes.sidecars import read_blend_file, read_creases_file
 from .io.patches.formats import load_patch_set
 from .io.registry import PATCH_READERS
 from .mesh.errors import TopologyError
 from .prepare.extension_data import Sidecars, SurfaceData
+from .prepare.mesh_edits import weld_mesh_file
 from .prepare.notes import repair_notes, seam_notes
 from .prepare.options import NON_MANIFOLD_RULES, InputOptions
 from .prepare.pipeline import prepare_mesh
 
-__all__ = ["load_surface", "load_patches", "prepared_input", "surface_from_file", "tessellate_surface", "check_surface",
+__all__ = ["load_surface", "load_patches", "prepared_input", "surface_from_file", "fit_surface", "read_scan",
+           "FitReport", "ScanFitOptions", "tessellate_surface", "check_surface",
            "build_surface", "Surface", "SurfaceOptions", "InputOptions", "LoadReport", "PreparedInput",
            "NON_MANIFOLD_RULES", "repair_notes", "seam_notes", "topology_error"]
 
@@ -170,6 +176,95 @@ def surface_from_file(path, **options):
     input_options = InputOptions(**{k: v for k, v in options.items() if k in _INPUT_FIELDS})
     surface, report = load_surface(os.fspath(path), surface_options, input_options)
     return surface, report.mesh
+
+def read_scan(path):
+    """The scan of ``c1surf fit``: (points (m, 3), triangles (t, 3), MeshFile as read), welded at equal positions
+    (scans split at texture seams close up), polygons cut into triangle fans, unused vertices left out.
+
+    Raises MeshInputError for a file without faces or spanning no surface.
+    """
+    mesh, _ = weld_mesh_file(read_mesh(path), 0.0)
+    sizes, corners = np.asarray(mesh.face_sizes, dtype=np.int64), np.asarray(mesh.face_vertices, dtype=np.int64)
+    fans = np.maximum(sizes - 2, 0)  # triangles (v0, v_j, v_j+1) of each face, j = 1 .. k - 2
+    first = np.repeat(np.cumsum(sizes) - sizes, fans)
+    j = 1 + np.arange(first.size) - np.repeat(np.cumsum(fans) - fans, fans)
+    triangles = corners[np.stack([first, first + j, first + j + 1], axis=1)].reshape(-1, 3)
+    used, triangles = np.unique(triangles, return_inverse=True)
+    points, triangles = np.asarray(mesh.points, dtype=np.float64)[used], triangles.reshape(-1, 3)
+    try:
+        check_scan(points, triangles, "the file")
+    except ValueError as e:
+        raise MeshInputError(mesh.path, str(e)) from None
+    return points, triangles, mesh
+
+
+def control_mesh_input(path, surface_options: SurfaceOptions, input_options: InputOptions | None = None):
+    """A user's control mesh for ``fit_surface``: (ControlMesh, SharpFeatures or None, LoadReport's notes), read and
+    prepared as every mesh file is (``prepared_input``: tags honoured), its unused vertices left out."""
+    prepared = prepared_input(path, surface_options, input_options)
+    mesh, data = prepared.mesh, prepared.data
+    used = np.unique(mesh.face_vertices)
+    number = np.full(mesh.n_vertices, -1, dtype=np.int64)
+    number[used] = np.arange(used.size)
+    features = data.features
+    if features is not None:
+        edges = number[features.crease_edges]
+        keep_edges, keep_corners = (edges >= 0).all(axis=1), number[features.corner_vertices] >= 0
+        features = replace(features, crease_edges=edges[keep_edges],
+                           crease_sharpness=features.crease_sharpness[keep_edges],
+                           corner_vertices=number[features.corner_vertices[keep_corners]],
+                           corner_sharpness=features.corner_sharpness[keep_corners])
+    control = ControlMesh(np.asarray(mesh.face_sizes, dtype=np.int64), number[mesh.face_vertices],
+                          np.asarray(data.points[used, :3], dtype=np.float64))
+    return control, features, list(data.feature_notes)
+
+
+def fit_surface(scan_path, options: ScanFitOptions | None = None, surface_options: SurfaceOptions | None = None, *,
+                control_path=None, input_options: InputOptions | None = None, progress=None):
+    """Fit a surface of the paper's construction to the dense mesh ``scan_path`` (``c1surf fit``).
+
+    Parameters
+    ----------
+    scan_path : a mesh file (OBJ, PLY, STL, OFF), read by ``read_scan``
+    options : fitting.scan_fit.ScanFitOptions (faces, tolerance, face cap, crease angle, the fit's weights)
+    surface_options : SurfaceOptions (default: refinements "auto", the fewest Doo-Sabin steps the control mesh allows)
+    control_path : the user's control mesh (any polygons, tags honoured, read with ``input_options``), or None:
+        a quad remesh of the scan
+    progress : callable(label, amount, total) or None
+
+    Returns
+    -------
+    (Surface, FitReport): the fitted surface (G1 by construction) and what was done, measured and noted
+
+    Raises MeshInputError (one line) for a scan or control mesh that cannot be fitted.
+    """
+    options = options or ScanFitOptions()
+    surface_options = surface_options or SurfaceOptions(refinements="auto")
+    scan_points, scan_triangles, scan_mesh = read_scan(scan_path)
+    control = features = None
+    notes = []
+    if control_path is not None:
+        control, features, notes = control_mesh_input(control_path, surface_options, input_options)
+    try:
+        result = fit_scan(scan_points, scan_triangles, options, surface_options, control, features, progress)
+    except TopologyError as e:
+        raise MeshInputError(str(control_path or scan_path), f"the control mesh cannot be built: {e.describe()}") from None
+    except ValueError as e:
+        raise MeshInputError(str(control_path or scan_path), str(e)) from None
+    return result.surface, FitReport(str(scan_path), scan_points, scan_triangles, result, notes + result.notes)
+
+
+@dataclass
+class FitReport:
+    """What ``fit_surface`` did: the scan as fitted (points, triangles), the ``fitting.scan_fit.ScanFit`` (control
+    mesh, fit, deviation, rounds, timings) and the notes."""
+
+    path: str
+    scan_points: np.ndarray
+    scan_triangles: np.ndarray
+    fit: object
+    notes: list = field(default_factory=list)
+
 
 def tessellate_surface(surface: Surface, resolution: int = 8, tolerance: float | None = None):
     """Welded N x N sampling of every patch of ``surface`` (a ``Tessellation``); with ``tolerance``, a

@@ -15,7 +15,7 @@ COMMANDS = {
     "convert": (".convert", "convert"), "batch": (".batch", "batch"), "check": (".check", "check"),
     "tessellate": (".tessellate", "tessellate"), "render": (".render", "render_command"),
     "measure": (".reports.measure", "measure"), "diff": (".reports.diff", "diff"),
-    "inspect": (".reports.inspect", "inspect"),
+    "inspect": (".reports.inspect", "inspect"), "fit": (".fit", "fit"),
 }
 
 

@@ -14,9 +14,12 @@ from ..io.patches.iges_writer import DEFAULT_UNITS, UNITS
 from .common import UsageFailure
 
 
-def surface_options(command):
+def surface_options(command=None, *, refinements: str = "2"):
     """Add the construction's options (``SurfaceOptions``: A1, A3, A1a, section 1.3.4, Prop. 1.3.1); the command
-    receives them as one ``surface`` argument."""
+    receives them as one ``surface`` argument. ``@surface_options(refinements="auto")``: another default for
+    --refinements (``fit``: the fewest Doo-Sabin steps the control mesh allows)."""
+    if command is None:
+        return lambda command: surface_options(command, refinements=refinements)
     options = [
         click.option("--blend", type=click.FloatRange(0.0, 1.0), default=0.5, show_default=True,
                      help="Doo-Sabin blend ratio alpha_f of every cell (A1): smaller follows the mesh more closely."),
@@ -31,13 +34,14 @@ def surface_options(command):
         click.option("--triangles", type=click.Choice(TRIANGLE_RULES), default="g1", show_default=True,
                      help="3-sided cells: 'g1' (A3) or 'parametric' (section 1.3.4: parametrically C1 to the "
                           "biquadratic patches around)."),
-        click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default="2", show_default=True,
+        click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default=refinements, show_default=True,
                      help="Doo-Sabin steps before A2/A3: 2 as in the paper; 0 or 1 when a closed input already "
                           "satisfies R1-R3 after that many (Prop. 1.3.1); auto: the fewest that work."),
     ]
 
     def build(refinements, **values):
-        return SurfaceOptions(refinements=refinements if refinements == "auto" else int(refinements), **values)
+        steps = refinements if refinements == "auto" else int(refinements)
+        return SurfaceOptions(refinements=steps, **values)
 
     return grouped(command, "surface", options, build)
 

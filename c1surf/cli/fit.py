@@ -1,0 +1,238 @@
+"""``c1surf fit``: a dense mesh (scan, sculpt, STL) in, a G1 surface over a coarse control mesh fitted to it out."""
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+from dataclasses import dataclass
+
+import click
+import numpy as np
+
+from ..api import FitReport, ScanFitOptions, Surface, check_surface, fit_surface
+from ..evaluation.merge import merge_biquadratic
+from ..evaluation.tessellate import patch_adjacency, tessellate_patches
+from ..fitting.options import FitOptions
+from ..io.atomic import atomic_output
+from ..io.images.png import write_png
+from ..io.meshes.write import write_triangle_mesh
+from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
+from ..render.deviation import deviation_picture
+from ..render.pictures import colormap, rgb8
+from .common import Progress, echo_notes, friendly_errors, output_suffix, with_formats
+from .convert import check_tessellation_size, write_mesh, write_patch_files
+from .options import grouped, input_options, patch_file_options, surface_options
+
+DEVIATION_SUFFIXES = (".png", ".ply")
+
+
+@dataclass(frozen=True)
+class FitOutputs:
+    """The files ``fit`` writes: the tessellated surface, patch files, the JSON report, deviation maps (PNG picture
+    or PLY of the scan with per-vertex ``quality`` and colours); None or () where not asked."""
+
+    mesh: str | None = None
+    patches: tuple = ()
+    report: str | None = None
+    deviation: tuple = ()
+
+    def paths(self) -> list:
+        return [p for p in (self.mesh, *self.patches, self.report, *self.deviation) if p]
+
+
+def output_options(command):
+    """-o, --patches, --report, --deviation: one ``outputs`` argument (``FitOutputs``)."""
+    return grouped(command, "outputs", [
+        click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
+                     help=f"Tessellated fitted surface; the suffix picks the format ({suffix_list(MESH_WRITERS)})."),
+        click.option("--patches", "patches_paths", type=click.Path(dir_okay=False), multiple=True,
+                     help=f"The fitted surface's Bezier patches ({suffix_list(PATCH_WRITERS)}; STEP and IGES packed "
+                          "into few faces); repeat for several formats."),
+        click.option("--report", "report_path", type=click.Path(dir_okay=False), default=None,
+                     help="JSON report: deviations both ways (max, RMS, 99th percentile, absolute and relative to the "
+                          "diagonal), control mesh, patches, CAD faces, G1 result, rounds and timings."),
+        click.option("--deviation", "deviation_paths", type=click.Path(dir_okay=False), multiple=True,
+                     help="The scan coloured by its distance to the surface: a .png picture with a colour bar, or a "
+                          ".ply of the scan with per-vertex 'quality' (the distance) and colours; repeat for both."),
+    ], lambda output, patches_paths, report_path, deviation_paths: FitOutputs(output, tuple(patches_paths),
+                                                                             report_path, tuple(deviation_paths)))
+
+
+def plan_options(command):
+    """--faces, --tolerance, --face-cap, --fairness, --iterations: one ``plan`` argument (``ScanFitOptions``;
+    --crease-angle comes with the input options)."""
+    return grouped(command, "plan", [
+        click.option("--faces", type=click.IntRange(8, None), default=None, metavar="N",
+                     help="Control faces of the quad remesh of the scan [default: 1000, fewer for a small scan]."),
+        click.option("--tolerance", type=float, default=None, metavar="T",
+                     help="Grow the control mesh until every scan vertex is within T times the bounding-box "
+                          "diagonal of the surface (e.g. 0.001), or --face-cap is reached (a note says so)."),
+        click.option("--face-cap", type=click.IntRange(8, 60000), default=6000, show_default=True,
+                     help="The most control faces --tolerance may ask for."),
+        click.option("--fairness", type=float, default=FitOptions.fairness, show_default=True,
+                     help="Weight of the umbrella fairness term that keeps the control mesh from folding where "
+                          "the scan has few samples (docs/fit.md)."),
+        click.option("--iterations", type=click.IntRange(1, 100), default=FitOptions.max_iterations, show_default=True,
+                     help="Most rounds of footpoints and least squares (they stop earlier when the deviation stops "
+                          "improving)."),
+    ], lambda faces, tolerance, face_cap, fairness, iterations: ScanFitOptions(
+        faces, tolerance, face_cap, None, FitOptions(fairness=fairness, max_iterations=iterations)).check())
+
+
+@click.command()
+@click.argument("scan_path", metavar="SCAN", type=click.Path(dir_okay=False))
+@output_options
+@click.option("-r", "--resolution", type=click.IntRange(2, None), default=8, show_default=True,
+              help="Samples per patch side of the -o tessellation.")
+@plan_options
+@click.option("--control-mesh", "control_path", type=click.Path(dir_okay=False), default=None,
+              help="Fit this control mesh (any polygons; its creases, corners and holes honoured) instead of "
+                   "remeshing the scan.")
+@patch_file_options
+@surface_options(refinements="auto")
+@input_options
+@click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
+@friendly_errors
+@with_formats
+def fit(scan_path, outputs, resolution, plan, control_path, patch_files, surface, inputs, quiet):
+    """Fit a G1 surface over a coarse control mesh to the dense mesh SCAN ({mesh_inputs}).
+
+    A quad remesh of the scan (Instant Meshes), or --control-mesh, is the
+    control mesh; the paper's construction over it is fitted to the scan by
+    sparse least squares (footpoints on the exact patches, point-to-plane with a
+    point-to-point share and a fairness term), so the result is G1 by
+    construction (C0 along --crease-angle's feature lines). Prints the
+    deviation both ways and writes the outputs asked for.
+    """
+    if not outputs.paths():
+        raise click.UsageError("nothing to write: give -o MESH, --patches FILE, --report FIT.json and/or --deviation "
+                               "DEV.png")
+    suffixes = check_outputs(outputs)
+    progress = Progress(quiet)
+    plan = ScanFitOptions(plan.faces, plan.tolerance, plan.face_cap, inputs.crease_angle, plan.fit)
+    progress.phase(f"reading {scan_path}")
+    fitted, report = fit_surface(scan_path, plan, surface, control_path=control_path, input_options=inputs,
+                                 progress=progress.advance)
+    echo_notes(report.notes, quiet)
+    progress.phase("checking the fitted surface")
+    document = fit_document(fitted, report, patch_files.merge)
+    for line in summary_lines(document):
+        click.echo(line)
+    write_outputs(scan_path, outputs, suffixes, fitted, report, document, resolution, patch_files, progress)
+    progress.done()
+
+
+def check_outputs(outputs: FitOutputs) -> dict:
+    """{path: suffix} of every output; usage errors for suffixes no writer takes and names given twice."""
+    suffixes = {}
+    if outputs.mesh:
+        suffixes[outputs.mesh] = output_suffix(outputs.mesh, MESH_WRITERS, "--output")
+    for path in outputs.patches:
+        suffixes[path] = output_suffix(path, PATCH_WRITERS, "--patches")
+    if outputs.report:
+        suffixes[outputs.report] = output_suffix(outputs.report, {".json": None}, "--report")
+    for path in outputs.deviation:
+        suffixes[path] = output_suffix(path, dict.fromkeys(DEVIATION_SUFFIXES), "--deviation")
+    paths = [os.path.abspath(p) for p in outputs.paths()]
+    if len(set(paths)) != len(paths):
+        raise click.BadParameter("-o, --patches, --report and --deviation must name different files")
+    return suffixes
+
+
+def cad_face_count(surface: Surface, merge: bool | None) -> int:
+    """The faces of the packed STEP/IGES file (merged biquadratic rectangles, then every other patch)."""
+    if merge is False:
+        return surface.n_patches
+    pieces = merge_biquadratic(surface)
+    covered = sum(int(np.size(piece.patches)) for piece in pieces)
+    return len(pieces) + surface.n_patches - covered
+
+
+def fit_document(surface: Surface, report: FitReport, merge: bool | None) -> dict:
+    """The JSON report of ``fit`` (``--report``; docs/fit.md lists its keys)."""
+    result = report.fit
+    g1 = check_surface(surface)
+    deviation = result.deviation
+    return {
+        "scan": {"file": report.path, "vertices": int(report.scan_points.shape[0]),
+                 "triangles": int(report.scan_triangles.shape[0]), "diagonal": float(deviation.diagonal)},
+        "control_mesh": {"faces": result.control.n_faces, "vertices": int(result.control.points.shape[0]),
+                         "crease_edges": int(result.control.crease_edges.shape[0]), **result.control.report},
+        "patches": {"biquadratic": int(surface.quad_frames.shape[0]), "bicubic": int(surface.cubic_frames.shape[0]),
+                    "total": surface.n_patches, "refinements": int(surface.refinements)},
+        "cad_faces": cad_face_count(surface, merge),
+        "scan_to_surface": deviation.scan_to_surface, "surface_to_scan": deviation.surface_to_scan,
+        "g1": {"max_normal_jump": float(g1.max_normal_jump), "max_gap": float(g1.relative_gap),
+               "is_g1": bool(g1.is_g1(1e-9, 1e-9))},
+        "fit": {"iterations": result.fit.iterations, "stopped": result.fit.stopped, "solver": result.fit.solver,
+                "history": result.fit.history},
+        "rounds": result.rounds, "timings": {**result.timings, **result.fit.timings}, "notes": report.notes,
+    }
+
+
+def summary_lines(document: dict) -> list[str]:
+    """What ``fit`` prints: sizes, the deviation both ways (relative to the diagonal), the G1 result."""
+    a, b = document["scan_to_surface"], document["surface_to_scan"]
+    lines = [f"control mesh:     {document['control_mesh']['faces']} faces",
+             f"patches:          {document['patches']['total']} ({document['patches']['refinements']} Doo-Sabin "
+             f"steps), {document['cad_faces']} CAD faces packed",
+             f"scan to surface:  RMS {a['relative_rms']:.3g}, 99% {a['relative_p99']:.3g}, max {a['relative_max']:.3g} "
+             "of the diagonal",
+             f"surface to scan:  RMS {b['relative_rms']:.3g}, 99% {b['relative_p99']:.3g}, max {b['relative_max']:.3g} "
+             "of the diagonal",
+             f"G1: {'yes' if document['g1']['is_g1'] else 'NO'} (max normal jump {document['g1']['max_normal_jump']:.3e} "
+             "rad)"]
+    return lines
+
+
+def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, surface: Surface, report: FitReport, document: dict,
+                  resolution: int, patch_files, progress: Progress) -> None:
+    """Every output asked for; all appear together, or none."""
+    with contextlib.ExitStack() as files:
+        def target(path):
+            progress.phase(f"writing {path}")
+            return files.enter_context(atomic_output(path, inputs=[scan_path]))
+
+        adjacency = patch_adjacency(surface.refined, surface.frames)
+        if outputs.mesh:
+            check_tessellation_size(surface.n_patches, resolution, False)
+            tess = tessellate_patches([surface.biquadratic, surface.bicubic], adjacency, resolution,
+                                      surface.patch_weights)
+            write_mesh(target(outputs.mesh), suffixes[outputs.mesh], tess, {}, None, False)
+        if outputs.patches:
+            merged = {suffix: None for suffix in suffixes.values()}
+            wanted = [s for p, s in suffixes.items() if p in outputs.patches]
+            if any(patch_files.merge if patch_files.merge is not None else PATCH_WRITERS[s].merged for s in wanted):
+                from .convert import merged_pieces
+
+                merged = merged_pieces(surface, wanted, patch_files.merge)
+            write_patch_files([(p, suffixes[p]) for p in outputs.patches], surface, scan_path,
+                              {"adjacency": adjacency, "units": patch_files.units, "group": patch_files.group},
+                              progress, merged)
+        if outputs.report:
+            with open(target(outputs.report), "w") as f:
+                json.dump(document, f, indent=1, default=_json_number)
+        for path in outputs.deviation:
+            write_deviation(target(path), suffixes[path], report)
+
+
+def write_deviation(path, suffix: str, report: FitReport) -> None:
+    """The scan coloured by its distance to the surface: a picture (.png) or the scan as PLY with ``quality``."""
+    distance = report.fit.deviation.scan_distance
+    diagonal = report.fit.deviation.diagonal
+    if suffix == ".png":
+        write_png(path, deviation_picture(report.scan_points, report.scan_triangles, distance, diagonal))
+        return
+    hi = float(np.percentile(distance, 99)) or 1.0
+    colours = rgb8(colormap(distance, 0.0, hi, "viridis"))
+    write_triangle_mesh(path, report.scan_points, report.scan_triangles, suffix=".ply",
+                        vertex_properties={"quality": distance, "relative": distance / diagonal}, vertex_colors=colours)
+
+
+def _json_number(value):
+    if isinstance(value, np.generic):
+        return value.item()
+    if isinstance(value, np.ndarray):
+        return value.tolist()
+    raise TypeError(f"{type(value).__name__} is not JSON")
+

@@ -1,0 +1,183 @@
+"""From a dense scan to a fitted surface: control mesh, fit, deviation, and refinement to a tolerance.
+
+``fit_scan`` is the whole workflow of ``c1surf fit`` on plain arrays (the files are ``api.fit_surface``'s):
+
+1. a control mesh: the user's (``control``), or a quad remesh of the scan sized by ``ScanFitOptions.faces``
+   (``control_mesh.control_mesh_from_scan``: cleaned, creases tagged with ``crease_angle``);
+2. the paper's construction over it with the fewest Doo-Sabin steps it allows (``refinements="auto"``);
+3. the fit (``iterate.fit_surface_points``): only the control points move, so the result is G1 (C0 on
+   exact creases) by construction;
+4. with ``tolerance``: while the largest scan-to-surface distance exceeds it, a larger remesh
+   (``local_refine.next_face_count``: cheaper than splitting faces, which makes pentagons that need the
+   second Doo-Sabin step everywhere), up to ``face_cap`` faces; a note says when the cap stops it;
+5. the two-sided deviation of the final surface (``deviation.two_sided_deviation``).
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from ..construction.surface import Surface, SurfaceOptions
+from .control_mesh import ControlMesh, control_mesh_from_scan
+from .deviation import bounding_diagonal, two_sided_deviation
+from .iterate import fit_surface_points
+from .local_refine import next_face_count
+from .options import FitOptions
+
+__all__ = ["ScanFitOptions", "ScanFit", "fit_scan", "default_face_count", "check_scan"]
+
+DEFAULT_FACES = 1000  # control faces when neither --faces nor a control mesh is given (docs/fit.md: the bench)
+MIN_FACES, FACE_CAP = 8, 6000
+
+
+@dataclass(frozen=True)
+class ScanFitOptions:
+    """What ``fit_scan`` makes.
+
+    faces : int or None, control faces of the remesh (None: ``default_face_count``)
+    tolerance : float or None, the largest scan-to-surface distance wanted, relative to the scan's bounding-box
+        diagonal: the control mesh grows until it holds or ``face_cap`` is reached
+    face_cap : int, the most control faces a tolerance may ask for
+    crease_angle : float degrees or None: scan edges sharper than this become C0 creases of the surface
+    fit : FitOptions, the least-squares fit's weights and rounds
+    """
+
+    faces: int | None = None
+    tolerance: float | None = None
+    face_cap: int = FACE_CAP
+    crease_angle: float | None = None
+    fit: FitOptions = field(default_factory=FitOptions)
+
+    def check(self) -> "ScanFitOptions":
+        """Raise ValueError for what ``fit_scan`` cannot take; else return self."""
+        if self.faces is not None and not (MIN_FACES <= self.faces <= self.face_cap):
+            raise ValueError(f"faces must be an integer in [{MIN_FACES}, {self.face_cap}], got {self.faces}")
+        if self.tolerance is not None and not (np.isfinite(self.tolerance) and 0 < self.tolerance < 1):
+            raise ValueError(f"the tolerance is a fraction of the bounding-box diagonal in (0, 1), got {self.tolerance}")
+        if not (MIN_FACES <= self.face_cap <= 10 * FACE_CAP):
+            raise ValueError(f"the face cap must be an integer in [{MIN_FACES}, {10 * FACE_CAP}], got {self.face_cap}")
+        if self.crease_angle is not None and not (np.isfinite(self.crease_angle) and 0 < self.crease_angle < 180):
+            raise ValueError(f"the crease angle must be in (0, 180) degrees, got {self.crease_angle}")
+        self.fit.check()
+        return self
+
+
+@dataclass
+class ScanFit:
+    """What ``fit_scan`` returns.
+
+    surface : Surface at the fitted control points (``update_points``, ``stencil()`` and every writer work)
+    control : ControlMesh at the fitted points (the unfitted points are ``report["control"]``'s)
+    fit : iterate.FitResult of the last fit; deviation : deviation.Deviation of the final surface
+    rounds : list of dict, one per control mesh tried (faces, patches, scan-to-surface max, seconds)
+    notes : list of str, ``c1surf: note:`` lines; timings : dict, seconds per stage
+    """
+
+    surface: Surface
+    control: ControlMesh
+    fit: object
+    deviation: object
+    rounds: list = field(default_factory=list)
+    notes: list = field(default_factory=list)
+    timings: dict = field(default_factory=dict)
+
+
+def default_face_count(n_triangles: int) -> int:
+    """Control faces for a scan of ``n_triangles`` without --faces: ``DEFAULT_FACES``, fewer for a small scan
+    (at least about 8 scan triangles per control face, so every patch has samples)."""
+    return int(max(MIN_FACES, min(DEFAULT_FACES, n_triangles // 8)))
+
+
+def check_scan(points: np.ndarray, triangles: np.ndarray, what: str = "the scan") -> float:
+    """The scan's bounding-box diagonal; ValueError for a scan without triangles or spanning no surface."""
+    if triangles.shape[0] == 0:
+        raise ValueError(f"{what} has no faces: c1surf fit needs a surface mesh (a point cloud has no surface to fit)")
+    used = points[np.unique(triangles)]
+    centred = used - used.mean(axis=0)
+    singular = np.linalg.svd(centred, compute_uv=False) if len(used) >= 3 else np.zeros(3)
+    diagonal = bounding_diagonal(used)
+    if not (np.isfinite(diagonal) and diagonal > 0) or singular.size < 2 or singular[1] <= 1e-9 * singular[0]:
+        raise ValueError(f"{what} spans no surface: all its points lie on one line or in one point")
+    return diagonal
+
+
+def _surface(control: ControlMesh, options: SurfaceOptions, features=None) -> Surface:
+    return Surface(control.face_sizes, control.face_vertices, control.points, options,
+                   features=control.features() if features is None else features)
+
+
+def fit_scan(points, triangles, options: ScanFitOptions, surface_options: SurfaceOptions | None = None,
+             control: ControlMesh | None = None, features=None, progress=None) -> ScanFit:
+    """Fit a surface of the paper's construction to the scan (module docstring).
+
+    Parameters
+    ----------
+    points : (m, 3) float, the scan's vertices (welded; every one on a triangle)
+    triangles : (t, 3) int
+    options : ScanFitOptions; surface_options : SurfaceOptions (default: refinements "auto")
+    control : ControlMesh or None, the user's control mesh (then ``options.faces`` and the tolerance's
+        remeshing do not apply); features : its SharpFeatures (tags), or None
+    progress : callable(label, amount, total) or None, told each round of each fit and each stage
+
+    Raises ValueError (one line) for a scan or control mesh that cannot be fitted.
+    """
+    options.check()
+    points, triangles = np.asarray(points, dtype=np.float64), np.asarray(triangles, dtype=np.int64)
+    diagonal = check_scan(points, triangles)
+    surface_options = surface_options or SurfaceOptions(refinements="auto")
+    tell = progress or (lambda label, amount, total: None)
+    notes, rounds, timings = [], [], {}
+    faces = options.faces or default_face_count(triangles.shape[0])
+    while True:
+        start = time.perf_counter()
+        if control is None or rounds:
+            tell(f"remeshing the scan to about {faces} quads", 0, 1)
+            mesh = control_mesh_from_scan(points, triangles, faces, options.crease_angle)
+            notes += [n for n in mesh.notes if n not in notes]
+        else:
+            mesh = control
+            _check_encloses(mesh.points, points, diagonal)
+        timings["control mesh"] = timings.get("control mesh", 0.0) + time.perf_counter() - start
+        start = time.perf_counter()
+        surface = _surface(mesh, surface_options, features if mesh is control else None)
+        timings["construction"] = timings.get("construction", 0.0) + time.perf_counter() - start
+        start = time.perf_counter()
+        result = fit_surface_points(surface, points, triangles, options.fit,
+                                    progress=lambda label, amount, total: tell(f"fitting {mesh.n_faces} faces", amount,
+                                                                               total))
+        timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - start
+        worst = result.history[-1]["relative_max"]
+        rounds.append({"faces": mesh.n_faces, "patches": surface.n_patches, "refinements": surface.refinements,
+                       "relative_max": worst, "relative_rms": result.history[-1]["relative_rms"],
+                       "iterations": result.iterations, "stopped": result.stopped})
+        if options.tolerance is None or worst <= options.tolerance:
+            break
+        if control is not None:
+            notes.append(f"--tolerance {options.tolerance:g}: the given control mesh is fitted as it is (its largest "
+                         f"distance {worst:.3g} of the diagonal): give a finer control mesh, or none to let c1surf "
+                         "remesh the scan")
+            break
+        if faces >= options.face_cap:
+            notes.append(f"--tolerance {options.tolerance:g} not reached within the face cap of {options.face_cap} "
+                         f"control faces: the largest scan-to-surface distance is {worst:.3g} of the diagonal "
+                         "(raise --face-cap, or look for thin parts and holes where the scan has no surface)")
+            break
+        faces = next_face_count(faces, worst / options.tolerance, options.face_cap)
+    start = time.perf_counter()
+    tell("measuring the deviation", 0, 1)
+    deviation = two_sided_deviation(surface, points, triangles, result.footpoints)
+    timings["deviation"] = time.perf_counter() - start
+    return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings)
+
+
+def _check_encloses(control_points: np.ndarray, scan_points: np.ndarray, diagonal: float) -> None:
+    """ValueError when the control mesh's bounding box lies away from the scan's (more than half a diagonal apart
+    at a corner): the fit would have to move every point across space, with footpoints that mean nothing."""
+    gap = np.abs(np.r_[control_points.min(axis=0) - scan_points.min(axis=0),
+                       control_points.max(axis=0) - scan_points.max(axis=0)])
+    if gap.max() > 0.5 * diagonal:
+        raise ValueError(f"the control mesh does not enclose the scan: their bounding boxes are {gap.max():.3g} apart "
+                         f"at a side ({gap.max() / diagonal:.2f} of the scan's diagonal); give a control mesh around "
+                         "the scan, in its units and position")
