@@ -5,18 +5,19 @@ vertices, edges in three faces, interior vertices of valence 2, faces whose orie
 with their neighbours', tiny faces. ``clean_control_mesh`` fixes each and says what it did, never
 refusing the mesh for the remesher's faults. The steps, repeated until nothing changes:
 
-1. weld coincident vertices (``mesh.weld``) and collapse edges shorter than ``1e-3`` of the median
+1. weld vertices closer than ``WELD`` of the diagonal (``mesh.weld``) and collapse edges shorter than ``1e-3`` of the median
    edge, and the shortest edge of faces with less than ``1e-4`` of the median area (merged into the
    lower-numbered vertex, at the pair's midpoint); faces left with fewer than three corners or
    visiting a vertex twice go, and so do repeated faces (``mesh.duplicate_faces``);
 2. edges in three or more faces: in rounds, on every such edge the face on the most such edges
-   goes (the fewest faces that make the mesh manifold, greedily); a boundary loop that only the
+   goes (the fewest faces that make the mesh manifold, greedily; ties: the face with the most
+   boundary edges, a flap standing on the surface); a boundary loop that only the
    dropped faces' vertices make (a hole the drop opened) is filled with one polygon;
-3. pinched vertices (two fans of faces at one vertex) get one vertex per fan
-   (``repair.split_pinched_vertices``);
-4. orientation: neighbours agree (``repair.orientation_flips``), and each closed component encloses
+3. orientation: neighbours agree (``repair.orientation_flips``), and each closed component encloses
    a positive volume (outward normals); an open component takes the orientation most of the scan's
    nearby triangles have, when a scan is given;
+4. pinched vertices (two fans of faces at one vertex) get one vertex per fan
+   (``repair.split_pinched_vertices``);
 5. interior valence-2 vertices are dissolved (``mesh.valence_two``), and two triangles that share
    an edge (what dissolving a vertex between two quads leaves) become one quad: two triangles side
    by side would need two Doo-Sabin steps instead of one (``refine.fewer_steps``);
@@ -36,6 +37,7 @@ from ..mesh.weld import collapse_repeated_corners, weld_vertices
 
 __all__ = ["clean_control_mesh", "cleanup_notes", "edge_keys"]
 
+WELD = 1e-6  # vertices closer than this fraction of the diagonal are welded
 SHORT_EDGE = 1e-3  # edges shorter than this fraction of the median edge are collapsed
 SMALL_FACE = 1e-4  # faces below this fraction of the median area lose their shortest edge
 LARGEST_FILL = 12  # holes the cleanup opened are filled when their loop has at most this many edges
@@ -127,10 +129,12 @@ def _make_manifold(sizes, vertices, n_vertices):
         if not on_bad.any():
             break
         badness = np.bincount(face[on_bad], minlength=kept_sizes.size)
-        # on every bad edge, the face on the most bad edges (ties: the later face) goes
+        loose = np.bincount(face[counts[inverse.ravel()] == 1], minlength=kept_sizes.size)
+        # on every bad edge, the face on the most bad edges goes; ties: the one with the most boundary
+        # edges (a flap standing on the surface), then the later face
         corners = np.flatnonzero(on_bad)
         edge = inverse.ravel()[corners]
-        order = np.lexsort((-face[corners], -badness[face[corners]], edge))
+        order = np.lexsort((-face[corners], -loose[face[corners]], -badness[face[corners]], edge))
         first = order[np.r_[True, edge[order][1:] != edge[order][:-1]]]
         keep[np.flatnonzero(keep)[np.unique(face[corners[first]])]] = False
     dropped_vertices = np.unique(vertices[np.repeat(~keep, sizes)])
@@ -321,7 +325,7 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
                             "stray_components", "stray_faces", "unused_vertices"), 0)
     for _ in range(rounds):
         before = dict(report)
-        sizes, vertices, _, weld = weld_vertices(points, sizes, vertices)
+        sizes, vertices, _, weld = weld_vertices(points, sizes, vertices, WELD)
         report["welded_vertices"] += weld["welded_vertices"]
         report["dropped_faces"] += weld["dropped_faces"]
         sizes, vertices, points, collapsed = _collapse_short_edges(sizes, vertices, points)
@@ -334,11 +338,11 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
         report["filled_holes"] += filled
         vertices, points, unused = _compact(sizes, vertices, points)
         report["unused_vertices"] += unused
+        vertices, flipped = _orient(sizes, vertices, points, scan)  # before the split: a flipped face is no fan
+        report["flipped_faces"] += flipped
         split, source, n_split = split_pinched_vertices(build_halfedges(sizes, vertices, points.shape[0]))
         vertices, points = split, points[source]
         report["split_vertices"] += n_split
-        vertices, flipped = _orient(sizes, vertices, points, scan)
-        report["flipped_faces"] += flipped
         sizes, vertices, _, dissolved = dissolve_valence_two(sizes, vertices, points.shape[0])
         report["valence_two"] += int(dissolved.size)
         sizes, vertices, paired = _pair_triangles(sizes, vertices, points.shape[0])
@@ -354,7 +358,7 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
 
 
 CLEANUP_WORDS = {
-    "welded_vertices": "welded {} coincident vertices",
+    "welded_vertices": "welded {} (nearly) coincident vertices",
     "collapsed_edges": "collapsed {} tiny edges",
     "dropped_faces": "dropped {} degenerate or repeated faces",
     "non_manifold_faces": "dropped {} faces on edges in three or more faces",
