@@ -12,15 +12,22 @@ refusing the mesh for the remesher's faults. The steps, repeated until nothing c
 2. edges in three or more faces: in rounds, on every such edge the face on the most such edges
    goes (the fewest faces that make the mesh manifold, greedily; ties: the face with the most
    boundary edges, a flap standing on the surface); a boundary loop that only the
-   dropped faces' vertices make (a hole the drop opened) is filled with one polygon;
+   dropped faces' vertices make (a hole the drop opened) is filled with one polygon; when the scan
+   is closed, every boundary loop of at most ``LARGEST_HOLE`` edges is (the remesher leaves holes at
+   thin parts);
 3. orientation: neighbours agree (``repair.orientation_flips``), and each closed component encloses
    a positive volume (outward normals); an open component takes the orientation most of the scan's
    nearby triangles have, when a scan is given;
 4. pinched vertices (two fans of faces at one vertex) get one vertex per fan
    (``repair.split_pinched_vertices``);
-5. interior valence-2 vertices are dissolved (``mesh.valence_two``), and two triangles that share
-   an edge (what dissolving a vertex between two quads leaves) become one quad: two triangles side
-   by side would need two Doo-Sabin steps instead of one (``refine.fewer_steps``);
+5. interior valence-2 vertices: a *doublet*, a vertex v in two quads (v, a, c, b) and (v, b, d, a),
+   is collapsed: both quads go, a and b become one vertex at v's place (regular where a and b had
+   valence 4, as in a pure-quad remesh, where they are edge midpoints) and c and d lose one edge each.
+   Dissolving v instead (one quad (a, c, b, d)) leaves a and b at valence 3 next to c and d, which
+   in a subdivided quad-dominant mesh are often irregular too: two irregular vertices side by side
+   need two Doo-Sabin steps instead of one (``refine.fewer_steps``, R2), four times the patches.
+   Other valence-2 vertices are dissolved (``mesh.valence_two``), and two triangles that share an
+   edge become one quad;
 6. components the scan does not have (the remesher's stray pieces at thin parts: more components
    than the scan's, each under a tenth of the faces) are dropped, the smallest first;
 7. unused vertices are dropped.
@@ -41,6 +48,7 @@ WELD = 1e-6  # vertices closer than this fraction of the diagonal are welded
 SHORT_EDGE = 1e-3  # edges shorter than this fraction of the median edge are collapsed
 SMALL_FACE = 1e-4  # faces below this fraction of the median area lose their shortest edge
 LARGEST_FILL = 12  # holes the cleanup opened are filled when their loop has at most this many edges
+LARGEST_HOLE = 64  # holes of a remesh of a closed scan are filled when their loop has at most this many edges
 
 
 def edge_keys(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices: int):
@@ -141,8 +149,8 @@ def _make_manifold(sizes, vertices, n_vertices):
     return sizes[keep], vertices[np.repeat(keep, sizes)], dropped_vertices, int(np.count_nonzero(~keep))
 
 
-def _fill_opened_holes(sizes, vertices, n_vertices, opened_vertices):
-    """One polygon for each boundary loop made only of ``opened_vertices`` (at most LARGEST_FILL edges)."""
+def _fill_opened_holes(sizes, vertices, n_vertices, opened_vertices, longest: int = LARGEST_FILL):
+    """One polygon for each boundary loop made only of ``opened_vertices`` (at most ``longest`` edges)."""
     if opened_vertices.size == 0:
         return sizes, vertices, 0
     mesh = build_halfedges(sizes, vertices, n_vertices)
@@ -162,7 +170,7 @@ def _fill_opened_holes(sizes, vertices, n_vertices, opened_vertices):
         loop = [start]
         seen[start] = True
         v = successor[start]
-        while v >= 0 and v != start and not seen[v] and len(loop) <= LARGEST_FILL:
+        while v >= 0 and v != start and not seen[v] and len(loop) <= longest:
             loop.append(v)
             seen[v] = True
             v = successor[v]
@@ -231,6 +239,47 @@ def _scan_normals_near(scan, query):
     return normals[nearest]
 
 
+def _collapse_doublets(sizes, vertices, points):
+    """Collapse interior valence-2 vertices between two quads (module docstring, step 5).
+
+    Returns sizes, vertices, points (the merged vertex moved to the doublet's), how many were collapsed.
+    """
+    n = points.shape[0]
+    mesh = build_halfedges(sizes, vertices, n)
+    valence = np.bincount(mesh.origin, minlength=n)
+    candidates = np.flatnonzero((valence == 2) & (np.bincount(vertices, minlength=n) == 2))
+    if candidates.size == 0:
+        return sizes, vertices, points, 0
+    outgoing = np.flatnonzero(np.isin(mesh.origin, candidates))
+    outgoing = outgoing[np.argsort(mesh.origin[outgoing], kind="stable")]
+    h1, h2 = outgoing[0::2], outgoing[1::2]  # the two half-edges leaving each candidate, in its two faces
+    v = mesh.origin[h1]
+    a, b = mesh.dest[h1], mesh.dest[h2]
+    ok = ((mesh.twin[h1] >= 0) & (mesh.twin[h2] >= 0) & (sizes[mesh.face[h1]] == 4) & (sizes[mesh.face[h2]] == 4)
+          & (mesh.face[h1] != mesh.face[h2]) & (mesh.origin[mesh.prev[h1]] == b) & (mesh.origin[mesh.prev[h2]] == a))
+    key = np.minimum(mesh.origin, mesh.dest) * n + np.maximum(mesh.origin, mesh.dest)
+    ok &= ~np.isin(np.minimum(a, b) * n + np.maximum(a, b), key)  # a and b not joined already
+    taken = np.zeros(n, dtype=bool)
+    drop = np.zeros(sizes.size, dtype=bool)
+    representative = np.arange(n)
+    moved = points.copy()
+    count = 0
+    for k in np.flatnonzero(ok):  # the few doublets, each apart from the others
+        around = [v[k], a[k], b[k], mesh.origin[mesh.next[mesh.next[h1[k]]]], mesh.origin[mesh.next[mesh.next[h2[k]]]]]
+        if taken[around].any():
+            continue
+        taken[around] = True
+        drop[[mesh.face[h1[k]], mesh.face[h2[k]]]] = True
+        keep, gone = min(a[k], b[k]), max(a[k], b[k])
+        representative[gone] = keep
+        moved[keep] = points[v[k]]
+        count += 1
+    if count == 0:
+        return sizes, vertices, points, 0
+    kept_vertices = representative[vertices[np.repeat(~drop, sizes)]]
+    return sizes[~drop], kept_vertices, moved, count
+
+
 def _pair_triangles(sizes, vertices, n_vertices):
     """Merge triangles that share an edge into quads, each triangle in one pair at most.
 
@@ -288,6 +337,12 @@ def _drop_stray_components(sizes, vertices, n_vertices, scan):
     return sizes[~drop], vertices[np.repeat(~drop, sizes)], int(order.size), int(np.count_nonzero(drop))
 
 
+def _is_closed(triangles: np.ndarray) -> bool:
+    """Whether every edge of the triangles is in exactly two of them."""
+    a, b, key, _ = edge_keys(np.full(len(triangles), 3), np.asarray(triangles).ravel(), int(np.max(triangles)) + 1)
+    return bool(np.all(np.unique(key, return_counts=True)[1] == 2))
+
+
 def _compact(sizes, vertices, points):
     """Drop unused vertices. Returns vertices renumbered, points, and how many went."""
     used = np.zeros(points.shape[0], dtype=bool)
@@ -314,15 +369,17 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
     points : (V', 3) float
     report : dict of int: ``welded_vertices``, ``collapsed_edges``, ``dropped_faces`` (degenerate or
         repeated), ``non_manifold_faces`` (dropped from edges in three or more faces), ``filled_holes``,
-        ``split_vertices``, ``flipped_faces``, ``valence_two`` (dissolved), ``paired_triangles`` (merged into
+        ``closed_holes`` (of a closed scan's remesh),
+        ``split_vertices``, ``flipped_faces``, ``doublets`` (collapsed), ``valence_two`` (dissolved), ``paired_triangles`` (merged into
         quads), ``stray_components`` and ``stray_faces`` (dropped), ``unused_vertices``
     """
     sizes = np.asarray(face_sizes, dtype=np.int64)
     vertices = np.asarray(face_vertices, dtype=np.int64)
     points = np.asarray(points, dtype=np.float64)
     report = dict.fromkeys(("welded_vertices", "collapsed_edges", "dropped_faces", "non_manifold_faces",
-                            "filled_holes", "split_vertices", "flipped_faces", "valence_two", "paired_triangles",
+                            "filled_holes", "closed_holes", "split_vertices", "flipped_faces", "doublets", "valence_two", "paired_triangles",
                             "stray_components", "stray_faces", "unused_vertices"), 0)
+    closed_scan = scan is not None and _is_closed(scan[1])
     for _ in range(rounds):
         before = dict(report)
         sizes, vertices, _, weld = weld_vertices(points, sizes, vertices, WELD)
@@ -336,6 +393,10 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
         report["non_manifold_faces"] += dropped
         sizes, vertices, filled = _fill_opened_holes(sizes, vertices, points.shape[0], opened)
         report["filled_holes"] += filled
+        if closed_scan:
+            sizes, vertices, filled = _fill_opened_holes(sizes, vertices, points.shape[0],
+                                                         np.arange(points.shape[0]), LARGEST_HOLE)
+            report["closed_holes"] += filled
         vertices, points, unused = _compact(sizes, vertices, points)
         report["unused_vertices"] += unused
         vertices, flipped = _orient(sizes, vertices, points, scan)  # before the split: a flipped face is no fan
@@ -343,6 +404,8 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
         split, source, n_split = split_pinched_vertices(build_halfedges(sizes, vertices, points.shape[0]))
         vertices, points = split, points[source]
         report["split_vertices"] += n_split
+        sizes, vertices, points, doublets = _collapse_doublets(sizes, vertices, points)
+        report["doublets"] += doublets
         sizes, vertices, _, dissolved = dissolve_valence_two(sizes, vertices, points.shape[0])
         report["valence_two"] += int(dissolved.size)
         sizes, vertices, paired = _pair_triangles(sizes, vertices, points.shape[0])
@@ -363,9 +426,11 @@ CLEANUP_WORDS = {
     "dropped_faces": "dropped {} degenerate or repeated faces",
     "non_manifold_faces": "dropped {} faces on edges in three or more faces",
     "filled_holes": "filled {} holes that drop opened",
+    "closed_holes": "closed {} holes the remesher left in a closed scan",
     "split_vertices": "split {} pinched vertices",
     "flipped_faces": "reversed {} faces to orient them consistently and outward",
-    "valence_two": "dissolved {} interior valence-2 vertices",
+    "doublets": "collapsed {} interior valence-2 vertices between two quads",
+    "valence_two": "dissolved {} other interior valence-2 vertices",
     "paired_triangles": "merged {} pairs of triangles into quads",
     "stray_components": "dropped {} stray components the scan does not have",
 }

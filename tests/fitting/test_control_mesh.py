@@ -91,6 +91,21 @@ def test_valence_two_vertex_is_dissolved():
     assert_builds_g1(s2, v2, p2)
 
 
+def test_doublet_is_collapsed():
+    """A vertex in two quads that share both its edges (as Instant Meshes leaves them): both quads go."""
+    sizes, vertices, points = quad_sphere()
+    faces = vertices.reshape(-1, 4)
+    a, c, b, d = faces[12]
+    v = points.shape[0]
+    points = np.vstack([points, points[faces[12]].mean(axis=0)])
+    doublet = np.array([[a, c, b, v], [b, d, a, v]])
+    rows = np.concatenate([np.delete(faces, 12, axis=0), doublet])
+    s2, v2, p2, report = clean_control_mesh(np.full(len(rows), 4), rows.ravel(), points)
+    assert report["doublets"] == 1 and report["valence_two"] == 0
+    assert s2.size == sizes.size - 1 and np.all(s2 == 4) and p2.shape[0] == points.shape[0] - 2
+    assert_builds_g1(s2, v2, p2)
+
+
 def test_edge_in_three_faces_loses_the_flap():
     sizes, vertices, points = quad_sphere()
     faces = vertices.reshape(-1, 4)
