@@ -71,7 +71,7 @@ def measure(name: str, faces: int, crease_angle):
     d = closest_distances(points, t.points[:, :3], np.asarray(t.triangles)) / diagonal
     r = mesh.report
     changed = {k: r[k] for k in ("welded_vertices", "collapsed_edges", "dropped_faces", "non_manifold_faces",
-                                 "filled_holes", "split_vertices", "flipped_faces", "valence_two", "paired_triangles",
+                                 "filled_holes", "closed_holes", "split_vertices", "flipped_faces", "doublets", "valence_two", "paired_triangles",
                                  "stray_components") if r.get(k)}
     valence = np.bincount(mesh.face_vertices, minlength=mesh.points.shape[0])
     print(f"{name:21s} {len(triangles):6d} tri | ask {faces:5d} remesh {r['remeshed_faces']:5d} ({r['remeshes']}x, "

@@ -404,8 +404,11 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
         split, source, n_split = split_pinched_vertices(build_halfedges(sizes, vertices, points.shape[0]))
         vertices, points = split, points[source]
         report["split_vertices"] += n_split
-        sizes, vertices, points, doublets = _collapse_doublets(sizes, vertices, points)
-        report["doublets"] += doublets
+        for _ in range(8):  # doublets next to each other go in turn
+            sizes, vertices, points, doublets = _collapse_doublets(sizes, vertices, points)
+            report["doublets"] += doublets
+            if not doublets:
+                break
         sizes, vertices, _, dissolved = dissolve_valence_two(sizes, vertices, points.shape[0])
         report["valence_two"] += int(dissolved.size)
         sizes, vertices, paired = _pair_triangles(sizes, vertices, points.shape[0])

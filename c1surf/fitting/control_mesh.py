@@ -10,6 +10,12 @@ by how far it was off. What else there is: pymeshlab (a bench-only dependency he
 triangle remeshing and pairs triangles into quad-dominant meshes, with no field alignment and no
 face-count control; QuadWild and Rhino's QuadRemesh have no maintained Python wheel.
 
+Doo-Sabin steps: a closed mesh whose irregular vertices and non-quad faces lie apart needs one step
+instead of two (``refine.fewer_steps``), a quarter of the patches. A pure-quad remesh has its
+irregular vertices apart; the cleanup's doublet collapse keeps them so (``cleanup``). When the
+cleaned mesh still needs two (holes the remesher left at thin parts), the remesh is tried again
+with the target 4 % up, then 4 % down (``RETRY_SCALES``), and the mesh needing fewest steps is kept.
+
 Sharp features (``crease_angle``): the scan's edges whose faces meet at more than the angle
 (``mesh.feature_edges``) are the feature lines. The remesher aligns to them; a control edge
 follows a line when its two ends and its midpoint lie within a quarter of the median control edge
@@ -37,6 +43,7 @@ FACES_PER_TARGET_VERTEX = 4.0  # pure-quad output: about four faces per vertex a
 FACE_SLACK = 0.15  # a second remesh when the count lands further than this from the request
 NEAR_LINE = 0.25  # of the median control edge: how near a feature line a tagged edge's points lie
 ALONG_DEGREES = 25.0  # largest angle between a tagged edge and the feature line it follows
+RETRY_SCALES = (1.0, 1.04, 0.96)  # remesh targets tried in turn until one Doo-Sabin step suffices
 
 
 @dataclass(frozen=True, eq=False)
@@ -138,6 +145,15 @@ def quad_remesh(points: np.ndarray, triangles: np.ndarray, faces: int, crease_an
     return np.asarray(quad_points, dtype=np.float64), np.asarray(quads, dtype=np.int64), info
 
 
+def _doo_sabin_steps(sizes, vertices, n_vertices) -> int:
+    """The fewest Doo-Sabin steps the construction needs on this mesh (``refinements="auto"``; 2 when open)."""
+    from ..construction.refine.fewer_steps import refinements_needed
+    from ..mesh.halfedges import build_halfedges
+
+    mesh = build_halfedges(sizes, vertices, n_vertices)
+    return refinements_needed(mesh) if np.all(mesh.twin >= 0) else 2
+
+
 def scan_feature_edges(points: np.ndarray, triangles: np.ndarray, crease_angle: float) -> np.ndarray:
     """(k, 2) int: the scan's edges whose triangles meet at more than ``crease_angle`` degrees."""
     return feature_edges(np.full(triangles.shape[0], 3), triangles.ravel(), points, crease_angle)
@@ -197,18 +213,27 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     -------
     ControlMesh, cleaned so that ``Surface`` builds it without repairs; its ``report`` holds
     ``requested_faces``, ``remeshed_faces``, ``faces``, ``remesh_seconds``, ``remeshes``,
-    ``target_vertices``, ``feature_edges`` (on the scan), ``crease_edges`` and the cleanup's counts
+    ``target_vertices``, ``doo_sabin_steps`` (what ``refinements="auto"`` takes), ``feature_edges`` (on the scan), ``crease_edges`` and the cleanup's counts
     """
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     scan_points, scan_triangles = _welded_scan(points, triangles)
-    quad_points, quads, info = quad_remesh(scan_points, scan_triangles, faces, crease_angle)
-    sizes, vertices, control_points, cleanup = clean_control_mesh(
-        np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=(scan_points, scan_triangles))
+    best, seconds, remeshes = None, 0.0, 0
+    for scale in RETRY_SCALES:
+        quad_points, quads, info = quad_remesh(scan_points, scan_triangles, int(round(faces * scale)), crease_angle)
+        seconds, remeshes = seconds + info["seconds"], remeshes + info["remeshes"]
+        sizes, vertices, control_points, cleanup = clean_control_mesh(
+            np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=(scan_points, scan_triangles))
+        steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
+        if best is None or steps < best[0]:
+            best = (steps, quads.shape[0], sizes, vertices, control_points, cleanup, info)
+        if steps <= 1:
+            break
+    steps, remeshed, sizes, vertices, control_points, cleanup, info = best
     notes = cleanup_notes(cleanup)
-    report = {"requested_faces": int(faces), "remeshed_faces": int(quads.shape[0]), "faces": int(sizes.size),
-              "remesh_seconds": info["seconds"], "remeshes": info["remeshes"],
-              "target_vertices": info["target_vertices"], **cleanup}
+    report = {"requested_faces": int(faces), "remeshed_faces": int(remeshed), "faces": int(sizes.size),
+              "remesh_seconds": seconds, "remeshes": remeshes, "target_vertices": info["target_vertices"],
+              "doo_sabin_steps": int(steps), **cleanup}
     creases = np.zeros((0, 2), dtype=np.int64)
     if crease_angle is not None:
         lines = scan_feature_edges(scan_points, scan_triangles, crease_angle)
