@@ -20,7 +20,9 @@ Sharp features (``crease_angle``): the scan's edges whose faces meet at more tha
 (``mesh.feature_edges``) are the feature lines. The remesher aligns to them; a control edge
 follows a line when its two ends and its midpoint lie within a quarter of the median control edge
 of the line and it runs along the line (within ``ALONG_DEGREES``); such edges are tagged
-infinitely sharp (``ControlMesh.features``).
+infinitely sharp (``ControlMesh.features``). A tagged line that stops short (a vertex on one tagged
+edge: a dart, which stays a G1 crease instead of a C0 seam) is extended there by the edge nearest
+the line within twice both allowances, for up to ``EXTEND_ROUNDS`` edges.
 """
 from __future__ import annotations
 
@@ -43,6 +45,7 @@ FACES_PER_TARGET_VERTEX = 4.0  # pure-quad output: about four faces per vertex a
 FACE_SLACK = 0.15  # a second remesh when the count lands further than this from the request
 NEAR_LINE = 0.25  # of the median control edge: how near a feature line a tagged edge's points lie
 ALONG_DEGREES = 25.0  # largest angle between a tagged edge and the feature line it follows
+EXTEND_ROUNDS = 8  # rounds of extending tagged lines from their loose ends
 RETRY_SCALES = (1.0, 1.04, 0.96)  # remesh targets tried in turn until one Doo-Sabin step suffices
 
 
@@ -196,6 +199,21 @@ def tag_feature_edges(face_sizes, face_vertices, points, line_points, line_edges
     edge_direction /= np.maximum(np.linalg.norm(edge_direction, axis=1, keepdims=True), 1e-300)
     along = np.abs(np.einsum("ij,ij->i", edge_direction, direction[segment[nearest[2]]]))
     tagged = np.all(distance < near, axis=0) & (along > np.cos(np.radians(ALONG_DEGREES)))
+    # close gaps: from a line's loose end (a vertex on one tagged edge) the untagged edge nearest the line
+    # and along it, within twice the allowance, until the lines meet or stop
+    loose_ok = np.all(distance < 2 * near, axis=0) & (along > np.cos(np.radians(2 * ALONG_DEGREES)))
+    for _ in range(EXTEND_ROUNDS):
+        degree = np.bincount(np.r_[a[tagged], b[tagged]], minlength=points.shape[0])
+        loose = degree == 1
+        grow = ~tagged & loose_ok & (loose[a] | loose[b])
+        if not grow.any():
+            break
+        # one edge per loose end: the one whose far end is nearest the line
+        end = np.where(loose[a[grow]], a[grow], b[grow])
+        edge = np.flatnonzero(grow)
+        order = np.lexsort((distance[:, edge].max(axis=0), end))
+        first = order[np.r_[True, end[order][1:] != end[order][:-1]]]
+        tagged[edge[first]] = True
     return np.stack([a[tagged], b[tagged]], axis=1).astype(np.int64)
 
 
