@@ -15,7 +15,7 @@ from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.fitting.cleanup import clean_control_mesh, cleanup_notes
 from c1surf.fitting.control_mesh import ControlMesh, control_mesh_from_scan, scan_feature_edges, tag_feature_edges
 from c1surf.fitting.local_refine import (face_deviation, faces_over_tolerance, nearest_control_faces,
-                                         patch_control_faces, refine_control_faces)
+                                         next_face_count, patch_control_faces, refine_control_faces)
 from c1surf.mesh.halfedges import build_halfedges
 
 SCANS = Path(__file__).resolve().parents[2].parent / "shared" / "scans"
@@ -268,3 +268,9 @@ def test_patch_faces_and_per_face_deviation():
     assert chosen.size == 1 and deviation[chosen[0]] == 0.5
     assert faces_over_tolerance(deviation, 0.1, sizes.size, sizes.size).size == 0  # the cap is reached
     assert np.array_equal(nearest_control_faces(ControlMesh(sizes, vertices, points), centroids), np.arange(sizes.size))
+
+
+def test_next_face_count_grows_with_the_excess_and_stops_at_the_cap():
+    assert next_face_count(1000, 1.0, 5000) == 1250  # at least a quarter more
+    assert next_face_count(1000, 8.0, 5000) == 4000  # 8^(2/3) = 4
+    assert next_face_count(1000, 100.0, 5000) == 5000
