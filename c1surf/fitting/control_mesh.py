@@ -152,6 +152,16 @@ def quad_remesh(points: np.ndarray, triangles: np.ndarray, faces: int, crease_an
     return np.asarray(quad_points, dtype=np.float64), np.asarray(quads, dtype=np.int64), info
 
 
+def _check_area(points: np.ndarray, triangles: np.ndarray) -> None:
+    """Raise ValueError for a scan without area (Instant Meshes never returns on one: measured, collinear points)."""
+    corners = points[triangles]
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0))) if points.size else 0.0
+    if not area > 1e-12 * diagonal ** 2:
+        raise ValueError(f"the scan's {len(triangles)} triangles have no area (its points lie on a line or in one "
+                         "point): there is no surface to fit")
+
+
 def _doo_sabin_steps(sizes, vertices, n_vertices) -> int:
     """The fewest Doo-Sabin steps the construction needs on this mesh (``refinements="auto"``; 2 when open)."""
     from ..construction.refine.fewer_steps import refinements_needed
@@ -284,6 +294,8 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     faces : int > 0, the control faces wanted
     crease_angle : float degrees or None: tag the control edges along the scan's sharper edges
 
+    Raises ValueError for a scan without area and when the remesher makes no face.
+
     Returns
     -------
     ControlMesh, cleaned so that ``Surface`` builds it without repairs; its ``report`` holds
@@ -293,6 +305,7 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     scan_points, scan_triangles = _welded_scan(points, triangles)
+    _check_area(scan_points, scan_triangles)
     best, seconds, remeshes = None, 0.0, 0
     for scale in RETRY_SCALES:
         quad_points, quads, info = quad_remesh(scan_points, scan_triangles, int(round(faces * scale)), crease_angle)
@@ -305,6 +318,9 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
         if steps <= 1:
             break
     steps, remeshed, sizes, vertices, control_points, cleanup, info = best
+    if sizes.size == 0:
+        raise ValueError(f"the quad remesher made no faces of this scan ({len(triangles)} triangles, {faces} faces "
+                         "asked): it needs a surface, not points on a line or in one point")
     notes = cleanup_notes(cleanup)
     report = {"requested_faces": int(faces), "remeshed_faces": int(remeshed), "faces": int(sizes.size),
               "remesh_seconds": seconds, "remeshes": remeshes, "target_vertices": info["target_vertices"],

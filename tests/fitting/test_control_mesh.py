@@ -274,3 +274,29 @@ def test_next_face_count_grows_with_the_excess_and_stops_at_the_cap():
     assert next_face_count(1000, 1.0, 5000) == 1250  # at least a quarter more
     assert next_face_count(1000, 8.0, 5000) == 4000  # 8^(2/3) = 4
     assert next_face_count(1000, 100.0, 5000) == 5000
+
+
+@pytest.mark.parametrize("reverse", [False, True])
+def test_open_scan_keeps_its_boundary_and_the_scan_orientation(reverse):
+    import trimesh
+
+    sphere = trimesh.creation.icosphere(subdivisions=4)
+    triangles = sphere.faces[sphere.triangles_center[:, 2] > 0.2]
+    mesh = control_mesh_from_scan(sphere.vertices, triangles[:, ::-1] if reverse else triangles, 100)
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(refinements="auto"))
+    assert surface.repairs["boundary_edges"] > 0 and surface.repairs["flipped_faces"] == 0
+    report = measure_smoothness([surface.biquadratic, surface.bicubic])
+    assert report.boundary_edges > 0 and report.max_normal_jump < 1e-9
+    patch = surface.biquadratic
+    normal = np.cross(patch[:, 2, 1] - patch[:, 0, 1], patch[:, 1, 2] - patch[:, 1, 0])
+    outward = np.einsum("ij,ij->i", normal, patch[:, 1, 1]) > 0
+    assert np.all(outward != reverse)
+
+
+def test_degenerate_scan_is_refused_in_one_line():
+    points = np.c_[np.linspace(0, 1, 30), np.zeros(30), np.zeros(30)]
+    triangles = np.stack([np.arange(28), np.arange(1, 29), np.arange(2, 30)], axis=1)
+    with pytest.raises(ValueError, match="no area"):
+        control_mesh_from_scan(points, triangles, 100)
+    with pytest.raises(ValueError, match="no area"):
+        control_mesh_from_scan(np.zeros((3, 3)), np.array([[0, 1, 2]]), 100)
