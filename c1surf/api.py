@@ -199,7 +199,7 @@ def read_scan(path):
 
 
 def control_mesh_input(path, surface_options: SurfaceOptions, input_options: InputOptions | None = None):
-    """A user's control mesh for ``fit_surface``: (ControlMesh, SharpFeatures or None, LoadReport's notes), read and
+    """A user's control mesh for ``fit_surface``: (ControlMesh, SharpFeatures or None, PreparedInput), read and
     prepared as every mesh file is (``prepared_input``: tags honoured), its unused vertices left out."""
     prepared = prepared_input(path, surface_options, input_options)
     mesh, data = prepared.mesh, prepared.data
@@ -213,10 +213,11 @@ def control_mesh_input(path, surface_options: SurfaceOptions, input_options: Inp
         features = replace(features, crease_edges=edges[keep_edges],
                            crease_sharpness=features.crease_sharpness[keep_edges],
                            corner_vertices=number[features.corner_vertices[keep_corners]],
-                           corner_sharpness=features.corner_sharpness[keep_corners])
+                           corner_sharpness=features.corner_sharpness[keep_corners],
+                           vertex_identity=None if features.vertex_identity is None else features.vertex_identity[used])
     control = ControlMesh(np.asarray(mesh.face_sizes, dtype=np.int64), number[mesh.face_vertices],
                           np.asarray(data.points[used, :3], dtype=np.float64))
-    return control, features, list(data.feature_notes)
+    return control, features, prepared
 
 
 def fit_surface(scan_path, options: ScanFitOptions | None = None, surface_options: SurfaceOptions | None = None, *,
@@ -241,16 +242,16 @@ def fit_surface(scan_path, options: ScanFitOptions | None = None, surface_option
     options = options or ScanFitOptions()
     surface_options = surface_options or SurfaceOptions(refinements="auto")
     scan_points, scan_triangles, scan_mesh = read_scan(scan_path)
-    control = features = None
-    notes = []
+    control = features = prepared = None
     if control_path is not None:
-        control, features, notes = control_mesh_input(control_path, surface_options, input_options)
+        control, features, prepared = control_mesh_input(control_path, surface_options, input_options)
     try:
         result = fit_scan(scan_points, scan_triangles, options, surface_options, control, features, progress)
     except TopologyError as e:
         raise MeshInputError(str(control_path or scan_path), f"the control mesh cannot be built: {e.describe()}") from None
     except ValueError as e:
         raise MeshInputError(str(control_path or scan_path), str(e)) from None
+    notes = [] if prepared is None else repair_notes(result.surface, prepared.mesh, prepared.data)
     return result.surface, FitReport(str(scan_path), scan_points, scan_triangles, result, notes + result.notes)
 
 

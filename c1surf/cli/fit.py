@@ -19,7 +19,7 @@ from ..io.meshes.write import write_triangle_mesh
 from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
 from ..render.deviation import deviation_picture
 from ..render.pictures import colormap, rgb8
-from .common import Progress, echo_notes, friendly_errors, output_suffix, with_formats
+from .common import Progress, UsageFailure, echo_notes, friendly_errors, output_suffix, with_formats
 from .convert import check_tessellation_size, write_mesh, write_patch_files
 from .options import grouped, input_options, patch_file_options, surface_options
 
@@ -105,8 +105,8 @@ def fit(scan_path, outputs, resolution, plan, control_path, patch_files, surface
     deviation both ways and writes the outputs asked for.
     """
     if not outputs.paths():
-        raise click.UsageError("nothing to write: give -o MESH, --patches FILE, --report FIT.json and/or --deviation "
-                               "DEV.png")
+        raise UsageFailure("nothing to write: give -o MESH, --patches FILE, --report FIT.json and/or --deviation "
+                           "DEV.png")
     suffixes = check_outputs(outputs)
     progress = Progress(quiet)
     plan = ScanFitOptions(plan.faces, plan.tolerance, plan.face_cap, inputs.crease_angle, plan.fit)
@@ -135,7 +135,7 @@ def check_outputs(outputs: FitOutputs) -> dict:
         suffixes[path] = output_suffix(path, dict.fromkeys(DEVIATION_SUFFIXES), "--deviation")
     paths = [os.path.abspath(p) for p in outputs.paths()]
     if len(set(paths)) != len(paths):
-        raise click.BadParameter("-o, --patches, --report and --deviation must name different files")
+        raise UsageFailure("-o, --patches, --report and --deviation must name different files")
     return suffixes
 
 
@@ -161,7 +161,7 @@ def fit_document(surface: Surface, report: FitReport, merge: bool | None) -> dic
         "patches": {"biquadratic": int(surface.quad_frames.shape[0]), "bicubic": int(surface.cubic_frames.shape[0]),
                     "total": surface.n_patches, "refinements": int(surface.refinements)},
         "cad_faces": cad_face_count(surface, merge),
-        "scan_to_surface": deviation.scan_to_surface, "surface_to_scan": deviation.surface_to_scan,
+        "scan_to_surface": deviation.scan_stats, "surface_to_scan": deviation.surface_stats,
         "g1": {"max_normal_jump": float(g1.max_normal_jump), "max_gap": float(g1.relative_gap),
                "is_g1": bool(g1.is_g1(1e-9, 1e-9))},
         "fit": {"iterations": result.fit.iterations, "stopped": result.fit.stopped, "solver": result.fit.solver,
@@ -218,7 +218,7 @@ def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, surface: Surfa
 
 def write_deviation(path, suffix: str, report: FitReport) -> None:
     """The scan coloured by its distance to the surface: a picture (.png) or the scan as PLY with ``quality``."""
-    distance = report.fit.deviation.scan_distance
+    distance = report.fit.deviation.scan_to_surface
     diagonal = report.fit.deviation.diagonal
     if suffix == ".png":
         write_png(path, deviation_picture(report.scan_points, report.scan_triangles, distance, diagonal))

@@ -21,8 +21,8 @@ import numpy as np
 
 from ..construction.surface import Surface, SurfaceOptions
 from .control_mesh import ControlMesh, control_mesh_from_scan
-from .deviation import bounding_diagonal, two_sided_deviation
-from .iterate import fit_surface_points
+from .deviation import bounding_diagonal, distance_stats, two_sided_deviation
+from .iterate import fit_surface_points, project_scan
 from .local_refine import next_face_count
 from .options import FitOptions
 
@@ -30,6 +30,7 @@ __all__ = ["ScanFitOptions", "ScanFit", "fit_scan", "default_face_count", "check
 
 DEFAULT_FACES = 1000  # control faces when neither --faces nor a control mesh is given (docs/fit.md: the bench)
 MIN_FACES, FACE_CAP = 8, 6000
+SAMPLES_PER_FACE = 16  # fit samples a control face at least (4 patches a face after one Doo-Sabin step)
 
 
 @dataclass(frozen=True)
@@ -103,6 +104,23 @@ def check_scan(points: np.ndarray, triangles: np.ndarray, what: str = "the scan"
     return diagonal
 
 
+def fitting_samples(points: np.ndarray, triangles: np.ndarray, faces: int):
+    """(points, triangles) the fit samples: the scan, its triangles cut into four (edge midpoints: samples on the
+    scan's own facets) until there are ``SAMPLES_PER_FACE`` samples a control face (twice at most). A scan with
+    fewer vertices than patches leaves the surface between samples to the fairness term alone: it bulges there."""
+    for _ in range(2):
+        if points.shape[0] >= SAMPLES_PER_FACE * faces:
+            break
+        edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+        unique, inverse = np.unique(edges, axis=0, return_inverse=True)
+        middle = points.shape[0] + inverse.reshape(-1, 3)  # the midpoints of edges 01, 12, 20
+        points = np.concatenate([points, 0.5 * (points[unique[:, 0]] + points[unique[:, 1]])])
+        a, b, c = triangles.T
+        ab, bc, ca = middle.T
+        triangles = np.concatenate([np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
+    return points, triangles
+
+
 def _surface(control: ControlMesh, options: SurfaceOptions, features=None) -> Surface:
     return Surface(control.face_sizes, control.face_vertices, control.points, options,
                    features=control.features() if features is None else features)
@@ -144,9 +162,13 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
         surface = _surface(mesh, surface_options, features if mesh is control else None)
         timings["construction"] = timings.get("construction", 0.0) + time.perf_counter() - start
         start = time.perf_counter()
-        result = fit_surface_points(surface, points, triangles, options.fit,
+        samples, sample_triangles = fitting_samples(points, triangles, mesh.n_faces)
+        result = fit_surface_points(surface, samples, sample_triangles, options.fit,
                                     progress=lambda label, amount, total: tell(f"fitting {mesh.n_faces} faces", amount,
                                                                                total))
+        if samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
+            result.footpoints = project_scan(surface, points, options.fit, None)
+            result.history[-1] = {**result.history[-1], **distance_stats(result.footpoints.distance, diagonal)}
         timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - start
         worst = result.history[-1]["relative_max"]
         rounds.append({"faces": mesh.n_faces, "patches": surface.n_patches, "refinements": surface.refinements,
