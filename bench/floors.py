@@ -39,7 +39,7 @@ def main(argv=None) -> None:
     parser.add_argument("--grid", type=int, nargs=2, default=(600, 300), help="quad torus of NU x NV faces")
     parser.add_argument("--repeats", type=int, default=7)
     args = parser.parse_args(argv)
-    from c1surf.cli import runtime
+    from c1surf import memory as runtime
 
     runtime.tune_allocator()  # as the command line and the bench's workers
     from c1surf.api import tessellate_surface

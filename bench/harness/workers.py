@@ -69,7 +69,7 @@ def _phases(surface, build: float) -> dict:
 
 def _c1surf_api():
     """The parts of c1surf's Python API the in-memory worker uses (imported after the allocator is tuned)."""
-    from c1surf.cli import runtime
+    from c1surf import memory as runtime
 
     runtime.tune_allocator()  # what the command line does first
     from c1surf.construction.surface import Surface
@@ -152,7 +152,7 @@ def work_limit(job):
     triangles of the patch grid (a template shifted per patch), into arrays of the output's layout
     (points (V, 3), normals (V, 3), int32 triangles (T, 3)), by blocks of patches as c1surf works.
     """
-    from c1surf.cli import runtime
+    from c1surf import memory as runtime
 
     runtime.tune_allocator()  # the same allocator setting as the c1surf workers
     patches, n = job["patches"], 8

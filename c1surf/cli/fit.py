@@ -118,7 +118,7 @@ def fit(scan_path, outputs, resolution, plan, control_path, patch_files, surface
     document = fit_document(fitted, report, patch_files.merge)
     for line in summary_lines(document):
         click.echo(line)
-    write_outputs(scan_path, outputs, suffixes, fitted, report, document, resolution, patch_files, progress)
+    write_outputs(scan_path, outputs, suffixes, (fitted, report, document), resolution, patch_files, progress)
     progress.done()
 
 
@@ -185,9 +185,10 @@ def summary_lines(document: dict) -> list[str]:
     return lines
 
 
-def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, surface: Surface, report: FitReport, document: dict,
-                  resolution: int, patch_files, progress: Progress) -> None:
-    """Every output asked for; all appear together, or none."""
+def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, fitted: tuple, resolution: int, patch_files,
+                  progress: Progress) -> None:
+    """Every output asked for; ``fitted``: (Surface, FitReport, the report's document). All appear together, or none."""
+    surface, report, document = fitted
     with contextlib.ExitStack() as files:
         def target(path):
             progress.phase(f"writing {path}")

@@ -7,7 +7,7 @@ import signal
 import click
 
 from .. import __version__
-from .runtime import tune_allocator
+from ..memory import tune_allocator
 
 # command name: (module, function), imported when that command runs (or --help lists the commands), so
 # `c1surf convert` does not import what `render`, `batch` or `inspect` need
@@ -49,7 +49,7 @@ def main(ctx, debug):
     # SIGTERM (a killed make job, a batch scheduler) unwinds like Ctrl-C, so
     # temporary output files are removed and nothing partial is left behind.
     signal.signal(signal.SIGTERM, _interrupt)
-    tune_allocator()  # reuse freed memory instead of faulting in fresh pages (c1surf.cli.runtime)
+    tune_allocator()  # reuse freed memory instead of faulting in fresh pages (c1surf.memory)
 
 
 def _interrupt(signum, frame):

@@ -372,6 +372,9 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
         ``closed_holes`` (of a closed scan's remesh),
         ``split_vertices``, ``flipped_faces``, ``doublets`` (collapsed), ``valence_two`` (dissolved), ``paired_triangles`` (merged into
         quads), ``stray_components`` and ``stray_faces`` (dropped), ``unused_vertices``
+
+    Long: the cleanup's steps in their one order, each a call, repeated until a round changes nothing;
+    splitting it would only hide that order.
     """
     sizes = np.asarray(face_sizes, dtype=np.int64)
     vertices = np.asarray(face_vertices, dtype=np.int64)

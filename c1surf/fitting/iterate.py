@@ -84,6 +84,9 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
     Returns
     -------
     FitResult; ``surface`` is left on the fitted points
+
+    Long: the checks of the inputs, then one loop whose rounds (footpoints, system, solve, update, stop rule)
+    share the timings and the undo of a worse round.
     """
     options = (options or FitOptions()).check()
     if surface.rational:

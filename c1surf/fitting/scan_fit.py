@@ -157,41 +157,61 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
         else:
             mesh = control
             _check_encloses(mesh.points, points, diagonal)
-        timings["control mesh"] = timings.get("control mesh", 0.0) + time.perf_counter() - start
-        start = time.perf_counter()
-        surface = _surface(mesh, surface_options, features if mesh is control else None)
-        timings["construction"] = timings.get("construction", 0.0) + time.perf_counter() - start
-        start = time.perf_counter()
-        samples, sample_triangles = fitting_samples(points, triangles, mesh.n_faces)
-        result = fit_surface_points(surface, samples, sample_triangles, options.fit,
-                                    progress=lambda label, amount, total: tell(f"fitting {mesh.n_faces} faces", amount,
-                                                                               total))
-        if samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
-            result.footpoints = project_scan(surface, points, options.fit, None)
-            result.history[-1] = {**result.history[-1], **distance_stats(result.footpoints.distance, diagonal)}
-        timings["fit"] = timings.get("fit", 0.0) + time.perf_counter() - start
+        _clock(timings, "control mesh", start)
+        surface, result = _fit_round(points, triangles, (mesh, features if mesh is control else None),
+                                     (surface_options, options.fit), timings, tell)
         worst = result.history[-1]["relative_max"]
         rounds.append({"faces": mesh.n_faces, "patches": surface.n_patches, "refinements": surface.refinements,
                        "relative_max": worst, "relative_rms": result.history[-1]["relative_rms"],
                        "iterations": result.iterations, "stopped": result.stopped})
-        if options.tolerance is None or worst <= options.tolerance:
-            break
-        if control is not None:
-            notes.append(f"--tolerance {options.tolerance:g}: the given control mesh is fitted as it is (its largest "
-                         f"distance {worst:.3g} of the diagonal): give a finer control mesh, or none to let c1surf "
-                         "remesh the scan")
-            break
-        if faces >= options.face_cap:
-            notes.append(f"--tolerance {options.tolerance:g} not reached within the face cap of {options.face_cap} "
-                         f"control faces: the largest scan-to-surface distance is {worst:.3g} of the diagonal "
-                         "(raise --face-cap, or look for thin parts and holes where the scan has no surface)")
+        stop = _tolerance_stop(options, worst, faces, control is not None)
+        if stop is not None:
+            notes += [stop] if stop else []
             break
         faces = next_face_count(faces, worst / options.tolerance, options.face_cap)
     start = time.perf_counter()
     tell("measuring the deviation", 0, 1)
     deviation = two_sided_deviation(surface, points, triangles, result.footpoints)
-    timings["deviation"] = time.perf_counter() - start
+    _clock(timings, "deviation", start)
     return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings)
+
+
+def _clock(timings: dict, name: str, start: float) -> None:
+    timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
+
+
+def _fit_round(points, triangles, control: tuple, options: tuple, timings: dict, tell):
+    """(Surface, FitResult) of one control mesh: the construction over (ControlMesh, SharpFeatures or None) with
+    (SurfaceOptions, FitOptions), fitted to samples of the scan; the result's deviation is the scan vertices'."""
+    (mesh, features), (surface_options, fit_options) = control, options
+    start = time.perf_counter()
+    surface = _surface(mesh, surface_options, features)
+    _clock(timings, "construction", start)
+    start = time.perf_counter()
+    samples, sample_triangles = fitting_samples(points, triangles, mesh.n_faces)
+    result = fit_surface_points(surface, samples, sample_triangles, fit_options,
+                                progress=lambda label, amount, total: tell(f"fitting {mesh.n_faces} faces", amount,
+                                                                           total))
+    if samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
+        result.footpoints = project_scan(surface, points, fit_options, None)
+        diagonal = bounding_diagonal(points)
+        result.history[-1] = {**result.history[-1], **distance_stats(result.footpoints.distance, diagonal)}
+    _clock(timings, "fit", start)
+    return surface, result
+
+
+def _tolerance_stop(options: ScanFitOptions, worst: float, faces: int, given_control: bool):
+    """None: remesh finer and fit again; "" : done; a note: done, and why the tolerance is not met."""
+    if options.tolerance is None or worst <= options.tolerance:
+        return ""
+    if given_control:
+        return (f"--tolerance {options.tolerance:g}: the given control mesh is fitted as it is (its largest distance "
+                f"{worst:.3g} of the diagonal): give a finer control mesh, or none to let c1surf remesh the scan")
+    if faces >= options.face_cap:
+        return (f"--tolerance {options.tolerance:g} not reached within the face cap of {options.face_cap} control "
+                f"faces: the largest scan-to-surface distance is {worst:.3g} of the diagonal (raise --face-cap, or "
+                "look for thin parts and holes where the scan has no surface)")
+    return None
 
 
 def _check_encloses(control_points: np.ndarray, scan_points: np.ndarray, diagonal: float) -> None:

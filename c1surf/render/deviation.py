@@ -10,20 +10,41 @@ the bounding-box diagonal when one is given. ``io.images.png`` writes the result
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
 from .camera import frame_camera
 from .pictures import BACKGROUND, add_colorbar, colormap, rgb8
 from .raycast import RayCaster
 
-__all__ = ["deviation_picture", "AMBIENT"]
+__all__ = ["deviation_picture", "DeviationStyle", "AMBIENT"]
 
 AMBIENT = 0.45  # the curvature previews' ambient share
 
 
-def deviation_picture(points, triangles, values, diagonal: float | None = None, width: int = 960, height: int = 720,
-                      view: str = "iso", value_range=None, name: str = "viridis", legend: bool = True,
-                      label: str | None = None) -> np.ndarray:
+@dataclass(frozen=True)
+class DeviationStyle:
+    """How ``deviation_picture`` draws.
+
+    width, height : int, pixels
+    view : a key of ``camera.VIEWS`` ("iso": the 3/4 view)
+    value_range : (lo, hi) or None: the colour range in the bar's units; default the values' min and max
+    name : colour map ("viridis", "gray")
+    legend : draw the colour bar
+    label : the bar's title; default "distance / diagonal" (or "distance" without a diagonal)
+    """
+
+    width: int = 960
+    height: int = 720
+    view: str = "iso"
+    value_range: tuple | None = None
+    name: str = "viridis"
+    legend: bool = True
+    label: str | None = None
+
+
+def deviation_picture(points, triangles, values, diagonal: float | None = None, **style) -> np.ndarray:
     """(H, W, 3) uint8 sRGB picture of a triangle mesh coloured by ``values``.
 
     Parameters
@@ -32,17 +53,15 @@ def deviation_picture(points, triangles, values, diagonal: float | None = None, 
     triangles : (t, 3) int
     values : (m,) float, per vertex (a distance); NaN vertices are drawn at the range's bottom
     diagonal : float > 0 or None: values and bar labels are divided by it (fractions of the diagonal)
-    width, height : int, pixels
-    view : a key of ``camera.VIEWS`` ("iso": the 3/4 view)
-    value_range : (lo, hi) or None: the colour range in the bar's units; default the values' min and max
-    name : colour map ("viridis", "gray")
-    legend : draw the colour bar
-    label : the bar's title; default "distance / diagonal" (or "distance" without a diagonal)
+    **style : the fields of ``DeviationStyle`` (size, view, range, colour map, bar)
 
     Returns
     -------
     (height, width, 3) uint8
     """
+    s = DeviationStyle(**style)
+    width, height, view, value_range, name, legend, label = (s.width, s.height, s.view, s.value_range, s.name,
+                                                             s.legend, s.label)
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
     scale = float(diagonal) if diagonal else 1.0
