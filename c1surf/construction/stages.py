@@ -35,8 +35,8 @@ from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_ratios
 from .stencils.creases import crease_correction, mirror_perturbation, mirror_rows, refined_sharpness
 from .stencils.doo_sabin import DooSabinStep, FirstDooSabinStep, doo_sabin_matrix
-from .stencils.hole_rules import HoleRules
-from .stencils.perturbation import perturbation_matrix
+from .stencils.hole_rules import LARGE_HOLE, HoleRules
+from .stencils.perturbation import PerturbationStep, perturbation_matrix, perturbation_parts
 from .topology import RELEASED_TWIN_HALFEDGES, SurfaceTopology
 
 if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is made: a closed mesh's conversion makes none (0.2 s)
@@ -231,7 +231,13 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
     return step
 
 
-def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:
+def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs):
+    """A1's perturbation of even holes: its matrix, or factored when some even hole has more than
+    ``LARGE_HOLE`` sides (the matrix holds (2n)^2 entries for an n-sided hole)."""
+    large = any(g.n % 2 == 0 and g.n > LARGE_HOLE for g in topology.holes)
+    if large and topology.crease_sheets is None:
+        parts = perturbation_parts(topology.refined, topology.holes)
+        return PerturbationStep(*parts)
     matrix = perturbation_matrix(topology.refined, topology.holes)
     if matrix is not None and topology.crease_sheets is not None:  # C0 creases: ghost partners follow
         coarse_face = topology.input.face[topology.level1.origin[np.arange(topology.refined.n_vertices)]]

@@ -97,9 +97,33 @@ def doo_sabin_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray) ->
     ratio = np.asarray(ratio, dtype=np.float64)
     for n in unique_integers(mesh.face_sizes):
         faces = np.flatnonzero(mesh.face_sizes == n)
+        if n > LARGE_FACE:  # the matrix's n^2 products per face: its centroid once instead (not the matrix's bits)
+            _large_rows(mesh, ratio, flat, faces, int(n), out)
+            continue
         for start in range(0, faces.size, _ROWS_BLOCK):  # by blocks of faces: each face's rows alone, the same bits
             _rows_block(mesh, ratio, planes, faces[start : start + _ROWS_BLOCK], int(n), out)
     return out.reshape((mesh.n_halfedges,) + x.shape[1:])
+
+
+LARGE_FACE = 64
+"""Faces of more sides: ``doo_sabin_rows`` forms their centroid once (O(n) a face; the matrix's n^2 products give
+the other faces' bits), and a step with such a face keeps applying its factored map (its matrix would hold n^2
+entries a face: ``reuse`` does not make it)."""
+
+
+def _large_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, flat: np.ndarray, faces: np.ndarray, n: int,
+                out: np.ndarray) -> None:
+    """Write the rows (H, d) ``out`` of the n-sided ``faces`` (k,): ``(1 - a) x[origin] + a centroid``, from ``flat`` (V, d)."""
+    rows = (mesh.face_offsets[faces][:, None] + np.arange(n)).ravel()
+    corners = np.take(flat, mesh.origin[rows], axis=0).reshape(faces.size, n, -1)
+    centroid = corners.mean(axis=1, keepdims=True)
+    a = ratio[rows].reshape(faces.size, n, 1)
+    out[rows] = ((1.0 - a) * corners + a * centroid).reshape(rows.size, -1)
+
+
+def has_large_face(mesh: HalfEdgeMesh) -> bool:
+    """Whether some face of ``mesh`` has more than ``LARGE_FACE`` sides."""
+    return bool(mesh.n_faces) and int(mesh.face_sizes.max()) > LARGE_FACE
 
 
 _ROWS_BLOCK = 1 << 16  # faces per block of ``doo_sabin_rows``: its temporaries were 0.9 GB for the 4,000,000-quad torus
@@ -164,8 +188,10 @@ class FirstDooSabinStep:
         return self._matrix @ points if self._matrix is not None else doo_sabin_rows(self.mesh, self.ratio, points)
 
     def reuse(self) -> None:
-        """Applied again (``Surface.update_points``): the matrix from now on."""
-        self.matrix()
+        """Applied again (``Surface.update_points``): the matrix from now on (not with a face of more than
+        ``LARGE_FACE`` sides: n^2 entries a face)."""
+        if not has_large_face(self.mesh):
+            self.matrix()
 
     def matrix(self) -> csr_matrix:
         """(H, V) csr_matrix, built on the first call and kept."""
@@ -253,8 +279,10 @@ class DooSabinStep:
         return out
 
     def reuse(self) -> None:
-        """Applied again (``Surface.update_points``): the matrix from now on."""
-        self.matrix()
+        """Applied again (``Surface.update_points``): the matrix from now on (not with a face of more than
+        ``LARGE_FACE`` sides: n^2 entries a face)."""
+        if not has_large_face(self.mesh):
+            self.matrix()
 
     def matrix(self) -> csr_matrix:
         """(H, V) csr_matrix, built on the first call and kept (``apply`` uses it from then on)."""
