@@ -15,6 +15,7 @@ import math
 import click
 import numpy as np
 
+from ...construction.cell_memory import cell_work_bytes
 from ...construction.topology import build_topology
 from ...io.meshes.surface_data import SurfaceData, prepare_surface_input
 from ...io.meshes.tags.features import sharp_features
@@ -187,7 +188,7 @@ def output_sizes(topology, resolution: int) -> dict:
     return {
         "resolution": n, "patches": patches, "vertices": int(vertices), "triangles": int(triangles),
         "ply_bytes": int(PLY_HEADER_BYTES + PLY_VERTEX_BYTES * vertices + PLY_TRIANGLE_BYTES * triangles),
-        "memory_bytes": int(tessellation_bytes(patches, n)),
+        "memory_bytes": int(tessellation_bytes(patches, n) + cell_work_bytes(topology)),
     }
 
 
