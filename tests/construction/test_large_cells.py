@@ -185,7 +185,7 @@ def test_a_cell_of_10000_sides_builds_and_is_g1(make):
     assert surface.bicubic.shape[0] == 80_000 and np.isfinite(surface.bicubic).all()
     gap, jump = side_jumps(surface)
     assert gap < 1e-12
-    # measured 4e-11 (10,000-gon) and 9e-11 rad (valence): the paper's a = c / (1 - c) grows as n^2, so the
+    # measured 1.6e-11 (10,000-gon) and 9e-11 rad (valence): the paper's a = c / (1 - c) grows as n^2, so the
     # hole's patches bulge to 1e5 units while its sides are 1e-4 long (a dynamic range of 1e9)
     assert jump < 1e-9
 
@@ -197,9 +197,10 @@ def test_a_cell_of_1000_sides_passes_the_geometric_g1_check(make):
     report = measure_smoothness([surface.biquadratic, surface.bicubic])
     assert report.overshared_edges == 0 and report.boundary_edges == 0
     assert report.shared_edges == 2 * surface.n_patches
-    assert report.is_g1(1e-11, 1e-14)  # measured 2.5e-12 rad (prism)
+    assert report.is_g1(1e-11, 1e-14)  # measured 1.6e-12 rad (prism)
 
 
+@pytest.mark.skipif(not os.path.exists("/proc/self/status"), reason="reads the peak from /proc")
 @pytest.mark.parametrize("make", [prism, bipyramid])
 def test_inspect_predicts_the_memory_of_converting_a_10000_sided_cell_within_2x(tmp_path, make):
     # what a user measures (/usr/bin/time's maximum resident size of the whole process, the numbers):
@@ -207,9 +208,10 @@ def test_inspect_predicts_the_memory_of_converting_a_10000_sided_cell_within_2x(
     path = tmp_path / "big.obj"
     write_obj(path, *make(10_000))
     predicted = inspection(path, 2, 2)["output"]["memory_bytes"]
-    script = ("import resource, sys\nfrom c1surf.cli.main import main\nsys.argv = ['c1surf'] + sys.argv[1:]\n"
+    # VmHWM: this process's own peak (ru_maxrss would keep the forking pytest's across exec)
+    script = ("import sys\nfrom c1surf.cli.main import main\nsys.argv = ['c1surf'] + sys.argv[1:]\n"
               "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"
-              "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)")
+              "print([line.split()[1] for line in open('/proc/self/status') if line.startswith('VmHWM:')][0])")
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     done = subprocess.run([sys.executable, "-c", script, "convert", str(path), "-o", str(tmp_path / "big.ply"), "-r", "2"],
                           capture_output=True, text=True, env=env, check=True)

