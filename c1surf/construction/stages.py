@@ -33,7 +33,8 @@ from .refine.doo_sabin import FACE_FROM_VERTEX
 from .stencils.bicubic import bicubic_layout
 from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_ratios
-from .stencils.creases import crease_correction, mirror_perturbation, mirror_rows, refined_sharpness
+from .stencils.creases import (crease_correction, mirror_perturbation, mirror_perturbation_left, mirror_rows,
+                               refined_sharpness)
 from .stencils.doo_sabin import DooSabinStep, FirstDooSabinStep, doo_sabin_matrix
 from .stencils.hole_rules import LARGE_HOLE, HoleRules
 from .stencils.perturbation import PerturbationStep, perturbation_matrix, perturbation_parts
@@ -235,15 +236,23 @@ def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs):
     """A1's perturbation of even holes: its matrix, or factored when some even hole has more than
     ``LARGE_HOLE`` sides (the matrix holds (2n)^2 entries for an n-sided hole)."""
     large = any(g.n % 2 == 0 and g.n > LARGE_HOLE for g in topology.holes)
-    if large and topology.crease_sheets is None:
-        parts = perturbation_parts(topology.refined, topology.holes)
-        return PerturbationStep(*parts)
+    if large:
+        constraints, inverse_gram = perturbation_parts(topology.refined, topology.holes)
+        left = None
+        if topology.crease_sheets is not None:  # C0 creases: ghost partners follow (stencils.creases)
+            left = mirror_perturbation_left(constraints, topology.refined, topology.real_vertex,
+                                            _sheet_ghost(topology))
+        return PerturbationStep(constraints, inverse_gram, left)
     matrix = perturbation_matrix(topology.refined, topology.holes)
     if matrix is not None and topology.crease_sheets is not None:  # C0 creases: ghost partners follow
-        coarse_face = topology.input.face[topology.level1.origin[np.arange(topology.refined.n_vertices)]]
-        sheet_ghost = np.isin(coarse_face, topology.crease_sheets.ghost_faces)
-        matrix = mirror_perturbation(matrix, topology.refined, topology.real_vertex, sheet_ghost)
+        matrix = mirror_perturbation(matrix, topology.refined, topology.real_vertex, _sheet_ghost(topology))
     return None if matrix is None else MatrixStage("perturbation", matrix)
+
+
+def _sheet_ghost(topology: SurfaceTopology) -> np.ndarray:
+    """(Vr,) bool: the refined points of the crease sheets' ghost quads (``creases.mirror_perturbation``)."""
+    coarse_face = topology.input.face[topology.level1.origin[np.arange(topology.refined.n_vertices)]]
+    return np.isin(coarse_face, topology.crease_sheets.ghost_faces)
 
 
 def normal_stage(topology: SurfaceTopology, inputs: StageInputs):

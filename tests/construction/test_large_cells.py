@@ -217,3 +217,25 @@ def test_inspect_predicts_the_memory_of_converting_a_10000_sided_cell_within_2x(
                           capture_output=True, text=True, env=env, check=True)
     peak = int(done.stdout.split()[-1]) * 1024  # kB on Linux
     assert peak / 2 < predicted < 2 * peak
+
+
+@pytest.mark.parametrize("n", [66, 130])
+def test_c0_creases_around_a_large_even_cell_keep_the_mirrored_perturbation(n):
+    from c1surf.construction.features import SharpFeatures
+    from c1surf.construction.stencils.creases import mirror_perturbation
+
+    sizes, vertices, points = prism(n)
+    i = np.arange(n)
+    rims = np.concatenate([np.c_[i, (i + 1) % n], n + np.c_[i, (i + 1) % n]])  # both rims sharp
+    features = SharpFeatures(rims, np.full(len(rims), 10.0))
+    surface = Surface(sizes, vertices, points, SurfaceOptions(exact_creases=True), features=features)
+    t = surface.topology
+    assert t.crease_sheets is not None
+    step = surface.stage("perturbation")
+    assert isinstance(step, PerturbationStep) and step.left is not None
+    coarse_face = t.input.face[t.level1.origin[np.arange(t.refined.n_vertices)]]
+    expected = mirror_perturbation(perturbation_matrix(t.refined, t.holes), t.refined, t.real_vertex,
+                                   np.isin(coarse_face, t.crease_sheets.ghost_faces))
+    y = np.random.default_rng(4).normal(size=(t.refined.n_vertices, 3))
+    assert np.abs(step.apply(y) - expected @ y).max() < 1e-13
+    assert abs(step.matrix() - expected).max() < 1e-13

@@ -232,5 +232,32 @@ def mirror_perturbation(matrix: csr_matrix, refined: HalfEdgeMesh, real_vertex: 
     return (identity + diags(keep) @ delta - select @ delta).tocsr()
 
 
+def mirror_perturbation_left(constraints: csr_matrix, refined: HalfEdgeMesh, real_vertex: np.ndarray,
+                             sheet_ghost: np.ndarray):
+    """``mirror_perturbation`` for the factored perturbation ``x - A^T (G (A x))`` (``perturbation.PerturbationStep``):
+    the (Vr, Vr) csr_matrix L, O(Vr) entries, with ``mirror_perturbation``'s matrix = ``I - L A^T G A``, or None
+    when no ghost partner moves (L = I).
+
+    A row of A^T G A is non-zero exactly where A has a column (G is invertible and A of full row rank),
+    so the points that move are the B points of the even holes. Parameters: ``constraints`` A (m, Vr) csr_matrix,
+    the rest as ``mirror_perturbation``.
+    """
+    from scipy.sparse import csr_matrix, diags
+
+    crossing = real_vertex[refined.origin] & sheet_ghost[refined.dest]
+    ghost, real = refined.dest[crossing], refined.origin[crossing]
+    ghost, first = np.unique(ghost, return_index=True)
+    real = real[first]
+    moves = np.diff(constraints.tocsc().indptr) > 0
+    moved = moves[real]
+    if not moved.any():
+        return None
+    ghost, real = ghost[moved], real[moved]
+    n = refined.n_vertices
+    keep = np.ones(n)
+    keep[ghost] = 0.0
+    return (diags(keep, format="csr") - csr_matrix((np.ones(ghost.size), (ghost, real)), shape=(n, n))).tocsr()
+
+
 __all__ = ["crease_weight", "crease_correction", "refined_sharpness", "crease_corner_ratios", "mirror_rows",
-           "mirror_perturbation"]
+           "mirror_perturbation", "mirror_perturbation_left"]

@@ -63,28 +63,33 @@ class PerturbationStep:
     ``x - A^T ((A A^T)^-1 (A x))``, O(n) per n-sided hole where ``perturbation_matrix`` holds (2n)^2 entries.
 
     The stages use it when some even hole has many sides (``stages.perturbation_stage``); its matrix is made
-    when asked for (``Surface.stencil``). Parameters: the (A, (A A^T)^-1) of ``perturbation_parts``.
+    when asked for (``Surface.stencil``). Parameters: the (A, (A A^T)^-1) of ``perturbation_parts``, and
+    ``left`` (V, V) csr_matrix or None: the map is then ``x - left A^T (G (A x))`` (C0 creases: ghost partners
+    move opposite to their real points, ``creases.mirror_perturbation_left``).
     """
 
     name = "perturbation"
     mixes_coordinates = False
 
-    def __init__(self, constraints, inverse_gram):
-        self.constraints, self.inverse_gram = constraints, inverse_gram
+    def __init__(self, constraints, inverse_gram, left=None):
+        self.constraints, self.inverse_gram, self.left = constraints, inverse_gram, left
         self.shape = (constraints.shape[1], constraints.shape[1])
         self._matrix = None
 
     def apply(self, points: np.ndarray) -> np.ndarray:
         """(V, d) perturbed points from (V, d) ``points``."""
-        return points - self.constraints.T @ (self.inverse_gram @ (self.constraints @ points))
+        correction = self.constraints.T @ (self.inverse_gram @ (self.constraints @ points))
+        return points - (correction if self.left is None else self.left @ correction)
 
     def matrix(self):
-        """(V, V) csr_matrix, ``perturbation_matrix``'s, built on the first call and kept."""
+        """(V, V) csr_matrix, ``perturbation_matrix``'s (mirrored: ``creases.mirror_perturbation``'s), built on
+        the first call and kept."""
         if self._matrix is None:
             from scipy.sparse import identity
 
-            self._matrix = (identity(self.shape[0], format="csr")
-                            - self.constraints.T @ (self.inverse_gram @ self.constraints)).tocsr()
+            delta = self.constraints.T @ (self.inverse_gram @ self.constraints)
+            delta = delta if self.left is None else self.left @ delta
+            self._matrix = (identity(self.shape[0], format="csr") - delta).tocsr()
         return self._matrix
 
 
