@@ -35,7 +35,8 @@ from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_ratios
 from .stencils.creases import (crease_correction, mirror_perturbation, mirror_perturbation_left, mirror_rows,
                                refined_sharpness)
-from .stencils.doo_sabin import DooSabinStep, FirstDooSabinStep, doo_sabin_matrix
+from .stencils.doo_sabin import (DooSabinStep, FirstDooSabinStep, centroid_columns, doo_sabin_augmented,
+                                 doo_sabin_matrix, has_large_face, large_face_centroids)
 from .stencils.hole_rules import LARGE_HOLE, HoleRules
 from .stencils.perturbation import PerturbationStep, perturbation_matrix, perturbation_parts
 from .topology import RELEASED_TWIN_HALFEDGES, SurfaceTopology
@@ -81,6 +82,28 @@ class MatrixStage:
         return self._matrix @ points
 
     def matrix(self) -> csr_matrix:
+        return self._matrix
+
+
+class CentroidStage:
+    """A stage whose matrix holds n^2 entries per n-sided face (the first Doo-Sabin step on creases or with
+    A1a), kept as ``step`` (rows, V + L) on the points and the centroids (L, V) of the L large faces
+    (``stencils.doo_sabin.doo_sabin_augmented``): O(n) entries per face; ``matrix()`` multiplies them out."""
+
+    mixes_coordinates = False
+
+    def __init__(self, name: str, step, centroids):
+        self.name, self._step, self._centroids = name, step.tocsr(), centroids.tocsr()
+        self.shape = (step.shape[0], centroids.shape[1])
+        self._matrix = None
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        return self._step @ np.concatenate([points, self._centroids @ points])
+
+    def matrix(self) -> csr_matrix:
+        if self._matrix is None:
+            v = self.shape[1]
+            self._matrix = (self._step[:, :v] + self._step[:, v:] @ self._centroids).tocsr()
         return self._matrix
 
 
@@ -201,17 +224,22 @@ def first_step_stage(topology: SurfaceTopology, inputs: StageInputs):
     plain = sharp is None and not inputs.interpolate_vertices and topology.crease_sheets is None
     if plain:  # the plain step: its matrix's map, without the matrix
         return FirstDooSabinStep(topology.input, inputs.corner_ratio)
-    step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
+    centroids = None
+    if has_large_face(topology.input):  # n^2 entries per n-sided face: its centroid as a column instead
+        step, centroids = doo_sabin_augmented(topology.input, inputs.corner_ratio)
+    else:
+        step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
     if sharp is not None:  # creases and corners pull their points towards the crease polygon (stencils.creases)
+        columns = None if centroids is None else centroid_columns(topology.input)
         correction = crease_correction(topology.input, inputs.corner_ratio, inputs.corner_ratio, sharp.halfedge,
-                                       sharp.vertex, step=1)
+                                       sharp.vertex, step=1, centroid_column=columns, n_columns=step.shape[1])
         step = step if correction is None else (step + correction).tocsr()
     if inputs.interpolate_vertices or corners is not None:
         step = vertex_interpolation_step(step, topology.input, topology.faces1,
                                          None if inputs.interpolate_vertices else corners)
     if topology.crease_sheets is not None:  # C0 creases: ghost points mirror the real ones (stencils.creases)
         step = mirror_rows(step, topology.input, topology.crease_sheets, inputs.corner_ratio)
-    return MatrixStage("doo_sabin_1", step)
+    return MatrixStage("doo_sabin_1", step) if centroids is None else CentroidStage("doo_sabin_1", step, centroids)
 
 
 def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabinStep | None:
@@ -220,13 +248,17 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
         return None
     is_vertex_cell = topology.faces1.kind == FACE_FROM_VERTEX
     ratio = second_step_ratios(topology.level1, is_vertex_cell, inputs.corner_ratio)
-    correction, sharp = None, topology.sharpness
+    correction, centroids, sharp = None, None, topology.sharpness
     if sharp is not None:  # the creases of the first step, one step weaker (stencils.creases)
         ratio = np.ascontiguousarray(ratio)
         halfedge, vertex = refined_sharpness(topology.input, topology.level1, sharp.halfedge, sharp.vertex)
+        columns = None
+        if has_large_face(topology.level1):  # n^2 entries per n-sided face: its centroid as a column instead
+            centroids, columns = large_face_centroids(topology.level1), centroid_columns(topology.level1)
         correction = crease_correction(topology.level1, ratio, inputs.corner_ratio[topology.level1.origin], halfedge,
-                                       vertex, step=2)
-    step = DooSabinStep(topology.level1, ratio, correction=correction)
+                                       vertex, step=2, centroid_column=columns,
+                                       n_columns=None if centroids is None else sum(centroids.shape))
+    step = DooSabinStep(topology.level1, ratio, correction=correction, centroids=centroids)
     if topology.refined.n_halfedges >= RELEASED_TWIN_HALFEDGES:
         return_freed_memory()  # what this stage's temporaries freed, before the largest arrays of the build
     return step

@@ -239,3 +239,27 @@ def test_c0_creases_around_a_large_even_cell_keep_the_mirrored_perturbation(n):
     y = np.random.default_rng(4).normal(size=(t.refined.n_vertices, 3))
     assert np.abs(step.apply(y) - expected @ y).max() < 1e-13
     assert abs(step.matrix() - expected).max() < 1e-13
+
+
+@pytest.mark.parametrize("option", ["creases", "interpolate_vertices", "exact_creases"])
+def test_the_first_step_on_creases_or_with_a1a_keeps_large_faces_factored(monkeypatch, option):
+    from c1surf.construction.features import SharpFeatures
+    from c1surf.construction.stages import CentroidStage
+    import c1surf.construction.stages as stages
+
+    sizes, vertices, points = prism(100)
+    i = np.arange(100)
+    rims = np.concatenate([np.c_[i, (i + 1) % 100], 100 + np.c_[i, (i + 1) % 100]])
+    features = None if option == "interpolate_vertices" else SharpFeatures(rims, np.full(len(rims), 10.0))
+    options = SurfaceOptions(interpolate_vertices=option == "interpolate_vertices",
+                             exact_creases=option == "exact_creases")
+    surface = Surface(sizes, vertices, points, options, features=features)
+    first = surface.stage("doo_sabin_1")
+    assert isinstance(first, CentroidStage) and first._step.nnz < 20 * first.shape[0]
+    monkeypatch.setattr(stages, "has_large_face", lambda mesh: False)
+    dense = Surface(sizes, vertices, points, options, features=features)
+    assert not isinstance(dense.stage("doo_sabin_1"), CentroidStage)
+    assert abs(first.matrix() - dense.stage("doo_sabin_1").matrix()).max() < 1e-15
+    scale = np.abs(dense.bicubic).max()
+    assert np.abs(surface.bicubic - dense.bicubic).max() < 1e-12 * scale
+    assert np.abs(surface.biquadratic - dense.biquadratic).max() < 1e-12 * scale

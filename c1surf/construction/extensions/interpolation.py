@@ -71,7 +71,8 @@ def vertex_interpolation_step(step1, coarse: HalfEdgeMesh, faces1: RefinedFaces,
         return step1
     average = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(h, h))
     moved = np.concatenate(sel_rows)
-    pick = csr_matrix((np.ones(moved.size), (moved, coarse.origin[moved])), shape=(h, coarse.n_vertices))
+    # (columns: the step's: V, or V + L with the large faces' centroids, ``doo_sabin.doo_sabin_augmented``)
+    pick = csr_matrix((np.ones(moved.size), (moved, coarse.origin[moved])), shape=(h, step1.shape[1]))
     out = ((identity(h, format="csr") - average) @ step1 + pick).tocsr()
     out.sum_duplicates()
     out.eliminate_zeros()

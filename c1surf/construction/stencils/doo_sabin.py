@@ -121,6 +121,60 @@ def _large_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, flat: np.ndarray, faces: 
     out[rows] = ((1.0 - a) * corners + a * centroid).reshape(rows.size, -1)
 
 
+def doo_sabin_augmented(mesh: HalfEdgeMesh, ratio: np.ndarray):
+    """``doo_sabin_matrix(mesh, ratio, per_corner=True)`` with the centroids of its large faces as columns of their own:
+    O(n) entries per n-sided face where the matrix has n^2 (not its bits: its entries are added in another order).
+
+    Returns
+    -------
+    step : (H, V + L) csr_matrix on [points; centroids]: row h is ``(1 - a) x[origin] + a centroid``, the centroid a
+        column V + l for the l-th face of more than ``LARGE_FACE`` sides, ``a / n`` on each corner for the others
+    centroids : (L, V) csr_matrix, the large faces' centroids (n entries of 1 / n)
+    Then the matrix is ``step[:, :V] + step[:, V:] @ centroids``; row operations on the step (creases, A1a)
+    apply to ``step`` as to the matrix (``construction.stages.CentroidStage``).
+    """
+    from scipy.sparse import coo_matrix
+
+    ratio = np.broadcast_to(np.asarray(ratio, dtype=np.float64), (mesh.n_halfedges,))
+    sizes, offsets, n_vertices, n_halfedges = mesh.face_sizes, mesh.face_offsets, mesh.n_vertices, mesh.n_halfedges
+    large = np.flatnonzero(sizes > LARGE_FACE)
+    slot = centroid_columns(mesh) - n_vertices
+    slot[slot < 0] = -1
+    face = np.repeat(np.arange(sizes.size), sizes)
+    rows, cols, vals = [np.arange(n_halfedges)], [mesh.origin], [1.0 - ratio]  # every corner's own point
+    in_large = np.flatnonzero(slot[face] >= 0)
+    rows.append(in_large)
+    cols.append(n_vertices + slot[face[in_large]])
+    vals.append(ratio[in_large])
+    for n in unique_integers(sizes[sizes <= LARGE_FACE]):
+        corners = offsets[np.flatnonzero(sizes == n)][:, None] + np.arange(n)  # (k, n) half-edges
+        rows.append(np.repeat(corners, n, axis=1).ravel())
+        cols.append(np.tile(mesh.origin[corners], (1, n)).ravel())
+        vals.append(np.repeat(ratio[corners] / n, n, axis=1).ravel())
+    step = coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n_halfedges, n_vertices + large.size)).tocsr()
+    step.sum_duplicates()
+    return step, large_face_centroids(mesh)
+
+
+def large_face_centroids(mesh: HalfEdgeMesh):
+    """(L, V) csr_matrix: the centroid of each of the L faces of more than ``LARGE_FACE`` sides (n entries of 1 / n)."""
+    from scipy.sparse import csr_matrix
+
+    slot = centroid_columns(mesh) - mesh.n_vertices
+    face = np.repeat(np.arange(mesh.n_faces), mesh.face_sizes)
+    corners = np.flatnonzero(slot[face] >= 0)
+    return csr_matrix((1.0 / mesh.face_sizes[face[corners]], (slot[face[corners]], mesh.origin[corners])),
+                      shape=(int((slot >= 0).sum()), mesh.n_vertices))
+
+
+def centroid_columns(mesh: HalfEdgeMesh) -> np.ndarray:
+    """(F,) int64: V + l for the l-th face of more than ``LARGE_FACE`` sides, -1 for the others
+    (the columns of ``doo_sabin_augmented``)."""
+    large = mesh.face_sizes > LARGE_FACE
+    return np.where(large, mesh.n_vertices + np.cumsum(large) - 1, -1).astype(np.int64)
+
+
 def has_large_face(mesh: HalfEdgeMesh) -> bool:
     """Whether some face of ``mesh`` has more than ``LARGE_FACE`` sides."""
     return bool(mesh.n_faces) and int(mesh.face_sizes.max()) > LARGE_FACE
@@ -256,16 +310,19 @@ class DooSabinStep:
     ratio : (H,) float, the ratio of every corner
     name : str, the stage's name
     correction : (H, V) csr_matrix or None, added to the smooth step (creases and
-        corners, ``stencils.creases.crease_correction``)
+        corners, ``stencils.creases.crease_correction``); or (H, V + L) on the points and
+        ``centroids`` (L, V) csr_matrix, the centroids of the L faces of more than ``LARGE_FACE``
+        sides (``centroid_columns``: O(n) entries a face where the correction has n^2)
     """
 
     mixes_coordinates = False
 
-    def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_2", correction=None):
+    def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_2", correction=None,
+                 centroids=None):
         self.name = name
         self.mesh = mesh
         self.ratio = compact_ratio(ratio)
-        self.correction = correction
+        self.correction, self.centroids = correction, centroids
         self.shape = (mesh.n_halfedges, mesh.n_vertices)
         self._matrix = None
 
@@ -275,7 +332,8 @@ class DooSabinStep:
             return self._matrix @ points
         out = doo_sabin_factored(self.mesh, self.ratio, points)
         if self.correction is not None:
-            out += self.correction @ points
+            out += self.correction @ (points if self.centroids is None else
+                                      np.concatenate([points, self.centroids @ points]))
         return out
 
     def reuse(self) -> None:
@@ -289,5 +347,8 @@ class DooSabinStep:
         if self._matrix is None:
             self._matrix = doo_sabin_matrix(self.mesh, self.ratio, per_corner=True)
             if self.correction is not None:
-                self._matrix = (self._matrix + self.correction).tocsr()
+                correction, v = self.correction, self.mesh.n_vertices
+                if self.centroids is not None:
+                    correction = correction[:, :v] + correction[:, v:] @ self.centroids
+                self._matrix = (self._matrix + correction).tocsr()
         return self._matrix
