@@ -27,7 +27,7 @@ import numpy as np
 
 from ..memory import return_freed_memory
 from ..mesh.ghost_layer import ghost_points_matrix, reflex_corners
-from .extensions.interpolation import normal_constraint, vertex_interpolation_step
+from .extensions.interpolation import normal_constraint, vertex_interpolation_parts
 from .features import INFINITELY_SHARP
 from .refine.doo_sabin import FACE_FROM_VERTEX
 from .stencils.bicubic import bicubic_layout
@@ -35,8 +35,8 @@ from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_ratios
 from .stencils.creases import (crease_correction, mirror_perturbation, mirror_perturbation_left, mirror_rows,
                                refined_sharpness)
-from .stencils.doo_sabin import (DooSabinStep, FirstDooSabinStep, centroid_columns, doo_sabin_augmented,
-                                 doo_sabin_matrix, has_large_face, large_face_centroids)
+from .stencils.doo_sabin import (LARGE_FACE, DooSabinStep, FirstDooSabinStep, centroid_columns,
+                                 doo_sabin_augmented, doo_sabin_matrix, has_large_face, large_face_centroids)
 from .stencils.hole_rules import LARGE_HOLE, HoleRules
 from .stencils.perturbation import PerturbationStep, perturbation_matrix, perturbation_parts
 from .topology import RELEASED_TWIN_HALFEDGES, SurfaceTopology
@@ -86,24 +86,32 @@ class MatrixStage:
 
 
 class CentroidStage:
-    """A stage whose matrix holds n^2 entries per n-sided face (the first Doo-Sabin step on creases or with
-    A1a), kept as ``step`` (rows, V + L) on the points and the centroids (L, V) of the L large faces
-    (``stencils.doo_sabin.doo_sabin_augmented``): O(n) entries per face; ``matrix()`` multiplies them out."""
+    """A stage whose matrix holds n^2 entries per n-sided cell (the first Doo-Sabin step on creases or with
+    A1a), kept in O(n) entries: ``step`` acts on the points followed by derived points, each ``derived``
+    matrix making some from those before it (the centroids (L, V) of the L large faces,
+    ``stencils.doo_sabin.doo_sabin_augmented``; the mean rows of large V-cells, ``vertex_interpolation_parts``);
+    ``matrix()`` multiplies them out."""
 
     mixes_coordinates = False
 
-    def __init__(self, name: str, step, centroids):
-        self.name, self._step, self._centroids = name, step.tocsr(), centroids.tocsr()
-        self.shape = (step.shape[0], centroids.shape[1])
+    def __init__(self, name: str, step, derived):
+        self.name, self._step, self._derived = name, step.tocsr(), [d.tocsr() for d in derived]
+        self.shape = (step.shape[0], self._derived[0].shape[1])
         self._matrix = None
 
     def apply(self, points: np.ndarray) -> np.ndarray:
-        return self._step @ np.concatenate([points, self._centroids @ points])
+        y = points
+        for derived in self._derived:
+            y = np.concatenate([y, derived @ y])
+        return self._step @ y
 
     def matrix(self) -> csr_matrix:
         if self._matrix is None:
-            v = self.shape[1]
-            self._matrix = (self._step[:, :v] + self._step[:, v:] @ self._centroids).tocsr()
+            full = self._step
+            for derived in reversed(self._derived):
+                k = derived.shape[1]
+                full = (full[:, :k] + full[:, k:] @ derived).tocsr()
+            self._matrix = full
         return self._matrix
 
 
@@ -224,9 +232,10 @@ def first_step_stage(topology: SurfaceTopology, inputs: StageInputs):
     plain = sharp is None and not inputs.interpolate_vertices and topology.crease_sheets is None
     if plain:  # the plain step: its matrix's map, without the matrix
         return FirstDooSabinStep(topology.input, inputs.corner_ratio)
-    centroids = None
+    centroids, derived = None, []  # derived: points made from the points, as columns of the step (CentroidStage)
     if has_large_face(topology.input):  # n^2 entries per n-sided face: its centroid as a column instead
         step, centroids = doo_sabin_augmented(topology.input, inputs.corner_ratio)
+        derived.append(centroids)
     else:
         step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
     if sharp is not None:  # creases and corners pull their points towards the crease polygon (stencils.creases)
@@ -235,11 +244,12 @@ def first_step_stage(topology: SurfaceTopology, inputs: StageInputs):
                                        sharp.vertex, step=1, centroid_column=columns, n_columns=step.shape[1])
         step = step if correction is None else (step + correction).tocsr()
     if inputs.interpolate_vertices or corners is not None:
-        step = vertex_interpolation_step(step, topology.input, topology.faces1,
-                                         None if inputs.interpolate_vertices else corners)
+        step, means = vertex_interpolation_parts(step, topology.input, topology.faces1,
+                                                 None if inputs.interpolate_vertices else corners, LARGE_FACE)
+        derived += [] if means is None else [means]
     if topology.crease_sheets is not None:  # C0 creases: ghost points mirror the real ones (stencils.creases)
         step = mirror_rows(step, topology.input, topology.crease_sheets, inputs.corner_ratio)
-    return MatrixStage("doo_sabin_1", step) if centroids is None else CentroidStage("doo_sabin_1", step, centroids)
+    return CentroidStage("doo_sabin_1", step, derived) if derived else MatrixStage("doo_sabin_1", step)
 
 
 def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabinStep | None:

@@ -241,12 +241,24 @@ def test_c0_creases_around_a_large_even_cell_keep_the_mirrored_perturbation(n):
     assert abs(step.matrix() - expected).max() < 1e-13
 
 
-@pytest.mark.parametrize("option", ["creases", "interpolate_vertices", "exact_creases"])
+@pytest.mark.parametrize("option", ["creases", "interpolate_vertices", "exact_creases", "valence_interpolated"])
 def test_the_first_step_on_creases_or_with_a1a_keeps_large_faces_factored(monkeypatch, option):
     from c1surf.construction.features import SharpFeatures
     from c1surf.construction.stages import CentroidStage
     import c1surf.construction.stages as stages
 
+    if option == "valence_interpolated":  # A1a at vertices of valence 100: V-cells of 100 sides
+        sizes, vertices, points = bipyramid(100)
+        surface = Surface(sizes, vertices, points, SurfaceOptions(interpolate_vertices=True))
+        first = surface.stage("doo_sabin_1")
+        assert isinstance(first, CentroidStage) and first._step.nnz < 20 * first.shape[0]
+        monkeypatch.setattr(stages, "LARGE_FACE", 10**9)
+        dense = Surface(sizes, vertices, points, SurfaceOptions(interpolate_vertices=True))
+        assert not isinstance(dense.stage("doo_sabin_1"), CentroidStage)
+        assert abs(first.matrix() - dense.stage("doo_sabin_1").matrix()).max() < 1e-14
+        assert np.abs(surface.bicubic - dense.bicubic).max() < 1e-12 * np.abs(dense.bicubic).max()
+        assert np.abs(surface.biquadratic - dense.biquadratic).max() < 1e-13
+        return
     sizes, vertices, points = prism(100)
     i = np.arange(100)
     rims = np.concatenate([np.c_[i, (i + 1) % 100], 100 + np.c_[i, (i + 1) % 100]])
