@@ -26,7 +26,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 import numpy as np
 
 from ..memory import return_freed_memory
-from ..mesh.ghost_layer import ghost_points_matrix, reflex_corners
+from ..mesh.ghost_layer import ghost_points_parts, reflex_corners
 from .extensions.interpolation import normal_constraint, vertex_interpolation_parts
 from .features import INFINITELY_SHARP
 from .refine.doo_sabin import FACE_FROM_VERTEX
@@ -134,6 +134,7 @@ class PlacementStage:
         self._source = topology.vertex_source
         self.reflex = None  # (k,) bool per ghost corner, or None (closed input)
         self._matrix = None  # made when asked for (closed input) or by ``follow`` (open input)
+        self._derived = None  # (L, V) csr_matrix: centroids of large faces, read as points of their own
         self.follow(points)
         self.shape = (topology.input.n_vertices, topology.n_input_vertices)
 
@@ -145,17 +146,34 @@ class PlacementStage:
         if self.reflex is not None and np.array_equal(reflex, self.reflex):
             return False
         self.reflex = reflex
-        self._matrix = ghost_points_matrix(self._layer, reflex) @ self._topology.select_matrix()
+        matrix, centroids = ghost_points_parts(self._layer, reflex, LARGE_FACE)
+        select = self._topology.select_matrix()
+        if centroids is None:
+            self._matrix, self._derived = matrix @ select, None
+        else:  # faces of many sides: their centroids as points of their own (``ghost_points_parts``)
+            from scipy.sparse import hstack
+
+            n = centroids.shape[1]
+            self._derived = (centroids @ select).tocsr()
+            self._matrix = hstack([matrix[:, :n] @ select, matrix[:, n:]], format="csr")
+            self._whole = None
         return True
 
     def apply(self, points: np.ndarray) -> np.ndarray:
         if self._matrix is None:  # the selection's product adds each row's one point to 0.0 (-0.0 becomes 0.0)
             return np.take(points, self._source, axis=0) + 0.0
+        if self._derived is not None:
+            return self._matrix @ np.concatenate([points, self._derived @ points])
         return self._matrix @ points
 
     def matrix(self) -> csr_matrix:
         if self._matrix is None:
             self._matrix = self._topology.select_matrix()
+        if self._derived is not None:
+            if self._whole is None:
+                n = self._derived.shape[1]
+                self._whole = (self._matrix[:, :n] + self._matrix[:, n:] @ self._derived).tocsr()
+            return self._whole
         return self._matrix
 
 

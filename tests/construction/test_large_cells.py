@@ -275,3 +275,43 @@ def test_the_first_step_on_creases_or_with_a1a_keeps_large_faces_factored(monkey
     scale = np.abs(dense.bicubic).max()
     assert np.abs(surface.bicubic - dense.bicubic).max() < 1e-12 * scale
     assert np.abs(surface.biquadratic - dense.biquadratic).max() < 1e-12 * scale
+
+
+def test_ghost_points_beside_a_cut_out_large_face_are_the_whole_matrix():
+    from c1surf.construction.features import SharpFeatures
+    from c1surf.mesh.ghost_layer import ghost_points_matrix, ghost_points_parts, reflex_corners
+
+    sizes, vertices, points = prism(100)
+    i = np.arange(100)
+    rims = np.concatenate([np.c_[i, (i + 1) % 100], 100 + np.c_[i, (i + 1) % 100]])
+    surface = Surface(sizes, vertices, points, SurfaceOptions(exact_creases=True),
+                      features=SharpFeatures(rims, np.full(len(rims), 10.0)))
+    layer = surface.topology.ghost
+    reflex = reflex_corners(layer, points[surface.topology.vertex_source, :3])
+    whole = ghost_points_matrix(layer, reflex)
+    matrix, centroids = ghost_points_parts(layer, reflex, 64)
+    if centroids is not None:
+        n = centroids.shape[1]
+        matrix = matrix[:, :n] + matrix[:, n:] @ centroids
+    assert abs(matrix - whole).max() < 1e-15
+    place = surface.stage("place")
+    assert abs(place.matrix() - whole @ surface.topology.select_matrix()).max() < 1e-15
+
+
+def test_an_open_disc_of_many_sides_reads_its_centroid_once_for_its_ghost_points():
+    from c1surf.mesh.ghost_layer import ghost_points_matrix, ghost_points_parts, reflex_corners
+
+    n = 100
+    t = 2 * np.pi * np.arange(n) / n
+    points = np.c_[np.cos(t), np.sin(t), 0.05 * np.sin(7 * t)]
+    surface = Surface([n], np.arange(n), points)  # one open face: every corner a convex single-face corner
+    layer = surface.topology.ghost
+    reflex = reflex_corners(layer, points[surface.topology.vertex_source, :3])
+    whole = ghost_points_matrix(layer, reflex)
+    matrix, centroids = ghost_points_parts(layer, reflex, 64)
+    assert centroids is not None and matrix.nnz < whole.nnz / 10
+    k = centroids.shape[1]
+    assert abs(matrix[:, :k] + matrix[:, k:] @ centroids - whole).max() < 1e-15
+    assert abs(surface.stage("place").matrix() - whole @ surface.topology.select_matrix()).max() < 1e-15
+    gap, jump = side_jumps(surface)
+    assert gap < 1e-14 and jump < 1e-12  # measured 1.2e-14 rad
