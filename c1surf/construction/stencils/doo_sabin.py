@@ -73,7 +73,8 @@ def doo_sabin_matrix(mesh: HalfEdgeMesh, ratio: np.ndarray, per_corner: bool = F
 
 
 def doo_sabin_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """``doo_sabin_matrix(mesh, ratio, per_corner=True) @ points``, the same bits, without the matrix.
+    """``doo_sabin_matrix(mesh, ratio, per_corner=True) @ points``, the same bits, without the matrix (faces of
+    more than ``LARGE_FACE`` sides: from their centroid, O(n) a face, the same values to round-off).
 
     scipy's product starts every row from zero and adds its entries in their
     order, weight times point: here too, face size by face size, with the
