@@ -26,17 +26,19 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 import numpy as np
 
 from ..memory import return_freed_memory
-from ..mesh.ghost_layer import ghost_points_matrix, reflex_corners
-from .extensions.interpolation import normal_constraint, vertex_interpolation_step
+from ..mesh.ghost_layer import ghost_points_parts, reflex_corners
+from .extensions.interpolation import normal_constraint, vertex_interpolation_parts
 from .features import INFINITELY_SHARP
 from .refine.doo_sabin import FACE_FROM_VERTEX
 from .stencils.bicubic import bicubic_layout
 from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_ratios
-from .stencils.creases import crease_correction, mirror_perturbation, mirror_rows, refined_sharpness
-from .stencils.doo_sabin import DooSabinStep, FirstDooSabinStep, doo_sabin_matrix
-from .stencils.hole_rules import HoleRules
-from .stencils.perturbation import perturbation_matrix
+from .stencils.creases import (crease_correction, mirror_perturbation, mirror_perturbation_left, mirror_rows,
+                               refined_sharpness)
+from .stencils.doo_sabin import (LARGE_FACE, DooSabinStep, FirstDooSabinStep, centroid_columns,
+                                 doo_sabin_augmented, doo_sabin_matrix, has_large_face, large_face_centroids)
+from .stencils.hole_rules import LARGE_HOLE, HoleRules
+from .stencils.perturbation import PerturbationStep, perturbation_matrix, perturbation_parts
 from .topology import RELEASED_TWIN_HALFEDGES, SurfaceTopology
 
 if TYPE_CHECKING:  # scipy.sparse is imported where a matrix is made: a closed mesh's conversion makes none (0.2 s)
@@ -83,6 +85,36 @@ class MatrixStage:
         return self._matrix
 
 
+class CentroidStage:
+    """A stage whose matrix holds n^2 entries per n-sided cell (the first Doo-Sabin step on creases or with
+    A1a), kept in O(n) entries: ``step`` acts on the points followed by derived points, each ``derived``
+    matrix making some from those before it (the centroids (L, V) of the L large faces,
+    ``stencils.doo_sabin.doo_sabin_augmented``; the mean rows of large V-cells, ``vertex_interpolation_parts``);
+    ``matrix()`` multiplies them out."""
+
+    mixes_coordinates = False
+
+    def __init__(self, name: str, step, derived):
+        self.name, self._step, self._derived = name, step.tocsr(), [d.tocsr() for d in derived]
+        self.shape = (step.shape[0], self._derived[0].shape[1])
+        self._matrix = None
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        y = points
+        for derived in self._derived:
+            y = np.concatenate([y, derived @ y])
+        return self._step @ y
+
+    def matrix(self) -> csr_matrix:
+        if self._matrix is None:
+            full = self._step
+            for derived in reversed(self._derived):
+                k = derived.shape[1]
+                full = (full[:, :k] + full[:, k:] @ derived).tocsr()
+            self._matrix = full
+        return self._matrix
+
+
 class PlacementStage:
     """Input points to the coarse mesh's points: each repaired vertex's input point, then the ghost points.
 
@@ -102,6 +134,7 @@ class PlacementStage:
         self._source = topology.vertex_source
         self.reflex = None  # (k,) bool per ghost corner, or None (closed input)
         self._matrix = None  # made when asked for (closed input) or by ``follow`` (open input)
+        self._derived = None  # (L, V) csr_matrix: centroids of large faces, read as points of their own
         self.follow(points)
         self.shape = (topology.input.n_vertices, topology.n_input_vertices)
 
@@ -113,17 +146,34 @@ class PlacementStage:
         if self.reflex is not None and np.array_equal(reflex, self.reflex):
             return False
         self.reflex = reflex
-        self._matrix = ghost_points_matrix(self._layer, reflex) @ self._topology.select_matrix()
+        matrix, centroids = ghost_points_parts(self._layer, reflex, LARGE_FACE)
+        select = self._topology.select_matrix()
+        if centroids is None:
+            self._matrix, self._derived = matrix @ select, None
+        else:  # faces of many sides: their centroids as points of their own (``ghost_points_parts``)
+            from scipy.sparse import hstack
+
+            n = centroids.shape[1]
+            self._derived = (centroids @ select).tocsr()
+            self._matrix = hstack([matrix[:, :n] @ select, matrix[:, n:]], format="csr")
+            self._whole = None
         return True
 
     def apply(self, points: np.ndarray) -> np.ndarray:
         if self._matrix is None:  # the selection's product adds each row's one point to 0.0 (-0.0 becomes 0.0)
             return np.take(points, self._source, axis=0) + 0.0
+        if self._derived is not None:
+            return self._matrix @ np.concatenate([points, self._derived @ points])
         return self._matrix @ points
 
     def matrix(self) -> csr_matrix:
         if self._matrix is None:
             self._matrix = self._topology.select_matrix()
+        if self._derived is not None:
+            if self._whole is None:
+                n = self._derived.shape[1]
+                self._whole = (self._matrix[:, :n] + self._matrix[:, n:] @ self._derived).tocsr()
+            return self._whole
         return self._matrix
 
 
@@ -200,17 +250,24 @@ def first_step_stage(topology: SurfaceTopology, inputs: StageInputs):
     plain = sharp is None and not inputs.interpolate_vertices and topology.crease_sheets is None
     if plain:  # the plain step: its matrix's map, without the matrix
         return FirstDooSabinStep(topology.input, inputs.corner_ratio)
-    step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
+    centroids, derived = None, []  # derived: points made from the points, as columns of the step (CentroidStage)
+    if has_large_face(topology.input):  # n^2 entries per n-sided face: its centroid as a column instead
+        step, centroids = doo_sabin_augmented(topology.input, inputs.corner_ratio)
+        derived.append(centroids)
+    else:
+        step = doo_sabin_matrix(topology.input, inputs.corner_ratio, per_corner=True)
     if sharp is not None:  # creases and corners pull their points towards the crease polygon (stencils.creases)
+        columns = None if centroids is None else centroid_columns(topology.input)
         correction = crease_correction(topology.input, inputs.corner_ratio, inputs.corner_ratio, sharp.halfedge,
-                                       sharp.vertex, step=1)
+                                       sharp.vertex, step=1, centroid_column=columns, n_columns=step.shape[1])
         step = step if correction is None else (step + correction).tocsr()
     if inputs.interpolate_vertices or corners is not None:
-        step = vertex_interpolation_step(step, topology.input, topology.faces1,
-                                         None if inputs.interpolate_vertices else corners)
+        step, means = vertex_interpolation_parts(step, topology.input, topology.faces1,
+                                                 None if inputs.interpolate_vertices else corners, LARGE_FACE)
+        derived += [] if means is None else [means]
     if topology.crease_sheets is not None:  # C0 creases: ghost points mirror the real ones (stencils.creases)
         step = mirror_rows(step, topology.input, topology.crease_sheets, inputs.corner_ratio)
-    return MatrixStage("doo_sabin_1", step)
+    return CentroidStage("doo_sabin_1", step, derived) if derived else MatrixStage("doo_sabin_1", step)
 
 
 def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabinStep | None:
@@ -219,25 +276,43 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
         return None
     is_vertex_cell = topology.faces1.kind == FACE_FROM_VERTEX
     ratio = second_step_ratios(topology.level1, is_vertex_cell, inputs.corner_ratio)
-    correction, sharp = None, topology.sharpness
+    correction, centroids, sharp = None, None, topology.sharpness
     if sharp is not None:  # the creases of the first step, one step weaker (stencils.creases)
         ratio = np.ascontiguousarray(ratio)
         halfedge, vertex = refined_sharpness(topology.input, topology.level1, sharp.halfedge, sharp.vertex)
+        columns = None
+        if has_large_face(topology.level1):  # n^2 entries per n-sided face: its centroid as a column instead
+            centroids, columns = large_face_centroids(topology.level1), centroid_columns(topology.level1)
         correction = crease_correction(topology.level1, ratio, inputs.corner_ratio[topology.level1.origin], halfedge,
-                                       vertex, step=2)
-    step = DooSabinStep(topology.level1, ratio, correction=correction)
+                                       vertex, step=2, centroid_column=columns,
+                                       n_columns=None if centroids is None else sum(centroids.shape))
+    step = DooSabinStep(topology.level1, ratio, correction=correction, centroids=centroids)
     if topology.refined.n_halfedges >= RELEASED_TWIN_HALFEDGES:
         return_freed_memory()  # what this stage's temporaries freed, before the largest arrays of the build
     return step
 
 
-def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs) -> MatrixStage | None:
+def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs):
+    """A1's perturbation of even holes: its matrix, or factored when some even hole has more than
+    ``LARGE_HOLE`` sides (the matrix holds (2n)^2 entries for an n-sided hole)."""
+    large = any(g.n % 2 == 0 and g.n > LARGE_HOLE for g in topology.holes)
+    if large:
+        constraints, inverse_gram = perturbation_parts(topology.refined, topology.holes)
+        left = None
+        if topology.crease_sheets is not None:  # C0 creases: ghost partners follow (stencils.creases)
+            left = mirror_perturbation_left(constraints, topology.refined, topology.real_vertex,
+                                            _sheet_ghost(topology))
+        return PerturbationStep(constraints, inverse_gram, left)
     matrix = perturbation_matrix(topology.refined, topology.holes)
     if matrix is not None and topology.crease_sheets is not None:  # C0 creases: ghost partners follow
-        coarse_face = topology.input.face[topology.level1.origin[np.arange(topology.refined.n_vertices)]]
-        sheet_ghost = np.isin(coarse_face, topology.crease_sheets.ghost_faces)
-        matrix = mirror_perturbation(matrix, topology.refined, topology.real_vertex, sheet_ghost)
+        matrix = mirror_perturbation(matrix, topology.refined, topology.real_vertex, _sheet_ghost(topology))
     return None if matrix is None else MatrixStage("perturbation", matrix)
+
+
+def _sheet_ghost(topology: SurfaceTopology) -> np.ndarray:
+    """(Vr,) bool: the refined points of the crease sheets' ghost quads (``creases.mirror_perturbation``)."""
+    coarse_face = topology.input.face[topology.level1.origin[np.arange(topology.refined.n_vertices)]]
+    return np.isin(coarse_face, topology.crease_sheets.ghost_faces)
 
 
 def normal_stage(topology: SurfaceTopology, inputs: StageInputs):

@@ -123,6 +123,21 @@ def ghost_points_matrix(layer: GhostLayer, reflex: np.ndarray):
     layer : GhostLayer
     reflex : (k,) bool, which of ``layer.corners`` are reflex (``reflex_corners``)
     """
+    return ghost_points_parts(layer, reflex)[0]
+
+
+def ghost_points_parts(layer: GhostLayer, reflex: np.ndarray, large: int | None = None):
+    """``ghost_points_matrix`` with the faces of more than ``large`` sides in O(n) entries.
+
+    A convex corner reflects its face's centroid: n entries a corner, n^2 for a face of n such corners (a
+    polygon cut out along C0 creases). A face of more than ``large`` sides instead has its centroid as a
+    point of its own (a row of ``centroids``), which its corners' ghosts read once.
+
+    Returns
+    -------
+    matrix : (V + G, V + L) csr_matrix on [points; the L centroids]
+    centroids : (L, V) csr_matrix or None (no such face: ``matrix`` is ``ghost_points_matrix``'s)
+    """
     from scipy.sparse import csr_matrix  # open meshes only: a closed mesh's conversion imports no scipy.sparse
 
     mesh, ghost, boundary_vertices = layer.open_mesh, layer.ghost, layer.boundary_vertices
@@ -141,13 +156,28 @@ def ghost_points_matrix(layer: GhostLayer, reflex: np.ndarray):
         cols += [mesh.origin[h], mesh.dest[h], mesh.origin[mesh.prev[h]]]
         vals += [np.full(h.size, -3.0), np.ones(h.size), np.ones(h.size)]
     h = layer.corner_halfedges[~reflex]
+    n_large, centroids = 0, None
+    if h.size and large is not None and mesh.face_sizes.max() > large:  # large faces: a centroid point each
+        big = mesh.face_sizes > large
+        column = np.where(big, n + np.cumsum(big) - 1, -1)
+        n_large = int(big.sum())
+        own = column[mesh.face[h]] >= 0
+        rows.append(ghost[mesh.origin[h[own]]])
+        cols.append(column[mesh.face[h[own]]])
+        vals.append(np.full(int(own.sum()), -1.0))
+        corners = np.flatnonzero(big[mesh.face])
+        centroids = csr_matrix((1.0 / mesh.face_sizes[mesh.face[corners]], (column[mesh.face[corners]] - n,
+                                                                            mesh.origin[corners])), shape=(n_large, n))
+        h = h[~own]
     if h.size:  # a convex corner lies in one face: reflect that face's centroid
         face = mesh.face[h]
-        members = mesh.face_offsets[face][:, None] + np.arange(mesh.face_sizes.max())[None, :]
-        valid = np.arange(mesh.face_sizes.max())[None, :] < mesh.face_sizes[face][:, None]
+        width = int(mesh.face_sizes[face].max())  # these corners' faces only (not a wider mesh's largest face)
+        members = mesh.face_offsets[face][:, None] + np.arange(width)[None, :]
+        valid = np.arange(width)[None, :] < mesh.face_sizes[face][:, None]
         rows.append(np.broadcast_to(ghost[mesh.origin[h]][:, None], members.shape)[valid])
         cols.append(mesh.origin[np.where(valid, members, 0)][valid])
         vals.append(np.broadcast_to((-1.0 / mesh.face_sizes[face])[:, None], members.shape)[valid])
-    matrix = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(n + g, n))
+    matrix = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                        shape=(n + g, n + n_large))
     matrix.sum_duplicates()
-    return matrix
+    return matrix, centroids

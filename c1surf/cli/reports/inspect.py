@@ -16,6 +16,7 @@ import click
 import numpy as np
 
 from ...api import prepared_input, repair_notes, seam_notes, topology_error
+from ...construction.cell_memory import cell_work_bytes
 from ...construction.topology import build_topology
 from ...errors import ResourceRefusal
 from ...evaluation.adjacency import patch_adjacency
@@ -188,7 +189,7 @@ def output_sizes(topology, resolution: int) -> dict:
     return {
         "resolution": n, "patches": patches, "vertices": int(vertices), "triangles": int(triangles),
         "ply_bytes": int(PLY_HEADER_BYTES + PLY_VERTEX_BYTES * vertices + PLY_TRIANGLE_BYTES * triangles),
-        "memory_bytes": int(tessellation_bytes(patches, n)),
+        "memory_bytes": int(tessellation_bytes(patches, n) + cell_work_bytes(topology)),
     }
 
 

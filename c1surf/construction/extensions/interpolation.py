@@ -51,31 +51,63 @@ def vertex_interpolation_step(step1, coarse: HalfEdgeMesh, faces1: RefinedFaces,
     -------
     (H, V) csr_matrix ``(I - G) step1 + E``
     """
-    from scipy.sparse import csr_matrix, identity  # A1a only: the usual conversion imports no scipy.sparse
+    return vertex_interpolation_parts(step1, coarse, faces1, only)[0]
+
+
+def vertex_interpolation_parts(step1, coarse: HalfEdgeMesh, faces1: RefinedFaces, only: np.ndarray | None = None,
+                               large: int | None = None):
+    """``vertex_interpolation_step`` with the V-cells of more than ``large`` sides kept in O(n) entries.
+
+    G averages the rows of each V-cell's corners: n^2 entries for an n-sided cell in ``(I - G) step1``.
+    A cell of more than ``large`` sides instead gets the mean of its corners' rows as a point of its own
+    (a row of ``means``), and its corners take minus that point.
+
+    Returns
+    -------
+    out : (H, C + M) csr_matrix on [points (the C columns of ``step1``); the M means]
+    means : (M, C) csr_matrix or None (no such cell; then ``out`` is ``vertex_interpolation_step``'s)
+    """
+    from scipy.sparse import csr_matrix, hstack, identity  # A1a only: the usual conversion imports no scipy.sparse
 
     offsets = np.concatenate([[0], np.cumsum(faces1.face_sizes)])
     rows, cols, vals = [], [], []
     sel_rows = []
+    big_rows, big_cells, big_vals, n_big = [], [], [], 0
     chosen = faces1.kind == FACE_FROM_VERTEX
     if only is not None:
         chosen &= only[np.where(chosen, faces1.parent, 0)]
     for n in unique_integers(faces1.face_sizes[chosen]):
         cells = np.flatnonzero(chosen & (faces1.face_sizes == n))
         corners = faces1.face_vertices[offsets[cells][:, None] + np.arange(n)]  # (k, n) once-refined vertices
+        sel_rows.append(corners.ravel())
+        if large is not None and n > large:
+            big_rows.append(corners.ravel())
+            big_cells.append(np.repeat(n_big + np.arange(cells.size), n))
+            n_big += cells.size
+            big_vals.append(np.full(corners.size, 1.0 / n))
+            continue
         rows.append(np.repeat(corners, n, axis=1).ravel())
         cols.append(np.tile(corners, (1, n)).ravel())
         vals.append(np.full(corners.size * n, 1.0 / n))
-        sel_rows.append(corners.ravel())
     h = coarse.n_halfedges
-    if not rows:
-        return step1
-    average = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(h, h))
+    if not sel_rows:
+        return step1, None
+    average = csr_matrix((np.concatenate(vals or [np.zeros(0)]), (np.concatenate(rows or [np.zeros(0, int)]),
+                                                                   np.concatenate(cols or [np.zeros(0, int)]))),
+                         shape=(h, h))
     moved = np.concatenate(sel_rows)
-    pick = csr_matrix((np.ones(moved.size), (moved, coarse.origin[moved])), shape=(h, coarse.n_vertices))
+    # (columns: the step's: V, or V + L with the large faces' centroids, ``doo_sabin.doo_sabin_augmented``)
+    pick = csr_matrix((np.ones(moved.size), (moved, coarse.origin[moved])), shape=(h, step1.shape[1]))
     out = ((identity(h, format="csr") - average) @ step1 + pick).tocsr()
+    means = None
+    if big_rows:
+        big_rows, big_cells, big_vals = (np.concatenate(x) for x in (big_rows, big_cells, big_vals))
+        means = (csr_matrix((big_vals, (big_cells, big_rows)), shape=(n_big, h)) @ step1).tocsr()
+        spread = csr_matrix((-np.ones(big_rows.size), (big_rows, big_cells)), shape=(h, n_big))
+        out = hstack([out, spread], format="csr")
     out.sum_duplicates()
     out.eliminate_zeros()
-    return out
+    return out, means
 
 
 @dataclass(frozen=True)

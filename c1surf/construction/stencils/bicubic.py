@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..refine.holes import HoleGroup
+from .cyclic_sums import cosine_sums, twist_sums
 from .layout import PatchLayout
 
 
@@ -52,7 +53,8 @@ def boundary_rows(A, B1, B2, C, a: float):
     return P, P31
 
 
-def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric"):
+def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric",
+                              sums: str = "dense"):
     """Step A3: the n bicubic patches covering one n-sided hole.
 
     Implements the paper's formulas with the corrections of
@@ -64,6 +66,8 @@ def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.
     alpha : float, the shape parameter of P_32 (default 1)
     beta : float, S = S_C + beta (S_P - S_C) (section 1.3.3; 0 gives the centroid of the C_i)
     tangent_rule : "symmetric" (A3) or "corners" (A3a: P_32 from the C_i only)
+    sums : "dense" (P_32 and P_22 as (n, n) matrices on the ring: n^2 per hole, the bits of the
+        dense weights of small holes) or "ring" (the same sums formed once, ``cyclic_sums``: O(n) per hole)
 
     Returns
     -------
@@ -74,18 +78,24 @@ def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.
     P, P31 = boundary_rows(A, B1, B2, C, c / (1 - c))
     S_C = C.mean(axis=-2, keepdims=True)
     S = S_C + beta * (P31.mean(axis=-2, keepdims=True) - S_C)
-    i = np.arange(n)
-    cosines = np.cos(2 * np.pi * ((i[None, :] - i[:, None]) % n) / n)  # [i, m] = cos(2 pi (m - i) / n)
     tangent_source = P31 if tangent_rule == "symmetric" else (C + shift(C, 1)) / 2
-    P32 = S + 4 * alpha / (3 * n) * np.einsum("im,...md->...id", cosines, tangent_source)
+    if sums == "ring":
+        P32 = S + 4 * alpha / (3 * n) * cosine_sums(tangent_source)
+    else:
+        i = np.arange(n)
+        cosines = np.cos(2 * np.pi * ((i[None, :] - i[:, None]) % n) / n)  # [i, m] = cos(2 pi (m - i) / n)
+        P32 = S + 4 * alpha / (3 * n) * np.einsum("im,...md->...id", cosines, tangent_source)
     E = (1 - 2 * c / 3) * P32 + (2 * c / 3) * P31
+    P[..., 3, 3, :] = S
+    P[..., 3, 2, :] = P32
+    P[..., 2, 3, :] = shift(P32, -1)  # P_{23,i} = P_{32,i-1}
+    if sums == "ring":
+        P[..., 2, 2, :] = twist_sums(E)
+        return P
     # P_22,i = sum_m Z[i, m] E_m with m = i + j - 1 (the notes' index correction).
     j = (i[None, :] - i[:, None]) % n + 1
     sign = np.where(j % 2 == 0, 1.0, -1.0)
     Z = -sign if n % 2 else -2.0 / n * (n - j) * sign
-    P[..., 3, 3, :] = S
-    P[..., 3, 2, :] = P32
-    P[..., 2, 3, :] = shift(P32, -1)  # P_{23,i} = P_{32,i-1}
     P[..., 2, 2, :] = np.einsum("im,...md->...id", Z, E)
     return P
 

@@ -42,7 +42,8 @@ def crease_weight(sharpness: np.ndarray, step: int) -> np.ndarray:
 
 
 def crease_correction(mesh: HalfEdgeMesh, ratio: np.ndarray, chaikin_ratio: np.ndarray, halfedge_sharpness: np.ndarray,
-                      vertex_sharpness: np.ndarray, step: int):
+                      vertex_sharpness: np.ndarray, step: int, centroid_column: np.ndarray | None = None,
+                      n_columns: int | None = None):
     """The change creases and corners make to one Doo-Sabin step, as a sparse matrix.
 
     Parameters
@@ -53,6 +54,9 @@ def crease_correction(mesh: HalfEdgeMesh, ratio: np.ndarray, chaikin_ratio: np.n
     halfedge_sharpness : (H,) float, sharpness of every half-edge's edge
     vertex_sharpness : (V,) float, corner sharpness of every vertex
     step : 1 or 2
+    centroid_column : (F,) int or None, the column of each face's centroid, -1 for none (faces of many sides:
+        ``doo_sabin.centroid_columns``), where the smooth point's ``a / n`` on each corner is ``a`` on it
+    n_columns : int or None, the columns (V, or V + those centroids)
 
     Returns
     -------
@@ -83,14 +87,17 @@ def crease_correction(mesh: HalfEdgeMesh, ratio: np.ndarray, chaikin_ratio: np.n
     # minus w times the smooth point (1 - a) v + a/n (sum of the face's vertices)
     a, face = ratio[h], mesh.face[h]
     size = mesh.face_sizes[face]
-    members = np.repeat(mesh.face_offsets[face], size) + (np.arange(size.sum()) - np.repeat(np.cumsum(size) - size, size))
-    rows += [h, np.repeat(h, size)]
-    cols += [mesh.origin[h], mesh.origin[members]]
-    vals += [-weight * (1.0 - a), np.repeat(-weight * a / size, size)]
+    own = np.zeros(h.size, dtype=bool) if centroid_column is None else centroid_column[face] >= 0
+    spread = np.where(own, 0, size)  # the corners of a face without a centroid column
+    members = np.repeat(mesh.face_offsets[face], spread) + (np.arange(spread.sum()) - np.repeat(np.cumsum(spread) - spread, spread))
+    rows += [h, np.repeat(h, spread), h[own]]
+    cols += [mesh.origin[h], mesh.origin[members], np.zeros(0, dtype=np.int64) if centroid_column is None
+             else centroid_column[face[own]]]
+    vals += [-weight * (1.0 - a), np.repeat(-weight * a / size, spread), -weight[own] * a[own]]
     from scipy.sparse import csr_matrix  # sharp features only
 
     correction = csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-                            shape=(mesh.n_halfedges, mesh.n_vertices))
+                            shape=(mesh.n_halfedges, n_columns or mesh.n_vertices))
     correction.sum_duplicates()
     return correction
 
@@ -232,5 +239,32 @@ def mirror_perturbation(matrix: csr_matrix, refined: HalfEdgeMesh, real_vertex: 
     return (identity + diags(keep) @ delta - select @ delta).tocsr()
 
 
+def mirror_perturbation_left(constraints: csr_matrix, refined: HalfEdgeMesh, real_vertex: np.ndarray,
+                             sheet_ghost: np.ndarray):
+    """``mirror_perturbation`` for the factored perturbation ``x - A^T (G (A x))`` (``perturbation.PerturbationStep``):
+    the (Vr, Vr) csr_matrix L, O(Vr) entries, with ``mirror_perturbation``'s matrix = ``I - L A^T G A``, or None
+    when no ghost partner moves (L = I).
+
+    A row of A^T G A is non-zero exactly where A has a column (G is invertible and A of full row rank),
+    so the points that move are the B points of the even holes. Parameters: ``constraints`` A (m, Vr) csr_matrix,
+    the rest as ``mirror_perturbation``.
+    """
+    from scipy.sparse import csr_matrix, diags
+
+    crossing = real_vertex[refined.origin] & sheet_ghost[refined.dest]
+    ghost, real = refined.dest[crossing], refined.origin[crossing]
+    ghost, first = np.unique(ghost, return_index=True)
+    real = real[first]
+    moves = np.diff(constraints.tocsc().indptr) > 0
+    moved = moves[real]
+    if not moved.any():
+        return None
+    ghost, real = ghost[moved], real[moved]
+    n = refined.n_vertices
+    keep = np.ones(n)
+    keep[ghost] = 0.0
+    return (diags(keep, format="csr") - csr_matrix((np.ones(ghost.size), (ghost, real)), shape=(n, n))).tocsr()
+
+
 __all__ = ["crease_weight", "crease_correction", "refined_sharpness", "crease_corner_ratios", "mirror_rows",
-           "mirror_perturbation"]
+           "mirror_perturbation", "mirror_perturbation_left"]

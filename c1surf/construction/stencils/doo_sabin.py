@@ -73,7 +73,8 @@ def doo_sabin_matrix(mesh: HalfEdgeMesh, ratio: np.ndarray, per_corner: bool = F
 
 
 def doo_sabin_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray) -> np.ndarray:
-    """``doo_sabin_matrix(mesh, ratio, per_corner=True) @ points``, the same bits, without the matrix.
+    """``doo_sabin_matrix(mesh, ratio, per_corner=True) @ points``, the same bits, without the matrix (faces of
+    more than ``LARGE_FACE`` sides: from their centroid, O(n) a face, the same values to round-off).
 
     scipy's product starts every row from zero and adds its entries in their
     order, weight times point: here too, face size by face size, with the
@@ -97,9 +98,87 @@ def doo_sabin_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray) ->
     ratio = np.asarray(ratio, dtype=np.float64)
     for n in unique_integers(mesh.face_sizes):
         faces = np.flatnonzero(mesh.face_sizes == n)
+        if n > LARGE_FACE:  # the matrix's n^2 products per face: its centroid once instead (not the matrix's bits)
+            _large_rows(mesh, ratio, flat, faces, int(n), out)
+            continue
         for start in range(0, faces.size, _ROWS_BLOCK):  # by blocks of faces: each face's rows alone, the same bits
             _rows_block(mesh, ratio, planes, faces[start : start + _ROWS_BLOCK], int(n), out)
     return out.reshape((mesh.n_halfedges,) + x.shape[1:])
+
+
+LARGE_FACE = 64
+"""Faces of more sides: ``doo_sabin_rows`` forms their centroid once (O(n) a face; the matrix's n^2 products give
+the other faces' bits), and a step with such a face keeps applying its factored map (its matrix would hold n^2
+entries a face: ``reuse`` does not make it)."""
+
+
+def _large_rows(mesh: HalfEdgeMesh, ratio: np.ndarray, flat: np.ndarray, faces: np.ndarray, n: int,
+                out: np.ndarray) -> None:
+    """Write the rows (H, d) ``out`` of the n-sided ``faces`` (k,): ``(1 - a) x[origin] + a centroid``, from ``flat`` (V, d)."""
+    rows = (mesh.face_offsets[faces][:, None] + np.arange(n)).ravel()
+    corners = np.take(flat, mesh.origin[rows], axis=0).reshape(faces.size, n, -1)
+    centroid = corners.mean(axis=1, keepdims=True)
+    a = ratio[rows].reshape(faces.size, n, 1)
+    out[rows] = ((1.0 - a) * corners + a * centroid).reshape(rows.size, -1)
+
+
+def doo_sabin_augmented(mesh: HalfEdgeMesh, ratio: np.ndarray):
+    """``doo_sabin_matrix(mesh, ratio, per_corner=True)`` with the centroids of its large faces as columns of their own:
+    O(n) entries per n-sided face where the matrix has n^2 (not its bits: its entries are added in another order).
+
+    Returns
+    -------
+    step : (H, V + L) csr_matrix on [points; centroids]: row h is ``(1 - a) x[origin] + a centroid``, the centroid a
+        column V + l for the l-th face of more than ``LARGE_FACE`` sides, ``a / n`` on each corner for the others
+    centroids : (L, V) csr_matrix, the large faces' centroids (n entries of 1 / n)
+    Then the matrix is ``step[:, :V] + step[:, V:] @ centroids``; row operations on the step (creases, A1a)
+    apply to ``step`` as to the matrix (``construction.stages.CentroidStage``).
+    """
+    from scipy.sparse import coo_matrix
+
+    ratio = np.broadcast_to(np.asarray(ratio, dtype=np.float64), (mesh.n_halfedges,))
+    sizes, offsets, n_vertices, n_halfedges = mesh.face_sizes, mesh.face_offsets, mesh.n_vertices, mesh.n_halfedges
+    large = np.flatnonzero(sizes > LARGE_FACE)
+    slot = centroid_columns(mesh) - n_vertices
+    slot[slot < 0] = -1
+    face = np.repeat(np.arange(sizes.size), sizes)
+    rows, cols, vals = [np.arange(n_halfedges)], [mesh.origin], [1.0 - ratio]  # every corner's own point
+    in_large = np.flatnonzero(slot[face] >= 0)
+    rows.append(in_large)
+    cols.append(n_vertices + slot[face[in_large]])
+    vals.append(ratio[in_large])
+    for n in unique_integers(sizes[sizes <= LARGE_FACE]):
+        corners = offsets[np.flatnonzero(sizes == n)][:, None] + np.arange(n)  # (k, n) half-edges
+        rows.append(np.repeat(corners, n, axis=1).ravel())
+        cols.append(np.tile(mesh.origin[corners], (1, n)).ravel())
+        vals.append(np.repeat(ratio[corners] / n, n, axis=1).ravel())
+    step = coo_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                      shape=(n_halfedges, n_vertices + large.size)).tocsr()
+    step.sum_duplicates()
+    return step, large_face_centroids(mesh)
+
+
+def large_face_centroids(mesh: HalfEdgeMesh):
+    """(L, V) csr_matrix: the centroid of each of the L faces of more than ``LARGE_FACE`` sides (n entries of 1 / n)."""
+    from scipy.sparse import csr_matrix
+
+    slot = centroid_columns(mesh) - mesh.n_vertices
+    face = np.repeat(np.arange(mesh.n_faces), mesh.face_sizes)
+    corners = np.flatnonzero(slot[face] >= 0)
+    return csr_matrix((1.0 / mesh.face_sizes[face[corners]], (slot[face[corners]], mesh.origin[corners])),
+                      shape=(int((slot >= 0).sum()), mesh.n_vertices))
+
+
+def centroid_columns(mesh: HalfEdgeMesh) -> np.ndarray:
+    """(F,) int64: V + l for the l-th face of more than ``LARGE_FACE`` sides, -1 for the others
+    (the columns of ``doo_sabin_augmented``)."""
+    large = mesh.face_sizes > LARGE_FACE
+    return np.where(large, mesh.n_vertices + np.cumsum(large) - 1, -1).astype(np.int64)
+
+
+def has_large_face(mesh: HalfEdgeMesh) -> bool:
+    """Whether some face of ``mesh`` has more than ``LARGE_FACE`` sides."""
+    return bool(mesh.n_faces) and int(mesh.face_sizes.max()) > LARGE_FACE
 
 
 _ROWS_BLOCK = 1 << 16  # faces per block of ``doo_sabin_rows``: its temporaries were 0.9 GB for the 4,000,000-quad torus
@@ -164,8 +243,10 @@ class FirstDooSabinStep:
         return self._matrix @ points if self._matrix is not None else doo_sabin_rows(self.mesh, self.ratio, points)
 
     def reuse(self) -> None:
-        """Applied again (``Surface.update_points``): the matrix from now on."""
-        self.matrix()
+        """Applied again (``Surface.update_points``): the matrix from now on (not with a face of more than
+        ``LARGE_FACE`` sides: n^2 entries a face)."""
+        if not has_large_face(self.mesh):
+            self.matrix()
 
     def matrix(self) -> csr_matrix:
         """(H, V) csr_matrix, built on the first call and kept."""
@@ -230,16 +311,19 @@ class DooSabinStep:
     ratio : (H,) float, the ratio of every corner
     name : str, the stage's name
     correction : (H, V) csr_matrix or None, added to the smooth step (creases and
-        corners, ``stencils.creases.crease_correction``)
+        corners, ``stencils.creases.crease_correction``); or (H, V + L) on the points and
+        ``centroids`` (L, V) csr_matrix, the centroids of the L faces of more than ``LARGE_FACE``
+        sides (``centroid_columns``: O(n) entries a face where the correction has n^2)
     """
 
     mixes_coordinates = False
 
-    def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_2", correction=None):
+    def __init__(self, mesh: HalfEdgeMesh, ratio: np.ndarray, name: str = "doo_sabin_2", correction=None,
+                 centroids=None):
         self.name = name
         self.mesh = mesh
         self.ratio = compact_ratio(ratio)
-        self.correction = correction
+        self.correction, self.centroids = correction, centroids
         self.shape = (mesh.n_halfedges, mesh.n_vertices)
         self._matrix = None
 
@@ -249,17 +333,23 @@ class DooSabinStep:
             return self._matrix @ points
         out = doo_sabin_factored(self.mesh, self.ratio, points)
         if self.correction is not None:
-            out += self.correction @ points
+            out += self.correction @ (points if self.centroids is None else
+                                      np.concatenate([points, self.centroids @ points]))
         return out
 
     def reuse(self) -> None:
-        """Applied again (``Surface.update_points``): the matrix from now on."""
-        self.matrix()
+        """Applied again (``Surface.update_points``): the matrix from now on (not with a face of more than
+        ``LARGE_FACE`` sides: n^2 entries a face)."""
+        if not has_large_face(self.mesh):
+            self.matrix()
 
     def matrix(self) -> csr_matrix:
         """(H, V) csr_matrix, built on the first call and kept (``apply`` uses it from then on)."""
         if self._matrix is None:
             self._matrix = doo_sabin_matrix(self.mesh, self.ratio, per_corner=True)
             if self.correction is not None:
-                self._matrix = (self._matrix + self.correction).tocsr()
+                correction, v = self.correction, self.mesh.n_vertices
+                if self.centroids is not None:
+                    correction = correction[:, :v] + correction[:, v:] @ self.centroids
+                self._matrix = (self._matrix + correction).tocsr()
         return self._matrix

@@ -81,6 +81,46 @@ def _dense_weights(rule: str, n: int, alpha: float, beta: float, tangent_rule: s
     return W
 
 
+LARGE_HOLE = 64
+"""Holes of more sides apply their rule as a ``HoleOperator`` (O(n)), the others as a dense (16 n, 4 n)
+block (64 n^2 floats: 2 MB at n = 64, 51 GB at n = 10,000), whose bits the golden files hold."""
+
+
+class HoleOperator:
+    """The (16 n, 4 n) weights of the g1 rule on [A, B1, B2, C] without the matrix: O(n) per column.
+
+    ``product`` maps the gathered points of some holes as the dense block would (rows and
+    columns as ``_dense_weights``), with A3's sums over the ring formed once
+    (``bicubic_hole_coefficients(sums="ring")``, ``cyclic_sums``), in local coordinates per
+    hole (the mean of its corners taken off and put back: every row sums to 1).
+    ``np.asarray(operator)`` makes the dense block (``Surface.stencil``: 64 n^2 floats).
+    """
+
+    def __init__(self, n: int, alpha: float, beta: float, tangent_rule: str):
+        self.n, self.alpha, self.beta, self.tangent_rule = n, alpha, beta, tangent_rule
+        self.shape = (16 * n, 4 * n)
+
+    def product(self, gathered: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
+        """(16 n, c) float: the rows of the holes' patches from ``gathered`` (4 n, c) float, the points
+        [A, B1, B2, C] of each hole in columns (one column per hole and coordinate); into ``out`` if given."""
+        n = self.n
+        origin = gathered[3 * n :].mean(axis=0)
+        local = (gathered - origin).T[:, None, :]  # (c, 1, 4 n): every column is one ring of points
+        A, B1, B2, C = (local[..., k * n : (k + 1) * n].transpose(0, 2, 1) for k in range(4))  # (c, n, 1)
+        P = bicubic_hole_coefficients(A, B1, B2, C, self.alpha, self.beta, self.tangent_rule, sums="ring")
+        rows = P.reshape(P.shape[0], 16 * n).T  # (16 n, c): row 16 i + 4 k + l
+        if out is None:
+            out = np.empty(rows.shape)
+        np.add(rows, origin, out=out)
+        return out
+
+    def __array__(self, dtype=None, copy=None) -> np.ndarray:
+        """(16 n, 4 n) float: the dense block (64 n^2 floats)."""
+        W = self.product(np.eye(4 * self.n))
+        W[np.abs(W) < 1e-15] = 0.0
+        return W if dtype is None else W.astype(dtype)
+
+
 @dataclass(frozen=True)
 class HoleRules:
     """The rule of every hole size and its shape parameters: what the A3 layout and the normal constraint look up.
@@ -98,8 +138,11 @@ class HoleRules:
         """Name of the rule that fills n-sided holes."""
         return self.triangles if n == 3 and HOLE_RULES[self.triangles].covers(n) else "g1"
 
-    def weights(self, n: int) -> np.ndarray:
-        """(16 n, 4 n) float, the rule's patches as weights on the hole's points [A, B1, B2, C] (cached)."""
+    def weights(self, n: int, large: int = LARGE_HOLE):
+        """(16 n, 4 n) float, the rule's patches as weights on the hole's points [A, B1, B2, C] (cached);
+        for n > ``large``, a ``HoleOperator`` of that shape that applies them in O(n)."""
+        if n > large and self.rule(n) == "g1":
+            return HoleOperator(n, float(self.alpha), float(self.beta), self.tangent_rule)
         return _dense_weights(self.rule(n), n, float(self.alpha), float(self.beta), self.tangent_rule)
 
     def tangent_datum(self, n: int):

@@ -159,6 +159,9 @@ def block_product(points: np.ndarray, slots: np.ndarray, weights: np.ndarray, st
         np.copyto(work.index(m, np.intp)[:, :n], index)
         index = work.index(m, np.intp)[:, :n]
     np.take(points, index, axis=0, out=g[:m], mode="clip")  # one call for all slots (a whole block: contiguous)
+    if not isinstance(weights, np.ndarray):  # a rule applied without its matrix (``hole_rules.HoleOperator``)
+        product = weights.product(g[:m].reshape(m, -1), out=work.product[:, : n * d])
+        return product if offset is None else np.add(product, _tiled(offset, n), out=product)
     if offset is None:
         return np.matmul(weights, g[:m].reshape(m, -1), out=work.product[:, : n * d])
     work.offset_row(offset)
@@ -203,6 +206,7 @@ def gathered_matrix(slots: np.ndarray, weights: np.ndarray, n_points: int):
     from scipy.sparse import csr_matrix  # scipy.sparse is imported where a matrix is made: the usual conversion needs none (0.2 s)
 
     slots = np.asarray(slots)  # a table made by blocks, whole
+    weights = np.asarray(weights)  # a rule applied without its matrix: its dense block (``hole_rules.HoleOperator``)
     k = slots.shape[1]
     i, j = np.nonzero(weights)  # row by row, so each patch's entries are in row order
     index = np.int32 if max(n_points, k * i.size) < 2**31 else np.int64

@@ -19,6 +19,21 @@ def perturbation_matrix(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
     Returns
     -------
     (V, V) csr_matrix ``I - A^T (A A^T)^-1 A``, or None when no hole needs it.
+    Its entries: (2n)^2 for an isolated n-sided hole (``PerturbationStep`` applies it in O(n)).
+    """
+    parts = perturbation_parts(mesh, holes)
+    if parts is None:
+        return None
+    from scipy.sparse import identity
+
+    constraints, inverse_gram = parts
+    return (identity(mesh.n_vertices, format="csr") - constraints.T @ (inverse_gram @ constraints)).tocsr()
+
+
+def perturbation_parts(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
+    """(A (m, V) csr_matrix, (A A^T)^-1 (m, m) csr_matrix) of ``perturbation_matrix``, or None when no hole needs it.
+
+    A has a row of 2n entries per even hole (n > 4); A A^T is made of tiny blocks (``block_diagonal_inverse``).
     """
     rows, cols, vals = [], [], []
     count = 0
@@ -34,14 +49,48 @@ def perturbation_matrix(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
         count += k
     if count == 0:
         return None
-    from scipy.sparse import coo_matrix, identity  # even holes only
+    from scipy.sparse import coo_matrix  # even holes only
 
     constraints = coo_matrix(
         (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))), shape=(count, mesh.n_vertices)
     ).tocsr()
     constraints.sum_duplicates()
-    inverse_gram = block_diagonal_inverse((constraints @ constraints.T).tocoo())
-    return (identity(mesh.n_vertices, format="csr") - constraints.T @ (inverse_gram @ constraints)).tocsr()
+    return constraints, block_diagonal_inverse((constraints @ constraints.T).tocoo())
+
+
+class PerturbationStep:
+    """Step A1's perturbation as a stage (``construction.stages.Stage``), factored:
+    ``x - A^T ((A A^T)^-1 (A x))``, O(n) per n-sided hole where ``perturbation_matrix`` holds (2n)^2 entries.
+
+    The stages use it when some even hole has many sides (``stages.perturbation_stage``); its matrix is made
+    when asked for (``Surface.stencil``). Parameters: the (A, (A A^T)^-1) of ``perturbation_parts``, and
+    ``left`` (V, V) csr_matrix or None: the map is then ``x - left A^T (G (A x))`` (C0 creases: ghost partners
+    move opposite to their real points, ``creases.mirror_perturbation_left``).
+    """
+
+    name = "perturbation"
+    mixes_coordinates = False
+
+    def __init__(self, constraints, inverse_gram, left=None):
+        self.constraints, self.inverse_gram, self.left = constraints, inverse_gram, left
+        self.shape = (constraints.shape[1], constraints.shape[1])
+        self._matrix = None
+
+    def apply(self, points: np.ndarray) -> np.ndarray:
+        """(V, d) perturbed points from (V, d) ``points``."""
+        correction = self.constraints.T @ (self.inverse_gram @ (self.constraints @ points))
+        return points - (correction if self.left is None else self.left @ correction)
+
+    def matrix(self):
+        """(V, V) csr_matrix, ``perturbation_matrix``'s (mirrored: ``creases.mirror_perturbation``'s), built on
+        the first call and kept."""
+        if self._matrix is None:
+            from scipy.sparse import identity
+
+            delta = self.constraints.T @ (self.inverse_gram @ self.constraints)
+            delta = delta if self.left is None else self.left @ delta
+            self._matrix = (identity(self.shape[0], format="csr") - delta).tocsr()
+        return self._matrix
 
 
 def block_diagonal_inverse(matrix):
