@@ -16,6 +16,7 @@ from ..io.meshes.surface_data import prepare_surface_input
 from .common import crease_notes, dissolve_notes, file_notes, friendly_errors, weld_notes
 from .convert import build_or_fail, extension_setup
 from .options import extension_options, surface_options, weld_options, weld_tolerance
+from .numbers import FiniteFloat
 
 
 def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
@@ -55,7 +56,7 @@ def patch_file_crease_angle(shape: dict, weld, no_weld) -> float | None:
 
 @click.command()
 @click.argument("path", metavar="PATCHES|INPUT", type=click.Path(dir_okay=False))
-@click.option("--tolerance", type=float, default=1e-9, show_default=True,
+@click.option("--tolerance", type=FiniteFloat(0.0), default=1e-9, show_default=True,
               help="Largest normal jump (radians) and relative position gap accepted as G1.")
 @click.option("--samples", type=click.IntRange(2, None), default=11, show_default=True,
               help="Points sampled along each shared patch edge, end points included.")

@@ -8,16 +8,17 @@ from click.core import ParameterSource
 
 from ..construction.surface import TANGENT_RULES, TRIANGLE_RULES
 from .common import Failure
+from .numbers import FiniteFloat
 
 
 def surface_options(command):
     """Add --blend, --alpha, --beta, --tangent-rule to a command."""
     options = [
-        click.option("--blend", type=click.FloatRange(0.0, 1.0), default=0.5, show_default=True,
+        click.option("--blend", type=FiniteFloat(0.0, 1.0), default=0.5, show_default=True,
                      help="Doo-Sabin blend ratio alpha_f of every cell (A1): smaller follows the mesh more closely."),
-        click.option("--alpha", type=click.FloatRange(0.0, 1.0), default=1.0, show_default=True,
+        click.option("--alpha", type=FiniteFloat(0.0, 1.0), default=1.0, show_default=True,
                      help="Shape parameter of the bicubic tangent coefficients P_32 at each cell centre (A3)."),
-        click.option("--beta", type=float, default=0.0, show_default=True,
+        click.option("--beta", type=FiniteFloat(-10.0, 10.0), default=0.0, show_default=True,
                      help="Centre point S = S_C + beta (S_P - S_C) of each bicubic cell (section 1.3.3); 0 keeps the cell centroid."),
         click.option("--tangent-rule", type=click.Choice(TANGENT_RULES), default="symmetric", show_default=True,
                      help="Tangent plane at cell centres: 'symmetric' (A3) or 'corners' (A3a, from the C_i only)."),
@@ -58,7 +59,7 @@ def feature_options(command):
         click.option("--creases", "creases_file", type=click.Path(dir_okay=False), default=None,
                      help='JSON of creases, corners and holes besides the file\'s tags: {"creases": [[v0, v1, ..., '
                           'sharpness]], "corners": [[v, sharpness]], "holes": [face, ...]} (indices from 0).'),
-        click.option("--crease-angle", type=click.FloatRange(0.0, 180.0, max_open=True), default=None, metavar="DEG",
+        click.option("--crease-angle", type=FiniteFloat(0.0, 180.0, max_open=True), default=None, metavar="DEG",
                      help="Make every edge whose two faces meet at a dihedral angle above DEG degrees an infinitely "
                           "sharp crease (for meshes without tags)."),
         click.option("--ignore-tags", is_flag=True,
@@ -84,7 +85,7 @@ def resolve_exact_creases(exact_creases: bool | None, interpolate: bool = False)
 def weld_options(command):
     """Add --weld TOL and --no-weld (vertices at one position become one vertex; ``weld_tolerance``)."""
     options = [
-        click.option("--weld", type=click.FloatRange(0.0, 1.0), default=None, metavar="TOL",
+        click.option("--weld", type=FiniteFloat(0.0, 1.0), default=None, metavar="TOL",
                      help="Weld vertices closer than TOL times the bounding-box diagonal (default: weld equal "
                           "positions only, as STL files and seam-split meshes need)."),
         click.option("--no-weld", is_flag=True,

@@ -28,6 +28,7 @@ from ..io.meshes.tags.features import sharp_features
 from .common import Failure, Progress, friendly_errors, output_suffix, echo_repair_notes
 from .convert import available_memory, build_or_fail
 from .options import resolve_exact_creases, surface_options, weld_options, weld_tolerance
+from .numbers import FiniteFloat
 
 # EXR channels, in the order listed by `c1surf render --help` (the file sorts them by name).
 EXR_CHANNELS = ("R", "G", "B", "A") + CURVATURE_NAMES + GEOMETRY_NAMES
@@ -169,16 +170,16 @@ def write_atomically(path, input_path, progress: Progress, write) -> None:
               help="Also write reflection lines (zebra stripes): continuous on a G1 surface, broken where normals jump.")
 @click.option("--view", type=click.Choice(sorted(VIEWS)), default="iso", show_default=True,
               help="Camera direction for a Y-up scene (front looks along -Z, top along -Y, side along -X).")
-@click.option("--eye", type=float, nargs=3, default=None, metavar="X Y Z", help="Camera position (overrides --view).")
-@click.option("--target", type=float, nargs=3, default=None, metavar="X Y Z",
+@click.option("--eye", type=FiniteFloat(), nargs=3, default=None, metavar="X Y Z", help="Camera position (overrides --view).")
+@click.option("--target", type=FiniteFloat(), nargs=3, default=None, metavar="X Y Z",
               help="Point looked at [default: centre of the bounding box].")
-@click.option("--up", type=float, nargs=3, default=None, metavar="X Y Z", help="Up direction [default: +Y, or the view's].")
+@click.option("--up", type=FiniteFloat(), nargs=3, default=None, metavar="X Y Z", help="Up direction [default: +Y, or the view's].")
 @click.option("--size", default="1024x1024", show_default=True, metavar="WxH", help="Image size WIDTHxHEIGHT (or N for N x N).")
 @click.option("--projection", type=click.Choice(PROJECTIONS), default="perspective", show_default=True,
               help="Pinhole camera, or parallel rays (orthographic: only the direction of --eye/--view counts).")
-@click.option("--fov", type=click.FloatRange(0.1, 170.0), default=None,
+@click.option("--fov", type=FiniteFloat(0.1, 170.0), default=None,
               help="Vertical field of view in degrees (perspective) [default: 30, or framing everything with --eye].")
-@click.option("--zoom", type=click.FloatRange(min=1e-6), default=1.0, show_default=True,
+@click.option("--zoom", type=FiniteFloat(1e-6, 1e6), default=1.0, show_default=True,
               help="Magnify about the image centre (the whole surface is framed at 1).")
 @click.option("--atlas", is_flag=True,
               help="Parameter space instead of a view: patch k is a square tile (u to the right, v up), same channels.")
@@ -188,11 +189,11 @@ def write_atomically(path, input_path, progress: Progress, write) -> None:
               help="Curvature shown by the colours (R G B and --png).")
 @click.option("--colormap", type=click.Choice(sorted(COLORMAPS)), default="viridis", show_default=True,
               help="'viridis' (perceptual) or 'gray' (the paper's black-to-white ramp).")
-@click.option("--range", "value_range", type=float, nargs=2, default=None, metavar="LO HI",
+@click.option("--range", "value_range", type=FiniteFloat(), nargs=2, default=None, metavar="LO HI",
               help="Colour range [default: 0 to the 98th percentile of |value| on screen; symmetric when signed].")
 @click.option("--stripes", type=click.IntRange(1, 10000), default=16, show_default=True,
               help="--zebra: black and white stripe pairs per turn of the reflected ray.")
-@click.option("--stripe-axis", type=float, nargs=3, default=None, metavar="X Y Z",
+@click.option("--stripe-axis", type=FiniteFloat(), nargs=3, default=None, metavar="X Y Z",
               help="--zebra: direction of the parallel light lines [default: the camera's up]. Normals that jump "
                    "across an edge show best with lines along that edge.")
 @click.option("--mesh-resolution", type=click.IntRange(2, 64), default=None,
