@@ -56,10 +56,12 @@ def atomic_output(path, inputs=()):
         tmp = _create_temporary(target, path_str, made)
         yield tmp
         _move_into_place(tmp, target, path_str)
-    except BaseException:
+    except BaseException as error:
         for name in made:
             with contextlib.suppress(OSError):
                 os.unlink(name)
+        if isinstance(error, OutputError) and error.path in made:  # a writer's refusal names the output, not the temporary
+            raise type(error)(path_str, error.message) from None
         raise
 
 

@@ -25,6 +25,7 @@ import os
 import numpy as np
 
 from ...evaluation.stream.spool import SpooledTessellation
+from ..finite import refuse_non_finite_mesh, refuse_non_finite_vertices
 
 from .number_text import (FLOAT32_DIGITS, FLOAT64_DIGITS, constant_field, decimals_for, format_fixed, join_columns,
                           printf_field, text_lines)
@@ -88,6 +89,7 @@ def write_obj(path, mesh, float32: bool = False) -> None:
     """
     if mesh.properties:
         raise ValueError("per-vertex properties need a .ply output, not .obj")
+    refuse_non_finite_mesh(mesh, path)
     triangles = np.asarray(mesh.triangles)
     with open(path, "wb") as f:
         f.write(_ATTRIBUTE_HEADER if mesh.has_attributes else _HEADER)
@@ -124,6 +126,7 @@ def write_obj_stream(path, tessellation, float32: bool = False) -> None:
     with SpooledTessellation(tessellation, os.path.dirname(os.path.abspath(path))) as spooled:
         largest = np.zeros(2)
         for points, normals in spooled.vertex_blocks():  # evaluated: the decimals of v and of vn
+            refuse_non_finite_vertices(points, normals, path)
             largest = np.maximum(largest, [_largest(points[:, :3]), _largest(normals)])
         decimals = [decimals_for(np.array([value]), digits) for value in largest]
         with open(path, "wb") as f:

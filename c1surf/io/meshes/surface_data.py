@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import MeshInputError
+from ..geometry import check_mesh_file_geometry
 from ...construction.features import INFINITELY_SHARP, SharpFeatures
 from ...mesh.creases.non_manifold import split_non_manifold_edges
 from ...mesh.weld import coincident_representatives
@@ -218,6 +219,7 @@ def prepare_surface_input(mesh: MeshFile, data: SurfaceData | None, weld: float 
     (``split_surface_sheets``, unless ``data.non_manifold`` is "refuse") and the faces of crease sectors
     too large for an exact C0 crease merged (``merge_surface_sectors``), then dissolved again where that
     left an interior vertex in two faces."""
+    check_mesh_file_geometry(mesh)  # coordinates the construction can take, spanning a surface
     prepared = dissolve_surface_input(*drop_repeated_surface_faces(*weld_surface_input(mesh, data, weld)))
     if not exact_creases:
         return prepared

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..finite import refuse_non_finite_mesh
 from ..registry import MESH_WRITERS, suffix_of
 from .surface_data import COLOUR_NAMES
 
@@ -126,6 +127,8 @@ def write_attribute_mesh(path, points, triangles, normals, attributes, names, co
 
 def _trimesh_export(path, mesh: TriangleMesh, file_type: str, **options) -> None:
     import trimesh  # imported here: only these formats need it
+
+    refuse_non_finite_mesh(mesh, path, float32=file_type in ("stl", "glb"))  # float32 by definition
 
     shape = trimesh.Trimesh(vertices=mesh.points, faces=mesh.triangles, vertex_normals=mesh.normals, process=False,
                             validate=False)

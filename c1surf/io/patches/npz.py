@@ -36,6 +36,7 @@ import numpy as np
 
 from ...evaluation.patch_set import FORMAT_NAME, PatchSet
 from ..errors import MeshInputError
+from ..finite import refuse_non_finite
 from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
@@ -119,12 +120,14 @@ class _Blocks:
     def __init__(self, shape: tuple, dtype, blocks):
         self.shape, self.dtype, self.blocks = tuple(int(n) for n in shape), np.dtype(dtype), blocks
 
-    def write(self, f) -> None:
-        """The bytes ``np.lib.format.write_array`` writes for the whole array (a header of format 1.0)."""
+    def write(self, f, path="output", name: str = "array") -> None:
+        """The bytes ``np.lib.format.write_array`` writes for the whole array (a header of format 1.0); each
+        block's numbers are finite (``refuse_non_finite``, naming ``path`` and the member ``name``)."""
         descr = np.lib.format.dtype_to_descr(self.dtype)
         np.lib.format.write_array_header_1_0(f, {"descr": descr, "fortran_order": False, "shape": self.shape})
         rows = 0
         for block in self.blocks:
+            refuse_non_finite(block, f"'{name}' values", path)
             f.write(np.ascontiguousarray(block, dtype=self.dtype).tobytes())
             rows += block.shape[0]
         if rows != self.shape[0]:
@@ -165,8 +168,9 @@ def _write_members(path, members) -> None:
             info.external_attr = 0o644 << 16
             with zf.open(info, "w", force_zip64=True) as f:
                 if isinstance(array, _Blocks):
-                    array.write(f)
+                    array.write(f, path, name)
                 else:
+                    refuse_non_finite(array, f"'{name}' values", path)
                     np.lib.format.write_array(f, np.ascontiguousarray(array), allow_pickle=False)
             del array
 

@@ -28,6 +28,7 @@ import numpy as np
 from ...evaluation.merge import MergedPiece
 from ...evaluation.patch_set import PatchSet
 from ..errors import MeshInputError
+from ..finite import refuse_non_finite_patch_set
 from .brep.step_brep import brep_shape, occ_classes
 from .merged import is_piece_knots, piece_patches
 
@@ -45,6 +46,7 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
     points = np.concatenate([np.asarray(g, dtype=np.float64)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)]
                             + [np.zeros((0, 3))])
     _check_range(path, points)
+    refuse_non_finite_patch_set(patch_set, path)
     write_step_shape(path, brep_shape(patch_set).shape, file_name or os.path.basename(os.fspath(path)))
 
 
