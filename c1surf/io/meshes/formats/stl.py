@@ -61,6 +61,7 @@ def _triangles(data: bytes, path: str) -> np.ndarray:
     """(T, 3, 3) float64 corners of every facet, in file order (all solids of an ASCII file)."""
     from trimesh.exchange.stl import load_stl  # a format library: imported on first use
 
+    data = _as_utf8(data, path)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # numpy's fromstring on text that is not numbers
@@ -73,6 +74,24 @@ def _triangles(data: bytes, path: str) -> np.ndarray:
         raise MeshInputError(path, "no triangles found: not an STL file, or a binary STL whose length does not match "
                              "the triangle count in its header")
     return np.concatenate(corners)
+
+
+def _as_utf8(data: bytes, path: str) -> bytes:
+    """``data`` as trimesh's STL loader takes it without guessing an encoding (``charset_normalizer``, not a
+    dependency): a binary STL (84 header bytes and 50 per triangle its header counts) or UTF-8 text as it is,
+    other text (a solid named in Latin-1) re-encoded as UTF-8; anything else refused in one line."""
+    if len(data) >= 84 and 84 + 50 * int.from_bytes(data[80:84], "little") == len(data):
+        return data
+    try:
+        data.decode("utf-8")
+        return data
+    except UnicodeDecodeError:
+        pass
+    if b"\0" in data or not data.lstrip()[:5].lower().startswith(b"solid"):
+        raise MeshInputError(path, f"not an STL file: not ASCII STL text (no `solid` line), and not a binary STL "
+                                   f"(its {len(data)} bytes are not the 84 + 50 x {int.from_bytes(data[80:84], 'little') if len(data) >= 84 else 0} "
+                                   "of its header's triangle count): re-export it")
+    return data.decode("latin-1").encode("utf-8")
 
 
 def _facet_lines(data: bytes, n_triangles: int) -> np.ndarray | None:
