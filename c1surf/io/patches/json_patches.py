@@ -208,6 +208,9 @@ def _load_document(path) -> dict:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise MeshInputError(str(path), f"not a JSON patch file ({e})", getattr(e, "lineno", None)) from None
+    except RecursionError:  # json's decoder recurses once per level
+        raise MeshInputError(str(path), "not a c1surf patch file: its JSON is nested too deeply to read (a patch file "
+                                        "nests 4 levels)") from None
     check_header(path, doc)
     if not isinstance(doc.get("patches", []), list):
         raise MeshInputError(str(path), '"patches" must be a list')

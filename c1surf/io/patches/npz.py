@@ -40,6 +40,7 @@ from ..finite import refuse_non_finite
 from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
+_MAX_RATIO = 100  # largest expansion of a compressed member read (float arrays compress 1-3 times)
 _STREAM_BLOCK = 1 << 15  # patches per block of a streamed file (bicubic: 12 MB)
 
 
@@ -191,6 +192,9 @@ def _mapped_members(path) -> dict:
                     continue
                 name = info.filename[:-4]
                 if info.compress_type != zipfile.ZIP_STORED or mapped is None:
+                    if info.file_size > _MAX_RATIO * info.compress_size + (1 << 20):  # real arrays: 1-3 times
+                        raise ValueError(f"member {info.filename} would expand {info.compress_size} bytes into "
+                                         f"{info.file_size}: refused as a zip bomb")
                     with zf.open(info) as member:
                         arrays[name] = np.lib.format.read_array(member, allow_pickle=False)
                     continue
@@ -262,6 +266,8 @@ def _header(path, data: dict) -> dict:
         header = json.loads(str(data["header"].item()))
     except (ValueError, TypeError) as e:
         raise MeshInputError(str(path), f"damaged header ({e})") from None
+    except RecursionError:  # json's decoder recurses once per level
+        raise MeshInputError(str(path), "damaged header: its JSON is nested too deeply to read") from None
     check_header(path, header)
     return header
 
