@@ -285,6 +285,9 @@ def _surface_128(path, tokens: list, line: int):
     """Knots, weights and control points of a rational B-spline surface entity from its parameters."""
     try:
         k1, k2, m1, m2 = (int(t) for t in tokens[1:5])
+        if min(m1, m2) < 1 or k1 < m1 or k2 < m2:
+            raise MeshInputError(str(path), f"rational B-spline surface (type 128) with degrees {m1}, {m2} and upper "
+                                 f"indices {k1}, {k2}: each degree must be at least 1 and at most its index", line)
         n1, n2, nc = k1 + m1 + 2, k2 + m2 + 2, (k1 + 1) * (k2 + 1)
         reals = tokens[10 : 10 + n1 + n2 + 4 * nc]
         try:
