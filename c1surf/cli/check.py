@@ -58,7 +58,7 @@ def patch_file_crease_angle(shape: dict, weld, no_weld) -> float | None:
 @click.argument("path", metavar="PATCHES|INPUT", type=click.Path(dir_okay=False))
 @click.option("--tolerance", type=FiniteFloat(0.0), default=1e-9, show_default=True,
               help="Largest normal jump (radians) and relative position gap accepted as G1.")
-@click.option("--samples", type=click.IntRange(2, None), default=11, show_default=True,
+@click.option("--samples", type=click.IntRange(2, 10000), default=11, show_default=True,
               help="Points sampled along each shared patch edge, end points included.")
 @click.option("--unoriented", is_flag=True,
               help="Compare normals up to sign (tangent-plane continuity of non-orientable surfaces such as a Moebius strip).")
