@@ -57,11 +57,12 @@ def check_geometry(points: np.ndarray, used: np.ndarray | None = None) -> None:
     check_spans_surface(xyz)
 
 
-def check_coordinate_range(xyz: np.ndarray) -> None:
+def check_coordinate_range(xyz: np.ndarray, what: str = "the mesh") -> None:
     """Refuse non-finite coordinates, coordinates beyond ``MAX_COORDINATE`` and bounding boxes whose
     diagonal lies outside [MIN_SIZE, MAX_SIZE] (unless it is 0: ``check_spans_surface`` says why that fails).
 
-    xyz : (V, 3) float, V >= 1
+    xyz : (V, 3) float, V >= 1 (the corners of a bounding box will do)
+    what : how the message names the thing measured ("the mesh", "the surface")
     """
     if not np.isfinite(xyz).all():
         raise GeometryError("a vertex has a NaN or infinite coordinate")
@@ -69,15 +70,15 @@ def check_coordinate_range(xyz: np.ndarray) -> None:
     largest = float(np.max(np.maximum(np.abs(low), np.abs(high))))
     if largest > MAX_COORDINATE:
         raise GeometryError(f"coordinates reach {largest:.3g}, beyond {MAX_COORDINATE:.0e} where the construction's "
-                            f"products of lengths overflow: scale the mesh by {_unit_scale(largest)} first (or by any "
+                            f"products of lengths overflow: scale {what} by {_unit_scale(largest)} first (or by any "
                             "factor that brings it within that)")
     scale = np.abs(high - low).max()  # the diagonal, by its largest side (no overflow on the way)
     size = 0.0 if scale == 0 else float(scale * np.sqrt(np.sum(((high - low) / scale) ** 2)))
     if size > MAX_SIZE:
-        raise GeometryError(f"the mesh is {size:.3g} across (bounding-box diagonal), beyond {MAX_SIZE:.0e} where the "
+        raise GeometryError(f"{what} is {size:.3g} across (bounding-box diagonal), beyond {MAX_SIZE:.0e} where the "
                             f"construction's products of lengths overflow: scale it by {_unit_scale(size)} first (to about unit size)")
     if 0 < size < MIN_SIZE:
-        raise GeometryError(f"the mesh is only {size:.3g} across (bounding-box diagonal), below {MIN_SIZE:.0e} where the "
+        raise GeometryError(f"{what} is only {size:.3g} across (bounding-box diagonal), below {MIN_SIZE:.0e} where the "
                             f"construction's products of lengths underflow to zero normals: scale it by "
                             f"{_unit_scale(size)} first (to about unit size)")
 
