@@ -43,8 +43,9 @@ def refuse_non_finite(values, what: str, path="output", dtype=None, allow_positi
         part = flat[start:start + _CHUNK]
         if array.dtype.kind == "c":
             part = np.concatenate([part.real, part.imag])
-        magnitude = np.abs(part)
-        ok = magnitude <= limit  # False for NaN
+        ok = np.isfinite(part)
+        if np.isfinite(limit):
+            ok &= np.abs(part) <= limit
         if allow_positive_infinity:
             ok |= part == np.inf
         bad += int(part.size - np.count_nonzero(ok))
