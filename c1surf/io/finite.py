@@ -38,22 +38,27 @@ def refuse_non_finite(values, what: str, path="output", dtype=None, allow_positi
         return
     limit = np.finfo(dtype).max if dtype is not None and np.dtype(dtype).kind == "f" else np.inf
     flat = array.reshape(-1)
-    bad = 0
+    not_finite = beyond = 0
     for start in range(0, flat.size, _CHUNK):
         part = flat[start:start + _CHUNK]
         if array.dtype.kind == "c":
             part = np.concatenate([part.real, part.imag])
-        ok = np.isfinite(part)
-        if np.isfinite(limit):
-            ok &= np.abs(part) <= limit
+        finite = np.isfinite(part)
         if allow_positive_infinity:
-            ok |= part == np.inf
-        bad += int(part.size - np.count_nonzero(ok))
-    if bad:
-        beyond = f" or beyond the range of {np.dtype(dtype).name} (write doubles: drop --float32)" if np.isfinite(limit) else ""
-        raise NonFiniteOutput(path, f"{bad} of the {flat.size} {what} to be written are NaN or infinite{beyond}: "
+            finite |= part == np.inf
+        not_finite += int(part.size - np.count_nonzero(finite))
+        if np.isfinite(limit):
+            beyond += int(np.count_nonzero(finite & (np.abs(np.where(finite, part, 0)) > limit)))
+    if not_finite:
+        raise NonFiniteOutput(path, f"{not_finite} of the {flat.size} {what} to be written are NaN or infinite: "
                                     "nothing was written (this is a bug in c1surf unless the input holds such "
                                     "numbers; please report it)")
+    if beyond:
+        name = np.dtype(dtype).name
+        raise NonFiniteOutput(path, f"{beyond} of the {flat.size} {what} to be written exceed the largest {name} "
+                                    f"({limit:.3g}), the number type of this output (--float32, STL, GLB): write "
+                                    "doubles (.ply or .obj without --float32) or scale the mesh down; nothing was "
+                                    "written")
 
 
 def refuse_non_finite_mesh(mesh, path, float32: bool = False) -> None:

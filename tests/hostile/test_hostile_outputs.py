@@ -194,3 +194,20 @@ def test_streamed_patch_writers_refuse_per_block(tmp_path, patches):
         with atomic_output(target) as tmp:
             write_patch_stream(tmp, Stream(), patches)
     assert os.listdir(tmp_path) == []
+
+
+def test_obj_beyond_fixed_point_is_refused_not_a_traceback(tmp_path):
+    """OBJ numbers are fixed point from int64 digits: coordinates of 1e20 are refused with what to write instead."""
+    points = TRIANGLE[0] * 1e20
+    target = tmp_path / "out.obj"
+    with pytest.raises(OutputError, match="write .ply"):
+        with atomic_output(target) as tmp:
+            write_mesh(tmp, TriangleMesh(points, TRIANGLE[1], None), ".obj")
+    assert os.listdir(tmp_path) == []
+    source = tmp_path / "big.obj"
+    source.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in points.tolist()) + "f 1 2 3\n")
+    result = run("convert", source, "-o", target, "-r", "2", "-q")
+    assert_outcome(result, tmp_path, [target], must_refuse=True)
+    result = run("convert", source, "-o", tmp_path / "out.ply", "-r", "2", "-q")  # doubles hold it
+    assert_outcome(result, tmp_path, [tmp_path / "out.ply"])
+    assert result.exit_code == 0, result.stderr
