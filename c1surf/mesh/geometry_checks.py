@@ -12,14 +12,16 @@ with the reason and what to do.
   that takes them to about unit size.
 - Span: a mesh whose vertices (those used by faces) all coincide or all lie on one line has no
   tangent plane anywhere: refused with that reason. Collinearity is measured as the largest
-  distance from the line through two extreme vertices, relative to the mesh's size; below
-  ``FLAT_RELATIVE`` (a few hundred units in the last place) the points lie on the line.
+  distance from the line through the two extreme vertices along the widest axis, relative to the
+  mesh's size; below ``FLAT_RELATIVE`` (a few hundred units in the last place) the points lie on it.
 """
 from __future__ import annotations
 
 import math
 
 import numpy as np
+
+from ..arrays import column_bounds
 
 __all__ = ["GeometryError", "check_geometry", "check_coordinate_range", "check_spans_surface",
            "MIN_SIZE", "MAX_SIZE", "MAX_COORDINATE", "FLAT_RELATIVE"]
@@ -29,6 +31,7 @@ MAX_SIZE = 1e50  # largest bounding-box diagonal converted
 MAX_COORDINATE = 1e50  # largest coordinate magnitude converted
 FLAT_RELATIVE = 1e-13  # largest distance from a line, relative to the size, of points "on" it
 _CHUNK = 1 << 20  # rows at a time for the distance pass: temporaries of some 10 MB
+_SAMPLE = 4096  # vertices of the first collinearity test
 
 
 class GeometryError(ValueError):
@@ -45,28 +48,35 @@ def check_geometry(points: np.ndarray, used: np.ndarray | None = None) -> None:
     Parameters
     ----------
     points : (V, >=3) float, vertex positions (further columns, e.g. weights, are ignored)
-    used : (k,) int or None, the vertices to check (those faces use; repeats allowed); None: all
+    used : (k,) int or None, the vertices to check (those faces use; repeats allowed); None: all. When
+        every vertex is used (the usual case) nothing is copied: a few passes over the coordinates.
     """
     xyz = np.asarray(points, dtype=np.float64)[:, :3]
     if used is not None:
-        used = np.asarray(used, dtype=np.int64).ravel()
-        xyz = xyz[np.unique(used)] if used.size < xyz.shape[0] else xyz[np.bincount(used, minlength=len(xyz)) > 0]
+        kept = np.zeros(xyz.shape[0], dtype=bool)
+        kept[np.asarray(used, dtype=np.int64).ravel()] = True
+        if not kept.all():
+            xyz = xyz[kept]
     if xyz.shape[0] == 0:
         return
-    check_coordinate_range(xyz)
-    check_spans_surface(xyz)
+    bounds = column_bounds(xyz)
+    check_coordinate_range(xyz, bounds=bounds)
+    check_spans_surface(xyz, bounds=bounds)
 
 
-def check_coordinate_range(xyz: np.ndarray, what: str = "the mesh") -> None:
+def check_coordinate_range(xyz: np.ndarray, what: str = "the mesh", bounds=None) -> None:
     """Refuse non-finite coordinates, coordinates beyond ``MAX_COORDINATE`` and bounding boxes whose
     diagonal lies outside [MIN_SIZE, MAX_SIZE] (unless it is 0: ``check_spans_surface`` says why that fails).
 
     xyz : (V, 3) float, V >= 1 (the corners of a bounding box will do)
     what : how the message names the thing measured ("the mesh", "the surface")
+    bounds : (low (3,), high (3,)) of ``xyz`` when known (``arrays.column_bounds``)
     """
-    if not np.isfinite(xyz).all():
+    with np.errstate(over="ignore", invalid="ignore"):
+        total = xyz.sum()  # finite: every entry is (a sum of finite numbers this size cannot overflow to nan)
+    if not np.isfinite(total) and not np.isfinite(xyz).all():
         raise GeometryError("a vertex has a NaN or infinite coordinate")
-    low, high = xyz.min(axis=0), xyz.max(axis=0)
+    low, high = column_bounds(xyz) if bounds is None else bounds
     largest = float(np.max(np.maximum(np.abs(low), np.abs(high))))
     if largest > MAX_COORDINATE:
         raise GeometryError(f"coordinates reach {largest:.3g}, beyond {MAX_COORDINATE:.0e} where the construction's "
@@ -76,46 +86,51 @@ def check_coordinate_range(xyz: np.ndarray, what: str = "the mesh") -> None:
     size = 0.0 if scale == 0 else float(scale * np.sqrt(np.sum(((high - low) / scale) ** 2)))
     if size > MAX_SIZE:
         raise GeometryError(f"{what} is {size:.3g} across (bounding-box diagonal), beyond {MAX_SIZE:.0e} where the "
-                            f"construction's products of lengths overflow: scale it by {_unit_scale(size)} first (to about unit size)")
+                            f"construction's products of lengths overflow: scale it by {_unit_scale(size)} first "
+                            "(to about unit size)")
     if 0 < size < MIN_SIZE:
         raise GeometryError(f"{what} is only {size:.3g} across (bounding-box diagonal), below {MIN_SIZE:.0e} where the "
                             f"construction's products of lengths underflow to zero normals: scale it by "
                             f"{_unit_scale(size)} first (to about unit size)")
 
 
-def check_spans_surface(xyz: np.ndarray) -> None:
+def check_spans_surface(xyz: np.ndarray, bounds=None) -> None:
     """Refuse vertices that all coincide or all lie on one line (up to rounding: ``FLAT_RELATIVE``).
 
-    xyz : (V, 3) finite float, V >= 1
+    The line is the one through an extreme vertex along the widest axis and the vertex farthest from it.
+    An evenly spaced sample of some thousand vertices decides first: one vertex off the line proves a surface;
+    only a sample on the line makes every vertex count.
+
+    xyz : (V, 3) finite float, V >= 1; bounds : (low (3,), high (3,)) of ``xyz`` when known
     """
-    low, high = xyz.min(axis=0), xyz.max(axis=0)
+    low, high = column_bounds(xyz) if bounds is None else bounds
     magnitude = float(np.max(np.maximum(np.abs(low), np.abs(high))))
     extent = float(np.max(high - low))
     if extent <= 4 * np.finfo(np.float64).eps * magnitude:  # 0, or a few units in the last place of the positions
         raise GeometryError(f"all {xyz.shape[0]} vertices lie at one point ({_point(xyz[0])}): the mesh spans no "
                             "surface")
-    start = xyz[np.argmin(xyz[:, int(np.argmax(high - low))])]  # an extreme vertex along the widest axis
-    end = _farthest(xyz, start, extent)  # at least extent away: the line through both is well defined
+    axis = int(np.argmax(high - low))
+    start = xyz[int(np.argmin(xyz[:, axis]))]  # an extreme vertex along the widest axis
+    end = xyz[int(np.argmax(xyz[:, axis]))]  # the other: at least extent away, the line through both well defined
     direction = (end - start) / extent
     direction /= np.linalg.norm(direction)
-    off = 0.0
+    allowed = FLAT_RELATIVE + 4 * np.finfo(np.float64).eps * magnitude / extent
+    sample = xyz[:: max(1, xyz.shape[0] // _SAMPLE)]
+    if _line_distance(sample, start, direction, extent) > allowed:
+        return
+    if _line_distance(xyz, start, direction, extent) > allowed:
+        return
+    raise GeometryError(f"all {xyz.shape[0]} vertices lie on one line (through {_point(start)} and {_point(end)}): "
+                        "the mesh spans no surface")
+
+
+def _line_distance(xyz: np.ndarray, start: np.ndarray, direction: np.ndarray, extent: float) -> float:
+    """The largest distance of ``xyz`` from the line ``start + t direction``, over ``extent`` (chunk by chunk)."""
+    largest = 0.0
     for a in range(0, xyz.shape[0], _CHUNK):
         offsets = (xyz[a:a + _CHUNK] - start) / extent
-        off = max(off, float(np.linalg.norm(np.cross(offsets, direction), axis=1).max()))
-    if off <= FLAT_RELATIVE + 4 * np.finfo(np.float64).eps * magnitude / extent:
-        raise GeometryError(f"all {xyz.shape[0]} vertices lie on one line (through {_point(start)} and {_point(end)}): "
-                            "the mesh spans no surface")
-
-
-def _farthest(xyz: np.ndarray, start: np.ndarray, extent: float) -> np.ndarray:
-    """The vertex of ``xyz`` farthest from ``start`` (distances scaled by ``extent``, chunk by chunk)."""
-    best, at = -1.0, 0
-    for a in range(0, xyz.shape[0], _CHUNK):
-        distance = np.einsum("ij,ij->i", *(2 * [(xyz[a:a + _CHUNK] - start) / extent]))
-        k = int(np.argmax(distance))
-        if distance[k] > best:
-            best, at = float(distance[k]), a + k
-    return xyz[at]
+        largest = max(largest, float(np.linalg.norm(np.cross(offsets, direction), axis=1).max()))
+    return largest
 
 
 def _unit_scale(value: float) -> str:
