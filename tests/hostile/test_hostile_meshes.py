@@ -196,3 +196,15 @@ def test_malformed_ply_counts_are_our_words(tmp_path):
     assert "out of bounds" not in result.stderr and "uint8" not in result.stderr
     result = convert_bytes(tmp_path, _ply_ascii().replace(b"element vertex 8", b"element vertex -8"), ".ply")
     assert "input.ply:3: " in result.stderr and "negative" in result.stderr
+
+
+def test_malformed_ascii_stl_names_its_line_in_our_words(tmp_path):
+    text = SOURCES["stl-ascii"][1].decode()
+    lines = text.splitlines()
+    k = next(i for i, line in enumerate(lines) if line.strip().startswith("vertex"))
+    bad = lines[:k] + ["vertex 1 2"] + lines[k + 1:]
+    result = convert_bytes(tmp_path, ("\n".join(bad) + "\n").encode(), ".stl")
+    assert result.exit_code == 1 and f"input.stl:{k + 1}: " in result.stderr and "three numbers" in result.stderr
+    bad = lines[:k] + lines[k + 1:]  # a facet of two vertices
+    result = convert_bytes(tmp_path, ("\n".join(bad) + "\n").encode(), ".stl")
+    assert result.exit_code == 1 and "a triangle needs 3" in result.stderr and "reshape" not in result.stderr

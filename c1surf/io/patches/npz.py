@@ -254,8 +254,13 @@ def _open(path) -> dict:
         raise MeshInputError(str(path), "no such file") from None
     except IsADirectoryError:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
-    except (OSError, ValueError, EOFError, struct.error, zipfile.BadZipFile) as e:
-        raise MeshInputError(str(path), f"not an NPZ patch file ({e})") from None
+    except zipfile.BadZipFile as e:
+        raise MeshInputError(str(path), f"not an NPZ patch file: not a readable zip archive ({e})") from None
+    except (OSError, ValueError, EOFError, struct.error) as e:
+        text = str(e)
+        if "header" in text.lower() and ("parse" in text.lower() or "magic" in text.lower()):
+            text = "the .npy header of a member is damaged"  # numpy quotes the damaged bytes
+        raise MeshInputError(str(path), f"not an NPZ patch file ({text[:120]})") from None
 
 
 def _header(path, data: dict) -> dict:
