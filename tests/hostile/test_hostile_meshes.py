@@ -208,3 +208,17 @@ def test_malformed_ascii_stl_names_its_line_in_our_words(tmp_path):
     bad = lines[:k] + lines[k + 1:]  # a facet of two vertices
     result = convert_bytes(tmp_path, ("\n".join(bad) + "\n").encode(), ".stl")
     assert result.exit_code == 1 and "a triangle needs 3" in result.stderr and "reshape" not in result.stderr
+
+
+@FAST
+@given(exponent=st.integers(-330, 308), mantissa=st.floats(1.0, 9.99), offset=st.sampled_from([0.0, 1.0, -3e5, 1e30]))
+def test_any_scale_is_refused_or_gives_unit_normals(tmp_path, exponent, mantissa, offset):
+    """A cube at any scale and offset: refused in one line (what scale works), or converted with finite points and
+    unit normals (no zero normals from underflow, no NaN from overflow)."""
+    from plyfile import PlyData
+
+    result = convert_bytes(tmp_path, scaled_cube_obj(mantissa * 10.0 ** exponent, offset).encode(), ".obj")
+    if result.exit_code == 0:
+        vertex = PlyData.read(str(tmp_path / "out.ply"))["vertex"].data
+        normals = np.stack([vertex["nx"], vertex["ny"], vertex["nz"]], axis=1)
+        assert np.allclose(np.linalg.norm(normals, axis=1), 1.0)
