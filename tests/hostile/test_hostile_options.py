@@ -119,3 +119,24 @@ def test_click_usage_errors_are_one_line(workspace, args, monkeypatch):
     assert_outcome(result, workspace, [workspace / "x.ply"], refused_status=(2,), must_refuse=True)
     assert "Usage:" not in result.stderr and "Try " not in result.stderr
     assert result.stderr.rstrip().endswith("--help`)")
+
+
+SIDECARS = [
+    ("--blend-file", '{"default": NaN}'), ("--blend-file", '{"default": 0.5, "faces": {"0": Infinity}}'),
+    ("--blend-file", '{"default": -1}'), ("--blend-file", "[" * 50_000 + "]" * 50_000), ("--blend-file", "{"),
+    ("--creases", '{"creases": [[0, 1, NaN]]}'), ("--creases", '{"creases": [[0, 1, 1e400]]}'),
+    ("--creases", '{"corners": [[0, -5]]}'), ("--creases", '{"creases": [[0, 99999999999, 10]]}'),
+    ("--creases", "[" * 50_000 + "]" * 50_000), ("--creases", '{"holes": [1e20]}'),
+]
+
+
+@pytest.mark.parametrize("option,text", SIDECARS)
+def test_sidecar_json_numbers(workspace, option, text):
+    """The JSON files options name (--blend-file, --creases): NaN, infinities, out-of-range values, nesting."""
+    sidecar = workspace / "sidecar.json"
+    sidecar.write_text(text)
+    out = workspace / "out.ply"
+    result = run("convert", workspace / "cube.obj", "-o", out, "-r", "2", "-q", option, sidecar)
+    assert_outcome(result, workspace, [out], must_refuse=True)
+    assert "sidecar.json" in result.stderr
+    sidecar.unlink()
