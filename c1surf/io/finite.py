@@ -47,8 +47,8 @@ def refuse_non_finite(values, what: str, path="output", dtype=None, allow_positi
         if allow_positive_infinity:
             finite |= part == np.inf
         not_finite += int(part.size - np.count_nonzero(finite))
-        if np.isfinite(limit):
-            beyond += int(np.count_nonzero(finite & (np.abs(np.where(finite, part, 0)) > limit)))
+        if np.isfinite(limit) and not not_finite and (part.max() > limit or part.min() < -limit):  # two fast passes
+            beyond += int(np.count_nonzero(np.abs(part) > limit))
     if not_finite:
         raise NonFiniteOutput(path, f"{not_finite} of the {flat.size} {what} to be written are NaN or infinite: "
                                     "nothing was written (this is a bug in c1surf unless the input holds such "
