@@ -34,6 +34,7 @@ from .io.meshes.sidecars import read_blend_file, read_creases_file
 from .io.patches.formats import load_patch_set
 from .io.registry import PATCH_READERS
 from .mesh.errors import TopologyError
+from .mesh.geometry_checks import GeometryError, check_geometry
 from .prepare.extension_data import Sidecars, SurfaceData
 from .prepare.mesh_edits import weld_mesh_file
 from .prepare.notes import repair_notes, seam_notes
@@ -192,7 +193,10 @@ def read_scan(path):
     used, triangles = np.unique(triangles, return_inverse=True)
     points, triangles = np.asarray(mesh.points, dtype=np.float64)[used], triangles.reshape(-1, 3)
     try:
+        check_geometry(points)
         check_scan(points, triangles, "the file")
+    except GeometryError as e:
+        raise MeshInputError(mesh.path, e.message) from None
     except ValueError as e:
         raise MeshInputError(mesh.path, str(e)) from None
     return points, triangles, mesh

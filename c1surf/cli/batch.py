@@ -220,6 +220,7 @@ def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, rebu
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
     planned = {path: outputs_for(path, out, mesh_suffix, patch_suffixes) for path in inputs}
+    refuse_outputs_over_inputs(planned)
     todo = {path: outputs for path, outputs in planned.items() if rebuild or not up_to_date(path, outputs)}
     # passed_on: --float32, and the surface and input options (built, so checked, by their decorators): each
     # conversion takes them again as they were given
@@ -229,6 +230,17 @@ def batch(patterns, out_dir, jobs, mesh_suffix, patch_suffixes, resolution, rebu
     commands = {path: convert_command(path, outputs, resolution, extra_args) for path, outputs in todo.items()}
     failures = run_conversions(commands, jobs or os.cpu_count() or 1, quiet)
     summarize(len(inputs), len(todo), failures, time.perf_counter() - started)
+
+
+def refuse_outputs_over_inputs(planned: dict) -> None:
+    """A usage error when an output would be one of the inputs (OUTDIR their folder, --format their format):
+    outputs beside the inputs in another format are fine."""
+    sources = {path.resolve(): path for path in planned}
+    for path, outputs in planned.items():
+        for output in outputs:
+            if output.resolve() in sources:
+                raise click.BadParameter(f"the output {output} would overwrite the input {sources[output.resolve()]}: "
+                                         "choose another output folder or --format", param_hint="--output-dir")
 
 
 def summarize(n_inputs: int, n_run: int, failures, seconds: float) -> None:

@@ -11,7 +11,7 @@ from ..api import load_patches
 from ..evaluation.smoothness import measure_smoothness
 from ..io.registry import MESH_READERS, PATCH_READERS
 from .common import echo_notes, friendly_errors, with_formats
-from .options import input_options, surface_options
+from .options import FiniteFloat, input_options, surface_options
 
 
 def read_or_build(path, surface, inputs, progress=None):
@@ -47,9 +47,9 @@ MESH_ONLY = ("blend", "alpha", "beta", "tangent_rule", "interpolate_vertices", "
 
 @click.command()
 @click.argument("path", metavar="PATCHES|INPUT", type=click.Path(dir_okay=False))
-@click.option("--tolerance", type=float, default=1e-9, show_default=True,
+@click.option("--tolerance", type=FiniteFloat(0.0), default=1e-9, show_default=True,
               help="Largest normal jump (radians) and relative position gap accepted as G1.")
-@click.option("--samples", type=click.IntRange(2, None), default=11, show_default=True,
+@click.option("--samples", type=click.IntRange(2, 10000), default=11, show_default=True,
               help="Points sampled along each shared patch edge, end points included.")
 @click.option("--unoriented", is_flag=True,
               help="Compare normals up to sign (tangent-plane continuity of non-orientable surfaces such as a Moebius strip).")

@@ -22,6 +22,50 @@ class Failure(click.ClickException):
         click.echo(f"c1surf: error: {self.message}", err=True)
 
 
+def usage_line(error: click.UsageError) -> str:
+    """One line for a click usage error: ``--blend: 2 is not in [0, 1]``, ``no such option: --blned``.
+
+    Names the command's --help for what the line cannot say.
+    """
+    if isinstance(error, click.BadParameter):
+        hint = error.param_hint
+        if hint is None and error.param is not None:
+            hint = _param_name(error.param)
+        if isinstance(error, click.MissingParameter):
+            what = error.param_type or (error.param.param_type_name if error.param is not None else "parameter")
+            text = f"missing {what} {hint}" if hint else f"missing {what}"
+            if error.message:
+                text += f": {error.message}"
+        else:
+            text = f"{_join(hint)}: {error.message}" if hint else error.message
+    else:
+        text = error.format_message()
+    text = " ".join(str(text).split()).replace(". (", " (").rstrip(".")
+    text = text[:1].lower() + text[1:] if text[:2] != text[:2].upper() else text
+    command = error.ctx.command_path if error.ctx is not None else "c1surf"
+    return f"{text} (see `{command} --help`)"
+
+
+def _param_name(param) -> str:
+    """The option's longest name (``--blend``) or the argument's metavar (``INPUT``)."""
+    if isinstance(param, click.Option):
+        return max(param.opts, key=len)
+    return param.metavar or (param.name or "").upper()
+
+
+def _join(hint) -> str:
+    if isinstance(hint, (list, tuple)):
+        return " / ".join(str(h) for h in hint)
+    return str(hint).strip("'\"")
+
+
+class OneLineUsageError(click.UsageError):
+    """A usage error printed as one ``c1surf: error:`` line, exit status 2."""
+
+    def show(self, file=None):
+        click.echo(f"c1surf: error: {self.message}", err=True)
+
+
 class UsageFailure(Failure):
     """A one-line ``c1surf: error:`` for a bad option value, with the exit status of bad usage (2)."""
 

@@ -1,6 +1,7 @@
 """The ``c1surf`` command: a click group; each subcommand lives in its own module."""
 from __future__ import annotations
 
+import contextlib
 import importlib
 import signal
 
@@ -8,6 +9,7 @@ import click
 
 from .. import __version__
 from ..memory import tune_allocator
+from .common import OneLineUsageError, usage_line
 
 # command name: (module, function), imported when that command runs (or --help lists the commands), so
 # `c1surf convert` does not import what `render`, `batch` or `inspect` need
@@ -30,6 +32,25 @@ class LazyGroup(click.Group):
             module, function = COMMANDS[name]
             self.add_command(getattr(importlib.import_module(module, __package__), function), name)
         return self.commands.get(name)
+
+    def make_context(self, info_name, args, parent=None, **extra):
+        with _one_line_usage():
+            return super().make_context(info_name, args, parent=parent, **extra)
+
+    def invoke(self, ctx):
+        with _one_line_usage():
+            return super().invoke(ctx)
+
+
+@contextlib.contextmanager
+def _one_line_usage():
+    """Click's usage errors (bad option values, unknown options, missing arguments) as one line, exit status 2."""
+    try:
+        yield
+    except (OneLineUsageError, click.exceptions.NoArgsIsHelpError):
+        raise
+    except click.UsageError as error:
+        raise OneLineUsageError(usage_line(error), ctx=error.ctx) from None
 
 
 @click.group(cls=LazyGroup, context_settings={"help_option_names": ["-h", "--help"]})

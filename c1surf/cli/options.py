@@ -1,4 +1,9 @@
-"""Click options shared by the commands that build a surface."""
+"""Click options shared by the commands, grouped into the objects the library takes, and ``FiniteFloat``.
+
+``click.FloatRange`` lets ``nan`` through every range (each comparison with NaN is false), and ``float``
+takes ``nan`` and ``inf``: a NaN blend ratio then turns every output point into NaN. ``FiniteFloat`` is
+the type of every float option of every command.
+"""
 from __future__ import annotations
 
 import functools
@@ -14,6 +19,48 @@ from ..io.patches.iges_writer import DEFAULT_UNITS, UNITS
 from .common import UsageFailure
 
 
+def _number(value: float) -> str:
+    """``value`` as the user would type it: 0.5, 1, 1e-06."""
+    return f"{value:g}"
+
+
+class FiniteFloat(click.FloatRange):
+    """A finite float, optionally within [min, max] (open ends with ``min_open``/``max_open``).
+
+    Errors name the range the way the help does: ``2 is not in [0, 1]``, ``nan is not a finite number``.
+    """
+
+    name = "float"
+
+    def __init__(self, min: float | None = None, max: float | None = None,
+                 min_open: bool = False, max_open: bool = False):
+        super().__init__(min=min, max=max, min_open=min_open, max_open=max_open, clamp=False)
+
+    def convert(self, value, param, ctx):
+        number = click.types.FloatParamType.convert(self, value, param, ctx)
+        if not math.isfinite(number):
+            self.fail(f"{value} is not a finite number", param, ctx)
+        low = self.min is not None and (number <= self.min if self.min_open else number < self.min)
+        high = self.max is not None and (number >= self.max if self.max_open else number > self.max)
+        if low or high:
+            self.fail(f"{value} is not in {self.describe()}", param, ctx)
+        return number
+
+    def describe(self) -> str:
+        """The range as an interval: [0, 1], (0, 180), [0, inf)."""
+        left = "(" if self.min_open or self.min is None else "["
+        right = ")" if self.max_open or self.max is None else "]"
+        low = "-inf" if self.min is None else _number(self.min)
+        high = "inf" if self.max is None else _number(self.max)
+        return f"{left}{low}, {high}{right}"
+
+    def _describe_range(self) -> str:  # the help's "[0<=x<=1]"
+        return self.describe() if (self.min is not None or self.max is not None) else "finite"
+
+    def __repr__(self) -> str:
+        return f"FiniteFloat{self.describe()}"
+
+
 def surface_options(command=None, *, refinements: str = "2"):
     """Add the construction's options (``SurfaceOptions``: A1, A3, A1a, section 1.3.4, Prop. 1.3.1); the command
     receives them as one ``surface`` argument. ``@surface_options(refinements="auto")``: another default for
@@ -21,11 +68,11 @@ def surface_options(command=None, *, refinements: str = "2"):
     if command is None:
         return lambda command: surface_options(command, refinements=refinements)
     options = [
-        click.option("--blend", type=click.FloatRange(0.0, 1.0), default=0.5, show_default=True,
+        click.option("--blend", type=FiniteFloat(0.0, 1.0), default=0.5, show_default=True,
                      help="Doo-Sabin blend ratio alpha_f of every cell (A1): smaller follows the mesh more closely."),
-        click.option("--alpha", type=click.FloatRange(0.0, 1.0), default=1.0, show_default=True,
+        click.option("--alpha", type=FiniteFloat(0.0, 1.0), default=1.0, show_default=True,
                      help="Shape parameter of the bicubic tangent coefficients P_32 at each cell centre (A3)."),
-        click.option("--beta", type=float, default=0.0, show_default=True,
+        click.option("--beta", type=FiniteFloat(-10.0, 10.0), default=0.0, show_default=True,
                      help="Centre point S = S_C + beta (S_P - S_C) of each bicubic cell (section 1.3.3); 0 keeps the cell centroid."),
         click.option("--tangent-rule", type=click.Choice(TANGENT_RULES), default="symmetric", show_default=True,
                      help="Tangent plane at cell centres: 'symmetric' (A3) or 'corners' (A3a, from the C_i only)."),
@@ -51,7 +98,7 @@ def input_options(command):
     paper's extensions' data (docs/paper-notes.md), sharp features (docs/sharp-features.md)); the command receives
     them as one ``inputs`` argument."""
     options = [
-        click.option("--weld", type=click.FloatRange(0.0, 1.0), default=None, metavar="TOL",
+        click.option("--weld", type=FiniteFloat(0.0, 1.0), default=None, metavar="TOL",
                      help="Weld vertices closer than TOL times the bounding-box diagonal (default: weld equal "
                           "positions only, as STL files and seam-split meshes need)."),
         click.option("--no-weld", is_flag=True,
@@ -71,7 +118,7 @@ def input_options(command):
         click.option("--creases", "creases_file", type=click.Path(dir_okay=False), default=None,
                      help='JSON of creases, corners and holes besides the file\'s tags: {"creases": [[v0, v1, ..., '
                           'sharpness]], "corners": [[v, sharpness]], "holes": [face, ...]} (indices from 0).'),
-        click.option("--crease-angle", type=click.FloatRange(0.0, 180.0, max_open=True), default=None, metavar="DEG",
+        click.option("--crease-angle", type=FiniteFloat(0.0, 180.0, max_open=True), default=None, metavar="DEG",
                      help="Make every edge whose two faces meet at a dihedral angle above DEG degrees an infinitely "
                           "sharp crease (for meshes without tags)."),
         click.option("--ignore-tags", is_flag=True,

@@ -21,7 +21,7 @@ from ..render.pictures import COLORMAPS, curvature_picture, srgb_to_linear, zebr
 from ..render.raycast import default_resolution, patch_grid_mesh
 from ..resources import check_memory
 from .common import Failure, Progress, echo_notes, friendly_errors, output_suffix, with_formats
-from .options import grouped, input_options, surface_options
+from .options import FiniteFloat, grouped, input_options, surface_options
 
 # EXR channels, in the order listed by `c1surf render --help` (the file sorts them by name).
 EXR_CHANNELS = ("R", "G", "B", "A") + CURVATURE_NAMES + GEOMETRY_NAMES
@@ -180,18 +180,18 @@ def camera_options(command):
     return grouped(command, "camera", [
         click.option("--view", type=click.Choice(sorted(VIEWS)), default="iso", show_default=True,
                      help="Camera direction for a Y-up scene (front looks along -Z, top along -Y, side along -X)."),
-        click.option("--eye", type=float, nargs=3, default=None, metavar="X Y Z",
+        click.option("--eye", type=FiniteFloat(), nargs=3, default=None, metavar="X Y Z",
                      help="Camera position (overrides --view)."),
-        click.option("--target", type=float, nargs=3, default=None, metavar="X Y Z",
+        click.option("--target", type=FiniteFloat(), nargs=3, default=None, metavar="X Y Z",
                      help="Point looked at [default: centre of the bounding box]."),
-        click.option("--up", type=float, nargs=3, default=None, metavar="X Y Z",
+        click.option("--up", type=FiniteFloat(), nargs=3, default=None, metavar="X Y Z",
                      help="Up direction [default: +Y, or the view's]."),
         click.option("--projection", type=click.Choice(PROJECTIONS), default="perspective", show_default=True,
                      help="Pinhole camera, or parallel rays (orthographic: only the direction of --eye/--view counts)."),
-        click.option("--fov", type=click.FloatRange(0.1, 170.0), default=None,
+        click.option("--fov", type=FiniteFloat(0.1, 170.0), default=None,
                      help="Vertical field of view in degrees (perspective) [default: 30, or framing everything with "
                           "--eye]."),
-        click.option("--zoom", type=click.FloatRange(min=1e-6), default=1.0, show_default=True,
+        click.option("--zoom", type=FiniteFloat(1e-6, 1e6), default=1.0, show_default=True,
                      help="Magnify about the image centre (the whole surface is framed at 1)."),
     ], lambda **values: CameraPlacement(**values))
 
@@ -203,12 +203,12 @@ def colour_options(command):
                      help="Curvature shown by the colours (R G B and --png)."),
         click.option("--colormap", type=click.Choice(sorted(COLORMAPS)), default="viridis", show_default=True,
                      help="'viridis' (perceptual) or 'gray' (the paper's black-to-white ramp)."),
-        click.option("--range", "value_range", type=float, nargs=2, default=None, metavar="LO HI",
+        click.option("--range", "value_range", type=FiniteFloat(), nargs=2, default=None, metavar="LO HI",
                      help="Colour range [default: 0 to the 98th percentile of |value| on screen; symmetric when "
                           "signed]."),
         click.option("--stripes", type=click.IntRange(1, 10000), default=16, show_default=True,
                      help="--zebra: black and white stripe pairs per turn of the reflected ray."),
-        click.option("--stripe-axis", type=float, nargs=3, default=None, metavar="X Y Z",
+        click.option("--stripe-axis", type=FiniteFloat(), nargs=3, default=None, metavar="X Y Z",
                      help="--zebra: direction of the parallel light lines [default: the camera's up]. Normals that "
                           "jump across an edge show best with lines along that edge."),
     ], lambda **values: Colours(**values))

@@ -125,7 +125,7 @@ class PatchAdjacency:
             a = getattr(self, name)
             if not a.size:
                 continue
-            if a.min() < 0 or not np.all(np.bincount(a.ravel()) > 0):
+            if a.min() < 0 or a.max() >= a.size or not np.all(np.bincount(a.ravel()) > 0):  # dense: max < size
                 raise ValueError(f"adjacency {name} must be numbered 0, 1, 2, ... without gaps")
             if name == "edges" and np.bincount(a.ravel()).max() > 2:
                 raise ValueError("an edge is shared by more than two patch sides")

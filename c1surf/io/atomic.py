@@ -46,8 +46,8 @@ def atomic_output(path, inputs=()):
         does not exist or is not writable; or the block did not leave a
         file at the temporary path.
     """
-    target = Path(os.fspath(path))
-    path_str = str(target)
+    path_str = os.fspath(path) if isinstance(os.fspath(path), str) else os.fsdecode(path)
+    target = _file_behind(Path(os.fspath(path)), path_str)
     _check_target(target, path_str, inputs)
     # ``made`` holds the temporary file's name from just before it is created, so an
     # interrupt (Ctrl-C, SIGTERM) at any point after that removes it as well.
@@ -56,11 +56,44 @@ def atomic_output(path, inputs=()):
         tmp = _create_temporary(target, path_str, made)
         yield tmp
         _move_into_place(tmp, target, path_str)
-    except BaseException:
+    except BaseException as error:
         for name in made:
             with contextlib.suppress(OSError):
                 os.unlink(name)
+        if isinstance(error, OutputError) and error.path in made:  # a writer's refusal names the output, not the temporary
+            raise type(error)(path_str, error.message) from None
         raise
+
+
+def _file_behind(target: Path, path_str: str) -> Path:
+    """The file ``target`` names: a symlink's final target (replaced in place, so the link stays a link), which
+    must be a regular file or not exist yet; devices, pipes and sockets are refused (never replaced by a file)."""
+    real = Path(os.path.realpath(target)) if target.is_symlink() else target
+    try:
+        mode = os.stat(real).st_mode
+    except OSError:  # does not exist yet (or unreachable: _check_target says why)
+        return real
+    kinds = {stat.S_ISCHR: "a character device", stat.S_ISBLK: "a block device", stat.S_ISFIFO: "a named pipe",
+             stat.S_ISSOCK: "a socket"}
+    for test, kind in kinds.items():
+        if test(mode):
+            via = f" (through the symlink to {str(real)!r})" if real != target else ""
+            raise OutputError(path_str, f"is {kind}{via}, not a regular file: c1surf writes regular files only; "
+                                        "choose another output path")
+    return real
+
+
+def _temporary_name(directory: Path, name: str) -> Path:
+    """``.tmp-c1surf-<random>.<name>`` in ``directory``, the start of ``name`` dropped as far as needed for the
+    name to fit the file system's limit (NAME_MAX, 255 bytes) with the suffix kept."""
+    head = f"{_PREFIX}{secrets.token_hex(4)}."
+    try:
+        limit = os.pathconf(directory, "PC_NAME_MAX")
+    except (OSError, ValueError, AttributeError):
+        limit = 255
+    while name and len(os.fsencode(head + name)) > limit:
+        name = name[1:]
+    return directory / (head + name)
 
 
 def _create_temporary(target: Path, path_str: str, made: list) -> str:
@@ -70,7 +103,7 @@ def _create_temporary(target: Path, path_str: str, made: list) -> str:
     """
     directory = target.parent
     for _ in range(100):  # name clashes are astronomically unlikely
-        candidate = directory / f"{_PREFIX}{secrets.token_hex(4)}.{target.name}"
+        candidate = _temporary_name(directory, target.name)
         made.append(str(candidate))
         try:
             # 0o666 & ~umask, like any newly written file (mkstemp would

@@ -64,6 +64,8 @@ def orientation_flips(mesh: HalfEdgeMesh):
     flip : (F,) bool
     non_orientable_faces : (k,) int, faces at an edge that no choice can make consistent (empty if orientable)
     """
+    if mesh.n_faces == 0:  # nothing to orient (a file whose every face was degenerate)
+        return np.zeros(0, dtype=bool), np.zeros(0, dtype=np.int64)
     from scipy.sparse import coo_matrix, csr_matrix  # only for meshes that need flips: 0.4 s to import
     from scipy.sparse.csgraph import breadth_first_order, connected_components
 

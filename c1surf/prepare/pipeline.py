@@ -10,6 +10,8 @@ from __future__ import annotations
 import numpy as np
 
 from ..construction.features import INFINITELY_SHARP
+from ..errors import MeshInputError
+from ..mesh.geometry_checks import GeometryError, check_geometry
 from .extension_data import Sidecars, SurfaceData, surface_data
 from .options import InputOptions
 from .renumber import dissolve_surface_input, drop_repeated_surface_faces, weld_surface_input
@@ -28,11 +30,18 @@ def prepare_mesh(mesh, options: InputOptions, exact_creases: bool, sidecars: Sid
     exact_creases : bool, ``SurfaceOptions.exact_creases`` as ``InputOptions.surface_options`` resolved it
     sidecars : Sidecars, what ``options``' sidecar files say (``io.meshes.sidecars``), or None
 
+    Raises MeshInputError for coordinates out of the construction's range or a mesh spanning no surface
+    (``mesh.geometry_checks``), and for data the options ask for that the file lacks.
+
     Returns
     -------
     (MeshFile, SurfaceData): the edited mesh (its report fields say what changed) and the data that follows it
     """
     options.check()
+    try:  # coordinates the construction can take, spanning a surface
+        check_geometry(mesh.points, mesh.face_vertices)
+    except GeometryError as error:
+        raise MeshInputError(mesh.path, error.message) from None
     data = surface_data(mesh, options, exact_creases, sidecars)
     return prepare_surface_input(mesh, data, options.weld, exact_creases)
 

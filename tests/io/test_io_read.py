@@ -239,7 +239,7 @@ OBJ_ERRORS = [
      ["texture coordinate index 0"]),
     ("v 0 0 0\nv 1 0 0\nv 0 1 0\nvn 0 0\nf 1//1 2//1 3//1\n", 4,
      ["`vn` line has 2 numbers"]),
-    ("v 0 0 0\x00\x01\x02", None, ["not an OBJ text file"]),
+    ("v 0 0 0\x00\x01\x02", 1, ["not an OBJ text file"]),  # the NUL byte's line (issue 30)
     ("ply\nformat ascii 1.0\nend_header\n", None, [".ply suffix"]),
 ]
 

@@ -341,10 +341,15 @@ def test_random_binary_stl_soups_never_crash(tmp_path, corners, copies):
 
 
 def test_batch_finds_stl_and_off_inputs_and_passes_the_weld_options_on(tmp_path):
-    from c1surf.cli.batch import expand_inputs, weld_arguments
+    from c1surf.cli.batch import batch, expand_inputs, given_arguments
 
     for name in ("a.stl", "b.OFF", "c.obj", "d.glb"):
         (tmp_path / name).write_text("x")
     assert [p.name for p in expand_inputs([str(tmp_path / "*")])] == ["a.stl", "b.OFF", "c.obj"]
-    assert weld_arguments(None) == ["--no-weld"] and weld_arguments(0.0) == []
-    assert weld_arguments(1e-6) == ["--weld", "1e-06"]
+
+    def passed_on(*options):
+        context = batch.make_context("batch", [str(tmp_path / "*"), "-o", str(tmp_path / "out"), *options])
+        return given_arguments(context, exclude=("out_dir",))
+
+    assert passed_on("--no-weld") == ["--no-weld"] and passed_on() == []
+    assert passed_on("--weld", "1e-6") == ["--weld", "1e-06"]

@@ -10,12 +10,13 @@ from ...io.meshes.read import read_mesh
 from ...io.patches.formats import load_patch_set
 from ...io.registry import MESH_READERS, PATCH_READERS, suffix_list
 from ..common import Failure, friendly_errors, with_formats
+from ..options import FiniteFloat
 
 
 @click.command()
 @click.argument("first", metavar="A", type=click.Path(dir_okay=False))
 @click.argument("second", metavar="B", type=click.Path(dir_okay=False))
-@click.option("--tolerance", type=click.FloatRange(0.0, None), default=1e-12, show_default=True,
+@click.option("--tolerance", type=FiniteFloat(0.0), default=1e-12, show_default=True,
               help="Largest coefficient (or vertex) move accepted as equal, relative to the bounding-box diagonal of A.")
 @friendly_errors
 @with_formats

@@ -315,7 +315,9 @@ def least_triangles(segments: np.ndarray, bounds: np.ndarray, tau: float, edges:
     if segments.shape[0] == 0:
         sides, per_edge = side_segments(edges, segments)
         return segments, sides, per_edge
-    uniform = int(np.maximum(1, np.ceil(np.sqrt(bounds.clip(min=0) @ [1.0, 2.0, 1.0] / (8 * tau)))).max())
+    # at most MAX_SEGMENTS (a tiny tau asks for astronomically many: the caller refuses what the cap cannot meet)
+    needed = np.ceil(np.sqrt(bounds.clip(min=0) @ [1.0, 2.0, 1.0] / (8 * tau))).max()
+    uniform = int(min(max(1.0, needed), MAX_SEGMENTS)) if np.isfinite(needed) else MAX_SEGMENTS
     while uniform < MAX_SEGMENTS and np.any(bound(bounds, np.full(segments.shape, uniform)) > tau * (1 + 1e-12)):
         uniform += 1
     floors = np.unique(np.round(np.geomspace(2, max(uniform, 2), 8)).astype(np.int64))

@@ -122,7 +122,8 @@ def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=
                              for k, g in enumerate(groups)] or [np.zeros((0, 3))])
     tau = tolerance * diagonal if diagonal > 0 else tolerance
     corners, edges = _compact(adjacency.corners), _compact(adjacency.edges)
-    segments, sides, per_edge = least_triangles(patch_segments(bounds, tau), bounds, tau, edges)
+    with np.errstate(over="ignore", divide="ignore"):  # a tau near 0 asks for more segments than exist: refused below
+        segments, sides, per_edge = least_triangles(patch_segments(bounds, tau), bounds, tau, edges)
     if np.any(bound(bounds, segments) > tau * (1 + 1e-12)):
         raise ValueError(f"a chordal error of {tolerance:g} of the diagonal needs more than {MAX_SEGMENTS} segments on "
                          "a patch side: give a larger tolerance")

@@ -10,6 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import MeshInputError, OutputError
+from ..finite import refuse_non_finite
 
 __all__ = ["write_exr", "read_exr"]
 
@@ -30,6 +31,8 @@ def write_exr(path, channels: dict, attributes: dict | None = None) -> None:
     if len(shapes) != 1 or len(next(iter(shapes))) != 2:
         raise ValueError(f"every channel must be one (H, W) array, got shapes {sorted(shapes)}")
     data = {str(name): np.ascontiguousarray(a, dtype=np.float32) for name, a in channels.items()}
+    for name, values in data.items():  # +inf is the depth of the background (Z), nothing else
+        refuse_non_finite(values, f"'{name}' channel values", path, allow_positive_infinity=name == "Z")
     header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
     for key, value in (attributes or {}).items():
         header[str(key)] = np.array(value, dtype=np.float32) if isinstance(value, (list, tuple, np.ndarray)) else value

@@ -295,10 +295,11 @@ def _check_text(data: bytes, path: str) -> None:
     if data[:3] == b"ply" and data[3:4] in (b"\n", b"\r"):
         raise MeshInputError(
             path, "this is a PLY file, not OBJ: give it a .ply suffix")
-    if b"\0" in data:
+    nul = data.find(b"\0")
+    if nul >= 0:
         raise MeshInputError(
-            path, "not an OBJ text file (it contains binary data): export "
-            "the mesh as text OBJ or as PLY")
+            path, "not an OBJ text file (a NUL byte: binary data): export "
+            "the mesh as text OBJ or as PLY", data.count(b"\n", 0, nul) + 1)
     arr = np.frombuffer(data, dtype=np.uint8)
     if arr.max() < 128:
         return  # plain ASCII

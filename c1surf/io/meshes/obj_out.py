@@ -25,6 +25,8 @@ import os
 import numpy as np
 
 from ...evaluation.stream.spool import SpooledTessellation
+from ..errors import OutputError
+from ..finite import refuse_non_finite_mesh, refuse_non_finite_vertices
 
 from .number_text import (FLOAT32_DIGITS, FLOAT64_DIGITS, constant_field, decimals_for, format_fixed, join_columns,
                           printf_field, text_lines)
@@ -88,6 +90,8 @@ def write_obj(path, mesh, float32: bool = False) -> None:
     """
     if mesh.properties:
         raise ValueError("per-vertex properties need a .ply output, not .obj")
+    refuse_non_finite_mesh(mesh, path)
+    _refuse_beyond_fixed_point(_largest(np.asarray(mesh.points)), path)
     triangles = np.asarray(mesh.triangles)
     with open(path, "wb") as f:
         f.write(_ATTRIBUTE_HEADER if mesh.has_attributes else _HEADER)
@@ -97,6 +101,16 @@ def write_obj(path, mesh, float32: bool = False) -> None:
         for a in range(0, triangles.shape[0], _BLOCK):
             index = format_fixed(triangles[a : a + _BLOCK].astype(np.float64) + 1.0, 0)
             f.write(text_lines(b"f ", _corner_fields(index, mesh.uv is not None, mesh.normals is not None)))
+
+
+_FIXED_POINT_LIMIT = 9e18  # number_text.format_fixed: int64 digits
+
+
+def _refuse_beyond_fixed_point(largest: float, path) -> None:
+    """OBJ numbers are written in fixed point from int64 digits: magnitudes of 9e18 and more do not fit."""
+    if largest >= _FIXED_POINT_LIMIT:
+        raise OutputError(path, f"coordinates reach {largest:.3g}: OBJ text is written in fixed point, up to "
+                                f"{_FIXED_POINT_LIMIT:.0e}; write .ply, .stl or .glb, or scale the mesh down")
 
 
 def _largest(values: np.ndarray) -> float:
@@ -124,7 +138,9 @@ def write_obj_stream(path, tessellation, float32: bool = False) -> None:
     with SpooledTessellation(tessellation, os.path.dirname(os.path.abspath(path))) as spooled:
         largest = np.zeros(2)
         for points, normals in spooled.vertex_blocks():  # evaluated: the decimals of v and of vn
+            refuse_non_finite_vertices(points, normals, path)
             largest = np.maximum(largest, [_largest(points[:, :3]), _largest(normals)])
+        _refuse_beyond_fixed_point(largest[0], path)
         decimals = [decimals_for(np.array([value]), digits) for value in largest]
         with open(path, "wb") as f:
             f.write(_HEADER)

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import os
 import re
+import warnings
 
 import numpy as np
 from plyfile import (PlyData, PlyElementParseError, PlyHeaderParseError,
@@ -94,12 +95,20 @@ def _open(path: str):
     if not head or head.isspace():
         raise MeshInputError(
             path, "the file is empty: a PLY mesh starts with a 'ply' header")
+    skip = 3 if head.startswith(b"\xef\xbb\xbf") else 0  # a UTF-8 byte order mark, skipped as in OBJ and OFF
+    head = head[skip:]
     if not (head.startswith(b"ply\n") or head.startswith(b"ply\r")):
         raise MeshInputError(
             path, "not a PLY file (it does not start with a 'ply' line): "
             "check the file, or give it the suffix of its real format")
     header_lines, binary, sniffed = _sniff_header(head)
-    ply = _load(path, binary, header_lines, sniffed)
+    negative = re.search(rb"^element[ \t]+\S+[ \t]+-", head[:head.find(b"end_header") + 1], re.M)
+    if negative is not None:
+        raise MeshInputError(path, "the header declares a negative element count: fix the header or re-export the "
+                                   "file", head[:negative.start()].count(b"\n") + 1)
+    with warnings.catch_warnings():  # numpy's loadtxt on a truncated row: the error that follows says it
+        warnings.simplefilter("ignore")
+        ply = _load(path, binary, header_lines, sniffed, skip)
     if "vertex" not in ply:
         raise MeshInputError(
             path, "the PLY file has no 'vertex' element: c1surf needs "
@@ -326,28 +335,40 @@ def _sniff_header(head: bytes):
     return header.count(b"\n") + 1, binary, elements
 
 
-def _load(path: str, binary: bool, header_lines: int, elements) -> PlyData:
+def _load_known_face_size(path: str, skip: int) -> PlyData | None:
+    """The fast path of a binary file: telling plyfile the face size lets it memory-map the faces instead
+    of reading them one by one in Python (about 100x faster for 1M quads). A wrong guess fails or leaves
+    bytes unread: None, and ``_load``'s general read reports."""
+    for k in (4, 3):
+        hint = {"face": {name: k for name in _INDEX_NAMES}}
+        try:
+            with open(path, "rb") as fh:
+                fh.seek(skip)
+                ply = PlyData.read(fh, known_list_len=hint)
+                if fh.tell() == os.fstat(fh.fileno()).st_size:
+                    return ply
+        except Exception:  # noqa: BLE001 - the general read reports
+            pass
+    return None
+
+
+def _load(path: str, binary: bool, header_lines: int, elements, skip: int = 0) -> PlyData:
     """Read with plyfile, mapping its errors to MeshInputError.
 
     ``header_lines`` and ``elements`` (name, count) come from
-    :func:`_sniff_header` and only serve to give ASCII errors a line.
+    :func:`_sniff_header` and only serve to give ASCII errors a line;
+    ``skip``: bytes before the header (a byte order mark).
     """
     if binary:
-        # Fast path: telling plyfile the face size lets it memory-map the
-        # faces instead of reading them one by one in Python (about 100x
-        # faster for 1M quads).  A wrong guess fails or leaves bytes
-        # unread; then fall through to the general read below.
-        for k in (4, 3):
-            hint = {"face": {name: k for name in _INDEX_NAMES}}
-            try:
-                with open(path, "rb") as fh:
-                    ply = PlyData.read(fh, known_list_len=hint)
-                    if fh.tell() == os.fstat(fh.fileno()).st_size:
-                        return ply
-            except Exception:  # noqa: BLE001 - the general read reports
-                pass
+        ply = _load_known_face_size(path, skip)
+        if ply is not None:
+            return ply
     try:
-        return PlyData.read(path)
+        if not skip:
+            return PlyData.read(path)
+        with open(path, "rb") as fh:
+            fh.seek(skip)
+            return PlyData.read(fh)
     except PlyHeaderParseError as exc:
         raise MeshInputError(
             path, f"bad PLY header: {exc.message}: fix the header or "
@@ -377,6 +398,9 @@ def _load(path: str, binary: bool, header_lines: int, elements) -> PlyData:
         raise MeshInputError(
             path, f"cannot read the file ({exc.strerror or exc})") from None
     except (ValueError, TypeError, OverflowError, IndexError) as exc:
+        if "out of bounds" in str(exc) or isinstance(exc, OverflowError):  # numpy: 300 as a uchar list length
+            raise MeshInputError(path, "a value does not fit the type the header declares for it (such as a face "
+                                       "of 300 corners with a 'uchar' count): fix the value or the header") from None
         raise MeshInputError(path, f"cannot read the PLY data ({exc}): "
                              "re-export the file") from None
 

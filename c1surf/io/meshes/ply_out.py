@@ -20,6 +20,8 @@ import threading
 
 import numpy as np
 
+from ..finite import refuse_non_finite_mesh, refuse_non_finite_vertices
+
 __all__ = ["write_ply", "write_ply_blocks", "write_ply_stream", "vertex_columns"]
 
 _BLOCK = 1 << 19  # rows per block: bounds the structured arrays to some MB
@@ -69,6 +71,7 @@ def write_ply(path, mesh, float32: bool = False) -> None:
     mesh : TriangleMesh, points (V, 3), triangles (T, 3) int, optional normals, uv, colours, properties
     float32 : positions (and normals) as ``float`` instead of ``double``
     """
+    refuse_non_finite_mesh(mesh, path, float32)
     columns = vertex_columns(mesh, float32)
     triangles = np.asarray(mesh.triangles)
     n, t = mesh.points.shape[0], triangles.shape[0]
@@ -115,6 +118,7 @@ def write_ply_blocks(path, n_vertices: int, n_triangles: int, vertex_blocks, tri
             f.seek(vertices_at)
         try:
             for points, normals in vertex_blocks:
+                refuse_non_finite_vertices(points, normals, path, real)
                 records = None if float32 else _records(points, normals)
                 if records is None:
                     values = [points[:, 0], points[:, 1], points[:, 2], normals[:, 0], normals[:, 1], normals[:, 2]]

@@ -39,6 +39,8 @@ def read_sidecar_json(path: str, option: str, what: str):
         raise MeshInputError(path, f"is a directory, not {what}") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise MeshInputError(path, f"not a JSON file ({e})", getattr(e, "lineno", None)) from None
+    except RecursionError:  # json's decoder recurses once per level
+        raise MeshInputError(path, f"not {what}: its JSON is nested too deeply to read") from None
 
 
 def read_creases_file(path, mesh) -> SharpFeatures:

@@ -18,6 +18,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..finite import refuse_non_finite_mesh
 from ..registry import MESH_WRITERS, suffix_of
 
 # vertex colour properties as the readers name them (``prepare.extension_data`` carries them as point columns)
@@ -129,6 +130,8 @@ def write_attribute_mesh(path, points, triangles, normals, attributes, names, *,
 
 def _trimesh_export(path, mesh: TriangleMesh, file_type: str, **options) -> None:
     import trimesh  # imported here: only these formats need it
+
+    refuse_non_finite_mesh(mesh, path, float32=file_type in ("stl", "glb"))  # float32 by definition
 
     shape = trimesh.Trimesh(vertices=mesh.points, faces=mesh.triangles, vertex_normals=mesh.normals, process=False,
                             validate=False)

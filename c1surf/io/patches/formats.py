@@ -6,13 +6,16 @@ import dataclasses
 
 from ...evaluation.patch_set import PatchSet, surface_patch_set
 from .. import registry
+from .checks import check_patch_range
 
 __all__ = ["load_patch_set", "write_patch_set", "write_patch_stream", "write_surface_patches"]
 
 
 def load_patch_set(path) -> PatchSet:
-    """Read any patch file (the suffix picks the reader) as a PatchSet."""
-    return registry.PATCH_READERS[registry.suffix_of(path, registry.PATCH_READERS)].function(path)
+    """Read any patch file (the suffix picks the reader) as a PatchSet, its coordinates in c1surf's range."""
+    patch_set = registry.PATCH_READERS[registry.suffix_of(path, registry.PATCH_READERS)].function(path)
+    check_patch_range(path, patch_set)
+    return patch_set
 
 
 def write_patch_set(path, patch_set: PatchSet, suffix: str | None = None, **options) -> None:

@@ -34,6 +34,7 @@ from ... import __version__
 from ...evaluation.merge import MergedPiece, piece_dicts
 from ...evaluation.patch_set import PatchSet, degree_runs
 from ..errors import MeshInputError
+from ..finite import refuse_non_finite_patch_set
 from .brep.iges_brep import iges_brep
 from .iges_writer import DEFAULT_UNITS, UNITS, bezier_patches_to_surfaces, write_iges
 from .merged import is_piece_knots, piece_patches, uncovered_groups
@@ -56,6 +57,7 @@ def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNIT
         (``brep.iges_brep``: 186 solids of the closed components, 514 shells, 510 faces, ...);
         None: when ``group``. ``brep=False, group=True``: the surfaces in one 402 group (no B-rep)
     """
+    refuse_non_finite_patch_set(patch_set, path)
     surfaces = piece_dicts(patch_set.merged)
     for points, weights in zip(*uncovered_groups(patch_set)):
         surfaces.extend(bezier_patches_to_surfaces(points, weights))
@@ -283,6 +285,9 @@ def _surface_128(path, tokens: list, line: int):
     """Knots, weights and control points of a rational B-spline surface entity from its parameters."""
     try:
         k1, k2, m1, m2 = (int(t) for t in tokens[1:5])
+        if min(m1, m2) < 1 or k1 < m1 or k2 < m2:
+            raise MeshInputError(str(path), f"rational B-spline surface (type 128) with degrees {m1}, {m2} and upper "
+                                 f"indices {k1}, {k2}: each degree must be at least 1 and at most its index", line)
         n1, n2, nc = k1 + m1 + 2, k2 + m2 + 2, (k1 + 1) * (k2 + 1)
         reals = tokens[10 : 10 + n1 + n2 + 4 * nc]
         try:

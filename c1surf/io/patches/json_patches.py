@@ -26,6 +26,7 @@ import numpy as np
 
 from ...evaluation.patch_set import KIND_BY_DEGREE, PatchSet, degree_runs, surface_patch_set
 from ..errors import MeshInputError
+from ..finite import refuse_non_finite, refuse_non_finite_patch_set
 from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
 
 _PIECE_KEYS = ("points", "knots_u", "knots_v", "patches", "rotation")  # and "weights" when rational
@@ -105,6 +106,7 @@ def write_patch_set_json(path, patch_set: PatchSet, **_options) -> None:
     Weights (rational patches) and merged pieces are kept; the options of other
     formats (IGES units, ...) do not apply.
     """
+    refuse_non_finite_patch_set(patch_set, path)  # json.dumps would write NaN, which no JSON reader takes
     text = json.dumps(patch_set_document(patch_set), separators=_SEPARATORS)  # dumps: the C encoder, unlike dump
     with open(path, "w", encoding="utf-8") as f:
         f.write(text)
@@ -124,6 +126,7 @@ def write_patch_stream_json(path, stream, **_options) -> None:
         separator, offset = "", 0
         for kind, count in enumerate(stream.counts):
             for a, points in stream.blocks(kind, _STREAM_BLOCK):
+                refuse_non_finite(points, "control point coordinates", path)
                 lo, hi = offset + a, offset + a + len(points)
                 adjacency = [stream.integers(name, lo, hi) for name in ("corners", "edges", "reversed", "neighbours")]
                 entries = patch_entries(points, stream.source_dicts(lo, hi), adjacency)
@@ -205,6 +208,9 @@ def _load_document(path) -> dict:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
     except (UnicodeDecodeError, json.JSONDecodeError) as e:
         raise MeshInputError(str(path), f"not a JSON patch file ({e})", getattr(e, "lineno", None)) from None
+    except RecursionError:  # json's decoder recurses once per level
+        raise MeshInputError(str(path), "not a c1surf patch file: its JSON is nested too deeply to read (a patch file "
+                                        "nests 4 levels)") from None
     check_header(path, doc)
     if not isinstance(doc.get("patches", []), list):
         raise MeshInputError(str(path), '"patches" must be a list')

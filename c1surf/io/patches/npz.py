@@ -36,9 +36,11 @@ import numpy as np
 
 from ...evaluation.patch_set import FORMAT_NAME, PatchSet
 from ..errors import MeshInputError
+from ..finite import refuse_non_finite
 from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
+_MAX_RATIO = 100  # largest expansion of a compressed member read (float arrays compress 1-3 times)
 _STREAM_BLOCK = 1 << 15  # patches per block of a streamed file (bicubic: 12 MB)
 
 
@@ -119,12 +121,14 @@ class _Blocks:
     def __init__(self, shape: tuple, dtype, blocks):
         self.shape, self.dtype, self.blocks = tuple(int(n) for n in shape), np.dtype(dtype), blocks
 
-    def write(self, f) -> None:
-        """The bytes ``np.lib.format.write_array`` writes for the whole array (a header of format 1.0)."""
+    def write(self, f, path="output", name: str = "array") -> None:
+        """The bytes ``np.lib.format.write_array`` writes for the whole array (a header of format 1.0); each
+        block's numbers are finite (``refuse_non_finite``, naming ``path`` and the member ``name``)."""
         descr = np.lib.format.dtype_to_descr(self.dtype)
         np.lib.format.write_array_header_1_0(f, {"descr": descr, "fortran_order": False, "shape": self.shape})
         rows = 0
         for block in self.blocks:
+            refuse_non_finite(block, f"'{name}' values", path)
             f.write(np.ascontiguousarray(block, dtype=self.dtype).tobytes())
             rows += block.shape[0]
         if rows != self.shape[0]:
@@ -165,8 +169,9 @@ def _write_members(path, members) -> None:
             info.external_attr = 0o644 << 16
             with zf.open(info, "w", force_zip64=True) as f:
                 if isinstance(array, _Blocks):
-                    array.write(f)
+                    array.write(f, path, name)
                 else:
+                    refuse_non_finite(array, f"'{name}' values", path)
                     np.lib.format.write_array(f, np.ascontiguousarray(array), allow_pickle=False)
             del array
 
@@ -187,6 +192,9 @@ def _mapped_members(path) -> dict:
                     continue
                 name = info.filename[:-4]
                 if info.compress_type != zipfile.ZIP_STORED or mapped is None:
+                    if info.file_size > _MAX_RATIO * info.compress_size + (1 << 20):  # real arrays: 1-3 times
+                        raise ValueError(f"member {info.filename} would expand {info.compress_size} bytes into "
+                                         f"{info.file_size}: refused as a zip bomb")
                     with zf.open(info) as member:
                         arrays[name] = np.lib.format.read_array(member, allow_pickle=False)
                     continue
@@ -246,8 +254,13 @@ def _open(path) -> dict:
         raise MeshInputError(str(path), "no such file") from None
     except IsADirectoryError:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
-    except (OSError, ValueError, EOFError, struct.error, zipfile.BadZipFile) as e:
-        raise MeshInputError(str(path), f"not an NPZ patch file ({e})") from None
+    except zipfile.BadZipFile as e:
+        raise MeshInputError(str(path), f"not an NPZ patch file: not a readable zip archive ({e})") from None
+    except (OSError, ValueError, EOFError, struct.error) as e:
+        text = str(e)
+        if "header" in text.lower() and ("parse" in text.lower() or "magic" in text.lower()):
+            text = "the .npy header of a member is damaged"  # numpy quotes the damaged bytes
+        raise MeshInputError(str(path), f"not an NPZ patch file ({text[:120]})") from None
 
 
 def _header(path, data: dict) -> dict:
@@ -258,6 +271,8 @@ def _header(path, data: dict) -> dict:
         header = json.loads(str(data["header"].item()))
     except (ValueError, TypeError) as e:
         raise MeshInputError(str(path), f"damaged header ({e})") from None
+    except RecursionError:  # json's decoder recurses once per level
+        raise MeshInputError(str(path), "damaged header: its JSON is nested too deeply to read") from None
     check_header(path, header)
     return header
 

@@ -20,6 +20,7 @@ swapped; other surfaces and trimmed faces are refused with one line.
 from __future__ import annotations
 
 import contextlib
+import mmap
 import os
 import re
 
@@ -28,9 +29,11 @@ import numpy as np
 from ...evaluation.merge import MergedPiece
 from ...evaluation.patch_set import PatchSet
 from ..errors import MeshInputError
+from ..finite import refuse_non_finite_patch_set
 from .brep.step_brep import brep_shape, occ_classes
 from .merged import is_piece_knots, piece_patches
 
+_FACE_ENTITY = re.compile(rb"=\s*(?:ADVANCED_FACE|FACE_SURFACE)\s*\(")
 _READ_HINT = "reading STEP needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
 
 
@@ -45,6 +48,7 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
     points = np.concatenate([np.asarray(g, dtype=np.float64)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)]
                             + [np.zeros((0, 3))])
     _check_range(path, points)
+    refuse_non_finite_patch_set(patch_set, path)
     write_step_shape(path, brep_shape(patch_set).shape, file_name or os.path.basename(os.fspath(path)))
 
 
@@ -202,6 +206,10 @@ def _face_nets(path):
             knots_u, knots_v, weights, points = knots_v, knots_u, weights.T, points.transpose(1, 0, 2)
         yield knots_u, knots_v, np.ascontiguousarray(weights), np.ascontiguousarray(points)
         explorer.Next()
+    declared = _declared_faces(path)
+    if number < declared:  # Open CASCADE drops what it cannot translate, without failing
+        raise MeshInputError(str(path), f"Open CASCADE read only {number} of the file's {declared} faces: some face or "
+                             "its surface is damaged; c1surf refuses an incomplete surface (re-export the file)")
 
 
 def _read_shape(path):
@@ -222,7 +230,34 @@ def _read_shape(path):
         if reader.ReadFile(os.fspath(path)) != IFSelect_RetDone:
             raise MeshInputError(str(path), "not a STEP file Open CASCADE can read")
         reader.TransferRoots()
+        _refuse_failed_faces(path, reader)
         return reader.OneShape()
+
+
+def _refuse_failed_faces(path, reader) -> None:
+    """Refuse, naming it, the first surface or face entity Open CASCADE failed to translate (it would drop the
+    face and go on: a corrupt surface, such as a degree of 1e9, would leave a surface with a hole)."""
+    checks = reader.WS().TransferReader().TransientProcess().CheckList(False)
+    checks.Start()
+    while checks.More():
+        check, number = checks.Value(), checks.Number()
+        entity = check.Entity()
+        kind = entity.DynamicType().Name() if entity is not None else ""
+        if check.NbFails() and kind.startswith(("StepGeom_", "StepShape_")) and ("Surface" in kind or "Face" in kind):
+            raise MeshInputError(str(path), f"entity #{number} ({kind.split('_', 1)[1]}) cannot be read: "
+                                 f"{check.CFail(1).strip()}; its face would be missing, so c1surf refuses the file "
+                                 "(re-export it)")
+        checks.Next()
+
+
+def _declared_faces(path) -> int:
+    """How many ADVANCED_FACE and FACE_SURFACE entities the file's text declares (a regular expression over
+    the memory-mapped file: no copy)."""
+    with open(path, "rb") as f:
+        if os.fstat(f.fileno()).st_size == 0:
+            return 0
+        with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as text:
+            return sum(1 for _ in _FACE_ENTITY.finditer(text))
 
 
 def _surface_net(path, number: int, surface):

@@ -21,6 +21,7 @@ import numpy as np
 
 from ....arrays import column_bounds
 from ....evaluation.stream.spool import SpooledTessellation
+from ...finite import refuse_non_finite_vertices
 
 __all__ = ["write_glb_stream"]
 
@@ -100,6 +101,7 @@ def write_glb_stream(path, tessellation, float32: bool = False) -> None:
     with SpooledTessellation(tessellation, os.path.dirname(os.path.abspath(path))) as spooled:
         bounds = _Bounds()
         for points, normals in spooled.vertex_blocks():  # evaluated once, kept for the second pass
+            refuse_non_finite_vertices(points[:, :3], normals, path, np.float32)
             bounds.add_vertices(*_vertex_arrays(points, normals))
         for triangles in spooled.triangle_blocks():
             bounds.add_triangles(triangles.astype(np.uint32))

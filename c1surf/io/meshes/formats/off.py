@@ -85,7 +85,10 @@ def parse_off(data: bytes, path="<memory>", *, keep_degenerate: bool = False) ->
 
 
 def _content_lines(data: bytes):
-    """(1-based numbers, tokens) of the lines that hold something once comments are removed."""
+    """(1-based numbers, tokens) of the lines that hold something once comments are removed (a UTF-8 byte
+    order mark read as spaces, as in OBJ)."""
+    if data.startswith(b"\xef\xbb\xbf"):
+        data = b"   " + data[3:]
     numbered = [(k + 1, line.split(b"#", 1)[0].split()) for k, line in enumerate(data.split(b"\n"))]
     kept = [(k, t) for k, t in numbered if t]
     return [k for k, _ in kept], [t for _, t in kept]

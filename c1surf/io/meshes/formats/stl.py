@@ -63,18 +63,66 @@ def _triangles(data: bytes, path: str) -> np.ndarray:
     """(T, 3, 3) float64 corners of every facet, in file order (all solids of an ASCII file)."""
     from trimesh.exchange.stl import load_stl  # a format library: imported on first use
 
+    data = _as_utf8(data, path)
     try:
         with warnings.catch_warnings():
             warnings.simplefilter("ignore")  # numpy's fromstring on text that is not numbers
             loaded = load_stl(io.BytesIO(data))
-    except Exception as exc:  # trimesh raises ValueError, HeaderError, ... on malformed files
-        raise MeshInputError(path, f"not a valid STL file ({exc})") from None
+    except Exception as exc:  # trimesh raises ValueError, HeaderError, ... on malformed files (numpy's words)
+        line, what = _ascii_fault(data)
+        if line is None and not data.lstrip()[:5].lower().startswith(b"solid"):
+            what = (f"a binary STL whose {len(data)} bytes are not the 84 + 50 x "
+                    f"{int.from_bytes(data[80:84], 'little') if len(data) >= 84 else 0} its header counts")
+        raise MeshInputError(path, f"not a valid STL file: {what or type(exc).__name__}: re-export it", line) from None
     solids = list(loaded["geometry"].values()) if "geometry" in loaded else [loaded]
     corners = [np.asarray(s["vertices"], dtype=np.float64)[np.asarray(s["faces"])] for s in solids]
     if not corners or sum(len(c) for c in corners) == 0:
         raise MeshInputError(path, "no triangles found: not an STL file, or a binary STL whose length does not match "
                              "the triangle count in its header")
     return np.concatenate(corners)
+
+
+_VERTEX = re.compile(rb"^[ \t]*vertex\b(.*)$", re.IGNORECASE | re.MULTILINE)
+
+
+def _ascii_fault(data: bytes):
+    """(1-based line or None, what is wrong) of an ASCII STL trimesh could not read: the first ``vertex`` line
+    without three numbers, or the first facet without three vertices; (None, None) when neither is found."""
+    vertex_lines = []
+    for match in _VERTEX.finditer(data):
+        line = data.count(b"\n", 0, match.start()) + 1
+        fields = match.group(1).split()
+        try:
+            ok = len(fields) == 3 and [float(f) for f in fields] is not None
+        except ValueError:
+            ok = False
+        if not ok:
+            return line, "a `vertex` line needs three numbers x y z"
+        vertex_lines.append(line)
+    facets = np.array([data.count(b"\n", 0, m.start()) + 1 for m in _FACET.finditer(data)], dtype=np.int64)
+    inside = np.diff(np.searchsorted(np.array(vertex_lines, dtype=np.int64), np.r_[facets, np.iinfo(np.int64).max]))
+    wrong = np.flatnonzero(inside != 3)
+    if wrong.size:
+        return int(facets[wrong[0]]), f"this facet has {int(inside[wrong[0]])} `vertex` lines, a triangle needs 3"
+    return None, None
+
+
+def _as_utf8(data: bytes, path: str) -> bytes:
+    """``data`` as trimesh's STL loader takes it without guessing an encoding (``charset_normalizer``, not a
+    dependency): a binary STL (84 header bytes and 50 per triangle its header counts) or UTF-8 text as it is,
+    other text (a solid named in Latin-1) re-encoded as UTF-8; anything else refused in one line."""
+    if len(data) >= 84 and 84 + 50 * int.from_bytes(data[80:84], "little") == len(data):
+        return data
+    try:
+        data.decode("utf-8")
+        return data
+    except UnicodeDecodeError:
+        pass
+    if b"\0" in data or not data.lstrip()[:5].lower().startswith(b"solid"):
+        raise MeshInputError(path, f"not an STL file: not ASCII STL text (no `solid` line), and not a binary STL "
+                                   f"(its {len(data)} bytes are not the 84 + 50 x {int.from_bytes(data[80:84], 'little') if len(data) >= 84 else 0} "
+                                   "of its header's triangle count): re-export it")
+    return data.decode("latin-1").encode("utf-8")
 
 
 def _facet_lines(data: bytes, n_triangles: int) -> np.ndarray | None:

@@ -14,6 +14,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from ...finite import refuse_non_finite
+
 __all__ = ["write_stl_stream", "stl_records"]
 
 # trimesh.exchange.stl's _stl_dtype_header and _stl_dtype
@@ -53,6 +55,7 @@ def write_stl_stream(path, tessellation, float32: bool = False) -> None:
     with open(path, "wb") as f:
         f.write(header.tobytes())
         for corners in tessellation.triangle_point_blocks():
+            refuse_non_finite(corners, "vertex coordinates", path, np.float32)
             f.write(stl_records(corners))
             written += corners.shape[0]
     if written != tessellation.n_triangles:
