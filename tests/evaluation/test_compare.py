@@ -52,12 +52,12 @@ def test_structure_weights_merged_and_sources():
     heavier.weights[0][7, 1, 1] = 1.5
     result = compare_patch_sets(rational, heavier)
     assert result.n_moved == 1 and "patch 7 " in result.moved[0] and "weights[1][1] 1.0 -> 1.5" in result.moved[0]
-    unmerged = copy(ps, merged=[])
-    assert compare_patch_sets(ps, unmerged).structural[0].startswith("merged pieces (spans): ")
+    unmerged = copy(ps, merged=[])  # the same surface, its patches not packed into pieces
+    assert compare_patch_sets(ps, unmerged).equal and compare_patch_sets(unmerged, ps).equal
     piece = ps.merged[0]
     shifted = copy(ps, merged=[dataclasses.replace(piece, points=piece.points + 1e-6)] + ps.merged[1:])
-    result = compare_patch_sets(ps, shifted)
-    assert result.n_moved == piece.points.shape[0] * piece.points.shape[1] and result.moved[0].startswith("merged piece 0:")
+    result = compare_patch_sets(ps, shifted)  # a piece that is not its patches: each of its 9 m n coefficients
+    assert result.n_moved == 9 * piece.patches.size and result.moved[0].startswith("B: merged piece 0 (span ")
     other_source = copy(ps, source=ps.source.copy())
     other_source.source[3, 0] += 1
     assert compare_patch_sets(ps, other_source).structural[0].startswith("patch 3 (biquadratic, source ")

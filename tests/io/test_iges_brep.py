@@ -25,6 +25,7 @@ from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.bezier import evaluate_patches
 from c1surf.evaluation.measure import solid_moments
 from c1surf.evaluation.merge import merge_biquadratic
+from c1surf.io.patches.merged import cad_patch_set
 from c1surf.evaluation.patch_set import surface_patch_set
 from c1surf.evaluation.rational import evaluate_rational
 from c1surf.io.errors import MeshInputError
@@ -79,7 +80,8 @@ def expected_patch_set(mesh, merge: bool):
     """The patch set convert writes: the surface's patches, with its merged pieces unless --no-merge."""
     surface = surface_from_file(mesh)[0]
     patch_set = surface_patch_set(surface)
-    return dataclasses.replace(patch_set, merged=merge_biquadratic(surface)) if merge else patch_set
+    # packed: the strips the IGES writer makes of the merged pieces (io.patches.merged.cad_patch_set)
+    return cad_patch_set(dataclasses.replace(patch_set, merged=merge_biquadratic(surface))) if merge else patch_set
 
 
 def read_iges(path):
@@ -204,7 +206,7 @@ def test_open_grid_is_one_valid_open_shell(tmp_path, merge):
     surface = Surface(*grid(4, lambda x, y: 0.1 * x * y), SurfaceOptions())
     patch_set = surface_patch_set(surface)
     if merge:
-        patch_set = dataclasses.replace(patch_set, merged=merge_biquadratic(surface))
+        patch_set = cad_patch_set(dataclasses.replace(patch_set, merged=merge_biquadratic(surface)))
     topology = iges_brep(patch_set, brep_topology(patch_set).n_faces).topology
     path = tmp_path / "grid.igs"
     write_patch_set_iges(path, patch_set)

@@ -45,7 +45,7 @@ from c1surf.io.patches.brep.edge_chains import chain_curve, edge_chains, inner_v
 from c1surf.io.patches.brep.solids import face_components, signed_volumes  # noqa: E402
 from c1surf.io.patches.brep.step_brep import brep_shape, brep_tolerance  # noqa: E402
 from c1surf.io.patches.brep.topology import FACE_PIECE, brep_topology, edge_curves  # noqa: E402
-from c1surf.io.patches.merged import piece_patches  # noqa: E402
+from c1surf.io.patches.merged import cad_patch_set, piece_patches  # noqa: E402
 from c1surf.io.patches.step import write_patch_set_step  # noqa: E402
 
 from conftest import CLOSED_SAMPLES, SAMPLES, grid, ocp_shapes, read_step, shared_mesh, weighted_cube  # noqa: E402
@@ -61,7 +61,8 @@ WORST = {}  # what -> largest relative disagreement, for the summary at the end
 
 def patch_set_of(surface, merge: bool) -> PatchSet:
     patch_set = surface_patch_set(surface)
-    return dataclasses.replace(patch_set, merged=merge_biquadratic(surface)) if merge else patch_set
+    # packed: the strips the STEP writer makes of the merged pieces (io.patches.merged.cad_patch_set)
+    return cad_patch_set(dataclasses.replace(patch_set, merged=merge_biquadratic(surface))) if merge else patch_set
 
 
 def convert_step(tmp_path, mesh, merge: bool):

@@ -36,7 +36,7 @@ from ...evaluation.patch_set import PatchSet, degree_runs
 from ..errors import MeshInputError
 from .brep.iges_brep import iges_brep
 from .iges_writer import DEFAULT_UNITS, UNITS, bezier_patches_to_surfaces, write_iges
-from .merged import is_piece_knots, piece_patches, uncovered_groups
+from .merged import cad_patch_set, is_piece_knots, piece_patches, uncovered_groups
 
 
 
@@ -56,6 +56,7 @@ def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNIT
         (``brep.iges_brep``: 186 solids of the closed components, 514 shells, 510 faces, ...);
         None: when ``group``. ``brep=False, group=True``: the surfaces in one 402 group (no B-rep)
     """
+    patch_set = cad_patch_set(patch_set)
     surfaces = piece_dicts(patch_set.merged)
     for points, weights in zip(*uncovered_groups(patch_set)):
         surfaces.extend(bezier_patches_to_surfaces(points, weights))

@@ -29,7 +29,7 @@ from ...evaluation.merge import MergedPiece
 from ...evaluation.patch_set import PatchSet
 from ..errors import MeshInputError
 from .brep.step_brep import brep_shape, occ_classes
-from .merged import is_piece_knots, piece_patches
+from .merged import cad_patch_set, is_piece_knots, piece_patches
 
 _READ_HINT = "reading STEP needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
 
@@ -45,7 +45,7 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
     points = np.concatenate([np.asarray(g, dtype=np.float64)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)]
                             + [np.zeros((0, 3))])
     _check_range(path, points)
-    write_step_shape(path, brep_shape(patch_set).shape, file_name or os.path.basename(os.fspath(path)))
+    write_step_shape(path, brep_shape(cad_patch_set(patch_set)).shape, file_name or os.path.basename(os.fspath(path)))
 
 
 def write_step_shape(path, shape, name: str) -> None:

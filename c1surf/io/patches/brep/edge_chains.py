@@ -70,7 +70,7 @@ def inner_vertices(topology: BRepTopology) -> np.ndarray:
     step = topology.loop_uv[:, 1] - topology.loop_uv[:, 0]  # (L, 2)
     following = np.arange(len(step)) + 1  # the next entry of the same loop, cyclically
     following[topology.loop_start[1:] - 1] = topology.loop_start[:-1]
-    turning = np.any(step != step[following], axis=1)
+    turning = np.any(step != step[following], axis=1) | (step[:, 1] != 0)  # a corner, or a side across v
     end = np.where(topology.loop_forward, ev[topology.loop_edge, 1], ev[topology.loop_edge, 0])
     turned = np.zeros(n, dtype=bool)
     turned[end[turning]] = True
