@@ -14,7 +14,7 @@ from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.write import write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
 from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list, suffix_of
-from ..io.patches.formats import write_patch_stream, write_surface_patches
+from ..io.patches.formats import check_patch_files_memory, write_patch_stream, write_surface_patches
 from ..io.patches.iges_writer import DEFAULT_UNITS, UNITS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import prepare_surface_input, surface_data
@@ -227,6 +227,7 @@ def convert(input_path, output, patches_paths, resolution, tolerance, units, no_
                        list(zip(patches_paths, patch_suffixes)))
         progress.done()
         return
+    check_patch_files_memory(patches_paths, surface.n_patches, force)  # the CAD writers' memory, before any output
     # the same welding `c1surf tessellate` reads from the patch file: identical meshes
     adjacency = patch_adjacency(surface.refined, surface.frames)
     if tolerance is not None:
@@ -240,7 +241,7 @@ def convert(input_path, output, patches_paths, resolution, tolerance, units, no_
     check_disk_space([output, *patches_paths], output_bytes(mesh_suffix, tess, float32, curvature, patch_suffixes,
                                                            surface), force)
     progress.phase(f"writing {output}")
-    patch_options = {"adjacency": adjacency, "units": units, "group": not no_group}
+    patch_options = {"adjacency": adjacency, "units": units, "group": not no_group, "force": force}
     merged = merged_pieces(surface, patch_suffixes, merge)
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:
         write_mesh(mesh_tmp, mesh_suffix, tess, extra, data if shape["attributes"] else None, float32)

@@ -50,6 +50,8 @@ class Format:
         a mesh writer taking the tessellation (``write(path, tessellation, float32=False)``,
         ``evaluation.stream.StreamedTessellation``), a patch writer taking the patches
         (``write(path, stream, **options)``, ``evaluation.patch_set.PatchStream``); "" if written whole only
+    memory : (base, per patch) bytes, the peak memory a patch writer takes beyond the patch set it is
+        given, measured (``/usr/bin/time -v``, see ``writer_memory``); (0, 0) where it is small beside the patches
     """
 
     suffixes: tuple
@@ -57,6 +59,13 @@ class Format:
     description: str
     holds: frozenset = field(default_factory=frozenset)
     streamed: str = ""
+    memory: tuple = (0, 0)
+
+    def writer_memory(self, n_patches: int) -> int:
+        """Bytes of memory the writer needs at its peak for a surface of ``n_patches`` patches (an upper estimate:
+        every patch its own face, as ``--no-merge`` writes them; packed files take less)."""
+        base, per_patch = self.memory
+        return int(base + per_patch * n_patches) if per_patch else 0
 
     @property
     def function(self):
@@ -139,6 +148,10 @@ def suffix_of(path, table: Mapping) -> str:
 
 
 _MESHES, _PATCHES, _IMAGES = "c1surf.io.meshes.", "c1surf.io.patches.", "c1surf.io.images."
+# Peak memory of the CAD writers beyond their patch set: (base, bytes per patch), from /usr/bin/time -v of
+# writing NPZ patch sets of 1,536 to 46,848 patches, the larger of packed and --no-merge (see io.patches.formats).
+IGES_MEMORY = (64 << 20, 4_000)
+STEP_MEMORY = (400 << 20, 60_000)  # Open CASCADE's libraries, then its B-rep, STEP model and text
 _BOTH = frozenset({"attributes", "properties"})
 
 MESH_READERS = FormatTable("mesh format", "reads", [
@@ -172,8 +185,10 @@ PATCH_WRITERS = FormatTable("patch format", "writes", [
            streamed=_PATCHES + "json_patches:write_patch_stream_json"),
     Format((".npz",), _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays",
            streamed=_PATCHES + "npz:write_patch_stream_npz"),
-    Format((".igs", ".iges"), _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)"),
-    Format((".step", ".stp"), _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)"),
+    Format((".igs", ".iges"), _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)",
+           memory=IGES_MEMORY),
+    Format((".step", ".stp"), _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)",
+           memory=STEP_MEMORY),
 ])
 
 IMAGE_WRITERS = FormatTable("image format", "writes", [

@@ -3,11 +3,16 @@ Surface, or a PatchStream (by blocks, the formats of ``PATCH_WRITERS.streamed()`
 from __future__ import annotations
 
 import dataclasses
+import os
 
 from ...evaluation.patch_set import PatchSet, surface_patch_set
 from .. import registry
+from ..errors import OutputError
 
-__all__ = ["load_patch_set", "write_patch_set", "write_patch_stream", "write_surface_patches"]
+__all__ = ["load_patch_set", "write_patch_set", "write_patch_stream", "write_surface_patches", "patch_writer_memory",
+           "check_patch_writer_memory", "check_patch_files_memory", "available_memory", "MEMORY_LIMIT_VARIABLE"]
+
+MEMORY_LIMIT_VARIABLE = "C1SURF_MEMORY_LIMIT"  # bytes (suffix K, M or G) the writers may take, instead of MemAvailable
 
 
 def load_patch_set(path) -> PatchSet:
@@ -22,7 +27,52 @@ def write_patch_set(path, patch_set: PatchSet, suffix: str | None = None, **opti
     units and group (IGES); a format ignores the options it has no use for.
     """
     suffix = suffix or registry.suffix_of(path, registry.PATCH_WRITERS)
+    if not options.pop("force", False):
+        check_patch_writer_memory(options.get("file_name") or path, patch_set.n_patches, suffix)
     registry.PATCH_WRITERS[suffix].function(path, patch_set, **options)
+
+
+def patch_writer_memory(suffix: str, n_patches: int) -> int:
+    """Peak bytes the writer of ``suffix`` takes for ``n_patches`` patches beyond the patch set (0: not modelled,
+    small beside it). Measured for the CAD writers (``registry.STEP_MEMORY``, ``IGES_MEMORY``)."""
+    return registry.PATCH_WRITERS[suffix].writer_memory(n_patches)
+
+
+def available_memory() -> int:
+    """Bytes the writers may take: ``C1SURF_MEMORY_LIMIT`` (e.g. 500M, 2G) where set, else the system's
+    MemAvailable, else 8 GiB."""
+    limit = os.environ.get(MEMORY_LIMIT_VARIABLE, "").strip().upper()
+    if limit:
+        scale = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30}.get(limit[-1], 1)
+        try:
+            return int(float(limit.rstrip("KMG")) * scale)
+        except ValueError:
+            pass
+    try:
+        with open("/proc/meminfo") as f:
+            for line in f:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except OSError:
+        pass
+    return 8 << 30
+
+
+def check_patch_writer_memory(path, n_patches: int, suffix: str | None = None, available: int | None = None) -> None:
+    """Refuse, before anything is written, a patch file whose writer would not fit in memory.
+
+    Raises OutputError (one line: the estimate, what is available, what to do) when the writer's peak
+    (``patch_writer_memory``) exceeds 80 % of ``available`` (default ``available_memory()``).
+    """
+    suffix = suffix or registry.suffix_of(path, registry.PATCH_WRITERS)
+    needed = patch_writer_memory(suffix, n_patches)
+    available = available_memory() if available is None else available
+    if needed and needed > 0.8 * available:
+        kind = suffix.lstrip(".").upper()
+        raise OutputError(path, f"writing {n_patches} patches as {kind} would need about {needed / 2**30:.1f} GiB of "
+                          f"memory but about {available / 2**30:.1f} GiB is available: make a surface of fewer faces "
+                          "(`c1surf fit` a coarser control mesh first), write .npz or .json patches instead, or pass "
+                          "--force to try anyway")
 
 
 def write_patch_stream(path, stream, suffix: str | None = None, **options) -> None:
@@ -47,3 +97,11 @@ def write_surface_patches(path, surface, suffix: str | None = None, input_path: 
     """
     patch_set = dataclasses.replace(surface_patch_set(surface, input_path, adjacency), merged=list(merged or []))
     write_patch_set(path, patch_set, suffix, **options)
+
+
+def check_patch_files_memory(paths, n_patches: int, force: bool = False) -> None:
+    """``check_patch_writer_memory`` of every patch file a conversion will write (none with ``force``): called
+    before the first output is written, so that a refusal leaves nothing behind."""
+    if not force:
+        for path in paths:
+            check_patch_writer_memory(path, n_patches)
