@@ -148,10 +148,13 @@ def suffix_of(path, table: Mapping) -> str:
 
 
 _MESHES, _PATCHES, _IMAGES = "c1surf.io.meshes.", "c1surf.io.patches.", "c1surf.io.images."
-# Peak memory of the CAD writers beyond their patch set: (base, bytes per patch), from /usr/bin/time -v of
-# writing NPZ patch sets of 1,536 to 46,848 patches, the larger of packed and --no-merge (see io.patches.formats).
-IGES_MEMORY = (64 << 20, 4_000)
-STEP_MEMORY = (400 << 20, 60_000)  # Open CASCADE's libraries, then its B-rep, STEP model and text
+# Peak memory of the CAD writers: (base, bytes per patch), the whole process's peak (/usr/bin/time -v) writing a
+# patch set read from NPZ, torus (1,536 patches), penguin (3,360) and fandisk (12,224), packed and --no-merge, the
+# larger of the two (--no-merge: one face per patch). STEP 456-605 MB for the first two (61 KB a patch more
+# with --no-merge, 47 KB packed; 840 MB packed fandisk); IGES 85-136 MB (10 KB a patch with --no-merge, 4 KB packed).
+# Open CASCADE's libraries take about 290 MB on their own (363 MB with Python, numpy and the patch set).
+IGES_MEMORY = (80 << 20, 10_000)
+STEP_MEMORY = (400 << 20, 62_000)
 _BOTH = frozenset({"attributes", "properties"})
 
 MESH_READERS = FormatTable("mesh format", "reads", [
