@@ -8,7 +8,11 @@ u, with one edge per span along v (``io.patches.merged.cad_patch_set``, ``brep.e
 that, spot's default volume was off by 4.8e-4 and cube's by 4.4e-3.
 
 Every closed sample mesh and spot: volume and area of the packed STEP and IGES solids within 1e-8
-relative of ``c1surf measure`` (measured: 4e-15 for volume, 8e-14 for spot's area, 4e-11 for cube's).
+relative of ``c1surf measure`` (measured: 4e-15 for volume, 8e-14 for spot's area, 4e-11 for cube's),
+but high_valence's area: 1.43e-7, the same with ``--no-merge`` (one face per patch), so not from the
+packing: its bicubic patches at the 12-gon's centre, whose parametrization nearly degenerates there,
+get Open CASCADE's fixed 4 x 8 Gauss points (a single-span face with a straight pcurve) for an
+integrand (the area element) that is not smooth enough for them. Its volume agrees to 4e-16.
 """
 from __future__ import annotations
 
@@ -57,4 +61,5 @@ def test_default_mass_properties_of_packed_files_agree_with_measure(tmp_path, na
     for path, shape in ((step, read_step(step)), (iges, read_iges(iges))):
         volume, area = default_volume_and_area(shape)
         assert abs(volume - ours["volume"]) <= 1e-8 * ours["volume"], (path.suffix, volume, ours["volume"])
-        assert abs(area - ours["area"]) <= 1e-8 * ours["area"], (path.suffix, area, ours["area"])
+        area_tolerance = 2e-7 if name == "high_valence.obj" else 1e-8  # see the module docstring
+        assert abs(area - ours["area"]) <= area_tolerance * ours["area"], (path.suffix, area, ours["area"])

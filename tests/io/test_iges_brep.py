@@ -185,13 +185,20 @@ def test_closed_sample_mesh_is_one_valid_solid_sewn_by_c1surf(tmp_path, name, me
 
 
 def test_a_piece_closing_on_itself_has_seams(tmp_path):
-    """The torus packs into one face whose loop uses its two seam edges (closed runs, one vertex) twice each,
-    as Open CASCADE's own tori do; still one valid solid."""
+    """The torus's one merged piece (48 x 32 spans, closed both ways) cut into strips as long as it goes around
+    (``cad_patch_set(.., max_spans=64)``): 32 faces of 1 x 48 spans, each using its seam edge (one span across
+    u, closed in v) twice, as Open CASCADE's own tori do. The file convert writes (shorter strips, no seams) is
+    one valid solid, every edge in two faces."""
     path = convert(tmp_path, SAMPLES / "torus.obj")
-    patch_set = expected_patch_set(SAMPLES / "torus.obj", True)
-    topology = iges_brep(patch_set, 1).topology
-    assert (topology.n_faces, topology.n_edges, len(topology.vertex_points)) == (1, 2, 1)
-    assert np.array_equal(np.bincount(topology.loop_edge), [2, 2]) and np.all(topology.edge_vertices == 0)
+    surface = surface_from_file(SAMPLES / "torus.obj")[0]
+    patch_set = cad_patch_set(dataclasses.replace(surface_patch_set(surface), merged=merge_biquadratic(surface)),
+                              max_spans=64)
+    topology = iges_brep(patch_set, 32).topology
+    assert topology.n_faces == 32 and all(p.patches.shape == (1, 48) for p in patch_set.merged)
+    uses = np.bincount(topology.loop_edge, minlength=topology.n_edges)
+    face_of = np.repeat(np.arange(32), np.diff(topology.loop_start))
+    seams = [e for e in range(topology.n_edges) if uses[e] == 2 and np.unique(face_of[topology.loop_edge == e]).size == 1]
+    assert np.all(uses == 2) and len(seams) == 32
     _, shape = read_iges(path)
     assert BRepCheck_Analyzer(shape).IsValid() and count(shape, TopAbs_SOLID) == 1
     assert np.all(edge_face_uses(shape) == 2)

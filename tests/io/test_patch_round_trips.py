@@ -96,7 +96,7 @@ def test_iges_gives_back_merged_pieces_and_their_patches(tmp_path, rational):
             turned = np.rot90(surface.biquadratic[want.patches[a, b]], k=want.rotation[a, b], axes=(0, 1))
             assert np.abs(quad[k] - turned).max() <= 1e-14 * scale
     # the patches no piece stands for follow, exactly as written
-    kept, kept_weights = uncovered_groups(original)
+    kept, kept_weights = uncovered_groups(strips)
     read = [quad[cut:], back.groups[1]]
     written = [next((g for g in kept if g.shape[1] == n), np.zeros((0, n, n, 3))) for n in (3, 4)]
     assert all(np.array_equal(a, b) for a, b in zip(read, written))

@@ -117,4 +117,5 @@ def cad_patch_set(patch_set, max_spans: int | None = None):
     max_spans = max_spans or int(os.environ.get("C1SURF_CAD_SPANS", CAD_SPANS))
     if not patch_set.merged:
         return patch_set
-    return dataclasses.replace(patch_set, merged=[s for p in patch_set.merged for s in strip_pieces(p, max_spans)])
+    strips = [s for p in patch_set.merged for s in strip_pieces(p, max_spans)]
+    return dataclasses.replace(patch_set, merged=[s for s in strips if s.patches.size > 1])  # 1 x 1: a patch face
