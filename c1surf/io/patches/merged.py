@@ -8,11 +8,14 @@ of the file, in file order.
 
 - JSON and NPZ keep every patch and add the pieces (their readers check
   them with ``checks.checked_piece``).
-- IGES and STEP write a piece *instead of* its patches (:func:`uncovered_groups`);
-  the IGES reader gives the patches back by cutting each piece at its knots
+- IGES and STEP write a piece *instead of* its patches (:func:`uncovered_groups`),
+  cut into strips one span wide (:func:`cad_patch_set`); the IGES and STEP
+  readers give the patches back by cutting each piece at its knots
   (:func:`piece_patches`), in the piece's orientation.
 """
 from __future__ import annotations
+
+import dataclasses
 
 import numpy as np
 
@@ -105,17 +108,17 @@ def strip_pieces(piece: MergedPiece, max_spans: int) -> list:
     return out
 
 
-CAD_SPANS = 4  # longest strip: Open CASCADE's default integration takes max(8, 6 k) points per strip of k spans
+CAD_SPANS = 4  # longest strip: Open CASCADE's default integration takes max(8, 6 k) points per edge of a k-span strip
 
 
-def cad_patch_set(patch_set, max_spans: int | None = None):
-    """``patch_set`` with its merged pieces cut into strips (:func:`strip_pieces`), as the IGES and STEP B-reps
-    write them."""
-    import dataclasses
-    import os
+def cad_patch_set(patch_set, max_spans: int = CAD_SPANS):
+    """``patch_set`` as the IGES and STEP B-reps write it: its merged pieces cut into strips (:func:`strip_pieces`),
+    strips of a single span left out (their patch is written as a Bezier face like any uncovered patch).
 
-    max_spans = max_spans or int(os.environ.get("C1SURF_CAD_SPANS", CAD_SPANS))
+    Why strips: Open CASCADE's default mass properties integrate a face with one Gauss rule across it in u and
+    one along each edge, over the whole range (not cut at knots), exact over one span only (docs/patch-format.md).
+    """
     if not patch_set.merged:
         return patch_set
     strips = [s for p in patch_set.merged for s in strip_pieces(p, max_spans)]
-    return dataclasses.replace(patch_set, merged=[s for s in strips if s.patches.size > 1])  # 1 x 1: a patch face
+    return dataclasses.replace(patch_set, merged=[s for s in strips if s.patches.size > 1])
