@@ -69,10 +69,12 @@ def check_patch_writer_memory(path, n_patches: int, suffix: str | None = None, a
     available = available_memory() if available is None else available
     if needed and needed > 0.8 * available:
         kind = suffix.lstrip(".").upper()
+        iges = patch_writer_memory(".igs", n_patches)
+        other = (f"write .igs (about {iges / 2**30:.1f} GiB), .npz or .json patches instead"
+                 if suffix != ".igs" and iges <= 0.8 * available else "write .npz or .json patches instead")
         raise OutputError(path, f"writing {n_patches} patches as {kind} would need about {needed / 2**30:.1f} GiB of "
                           f"memory but about {available / 2**30:.1f} GiB is available: make a surface of fewer faces "
-                          "(`c1surf fit` a coarser control mesh first), write .npz or .json patches instead, or pass "
-                          "--force to try anyway")
+                          f"(`c1surf fit` a coarser control mesh first), {other}, or pass --force to try anyway")
 
 
 def write_patch_stream(path, stream, suffix: str | None = None, **options) -> None:
