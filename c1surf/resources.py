@@ -13,7 +13,8 @@ import shutil
 from .errors import ResourceRefusal
 
 __all__ = ["available_memory", "check_memory", "check_disk_space", "tessellation_bytes", "ResourceRefusal",
-           "BYTES_PER_PATCH", "BYTES_PER_SAMPLE", "WRITER_HEADROOM", "STREAMED_BYTES_PER_SAMPLE"]
+           "BYTES_PER_PATCH", "BYTES_PER_SAMPLE", "WRITER_HEADROOM", "STREAMED_BYTES_PER_SAMPLE",
+           "MEMORY_SHARE", "MEMORY_LIMIT_VARIABLE"]
 
 # Peak memory of a tessellation, traced with tracemalloc on spot_quadrangulated (46,848 patches):
 # 465 bytes per patch at N = 2, 4,436 at N = 8, 40,950 at N = 24, i.e. about
@@ -26,10 +27,19 @@ WRITER_HEADROOM = 1.1
 # sample) and one block of at least one patch: counted from the array shapes, as 2,400 bytes per sample.
 STREAMED_BYTES_PER_SAMPLE = 2400
 MEMORY_SHARE = 0.8  # of the available memory, the most any estimate may take
+MEMORY_LIMIT_VARIABLE = "C1SURF_MEMORY_LIMIT"  # bytes (suffix K, M or G) c1surf may take, instead of MemAvailable
 
 
 def available_memory() -> int:
-    """Bytes of memory available to this process (MemAvailable), or 8 GiB if unknown."""
+    """Bytes of memory c1surf may take: ``C1SURF_MEMORY_LIMIT`` (e.g. 500M, 2G) where set, else the system's
+    MemAvailable, else 8 GiB."""
+    limit = os.environ.get(MEMORY_LIMIT_VARIABLE, "").strip().upper()
+    if limit:
+        scale = {"K": 1 << 10, "M": 1 << 20, "G": 1 << 30}.get(limit[-1], 1)
+        try:
+            return int(float(limit.rstrip("KMG")) * scale)
+        except ValueError:
+            pass
     try:
         with open("/proc/meminfo") as f:
             for line in f:

@@ -12,7 +12,7 @@ from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.write import write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
 from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list, suffix_of
-from ..io.patches.formats import write_patch_stream, write_surface_patches
+from ..io.patches.formats import check_patch_files_memory, write_patch_stream, write_surface_patches
 from ..resources import (BYTES_PER_PATCH, STREAMED_BYTES_PER_SAMPLE, WRITER_HEADROOM, check_disk_space, check_memory,
                          tessellation_bytes)
 from .common import Failure, Progress, echo_notes, friendly_errors, output_suffix, with_formats
@@ -97,6 +97,7 @@ def convert(input_path, output, patches_paths, resolution, tolerance, patch_file
                        list(zip(patches_paths, patch_suffixes)))
         progress.done()
         return
+    check_patch_files_memory(patches_paths, surface.n_patches, force)  # the CAD writers' memory, before any output
     # the same welding `c1surf tessellate` reads from the patch file: identical meshes
     adjacency = patch_adjacency(surface.refined, surface.frames)
     if tolerance is not None:
@@ -110,7 +111,8 @@ def convert(input_path, output, patches_paths, resolution, tolerance, patch_file
     check_disk_space([output, *patches_paths], output_bytes(mesh_suffix, tess, float32, curvature, patch_suffixes,
                                                            surface), force)
     progress.phase(f"writing {output}")
-    patch_options = {"adjacency": adjacency, "units": patch_files.units, "group": patch_files.group}
+    patch_options = {"adjacency": adjacency, "units": patch_files.units, "group": patch_files.group,
+                     "force": force}
     merged = merged_pieces(surface, patch_suffixes, patch_files.merge)
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:
         write_mesh(mesh_tmp, mesh_suffix, tess, extra, report.data if inputs.attributes else None, float32)

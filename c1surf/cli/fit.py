@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import os
 from dataclasses import dataclass
@@ -11,11 +12,13 @@ import numpy as np
 
 from ..api import FitReport, ScanFitOptions, Surface, check_surface, fit_surface
 from ..evaluation.merge import merge_biquadratic
+from ..evaluation.patch_set import surface_patch_set
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..fitting.options import FitOptions
 from ..io.atomic import atomic_output
 from ..io.images.png import write_png
 from ..io.meshes.write import write_triangle_mesh
+from ..io.patches.merged import cad_patch_set
 from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
 from ..render.deviation import deviation_picture
 from ..render.pictures import colormap, rgb8
@@ -140,12 +143,13 @@ def check_outputs(outputs: FitOutputs) -> dict:
 
 
 def cad_face_count(surface: Surface, merge: bool | None) -> int:
-    """The faces of the packed STEP/IGES file (merged biquadratic rectangles, then every other patch)."""
+    """The faces of the STEP/IGES file (``io.patches.merged.cad_patch_set``: merged biquadratic rectangles cut into
+    strips one span wide, then every other patch)."""
     if merge is False:
         return surface.n_patches
-    pieces = merge_biquadratic(surface)
-    covered = sum(int(np.size(piece.patches)) for piece in pieces)
-    return len(pieces) + surface.n_patches - covered
+    packed = cad_patch_set(dataclasses.replace(surface_patch_set(surface, ""), merged=merge_biquadratic(surface)))
+    covered = sum(int(np.size(piece.patches)) for piece in packed.merged)
+    return len(packed.merged) + surface.n_patches - covered
 
 
 def fit_document(surface: Surface, report: FitReport, merge: bool | None) -> dict:

@@ -1,19 +1,30 @@
 """Two surfaces (patch sets) or two polygon meshes compared: structure first, then coefficients.
 
-Structure must match exactly: patch counts and degrees run by run, weights
-present or not, merged pieces and their spans, the sources where both files
-record them; for meshes the vertex and face counts, face sizes and face
-vertices. Then every control point (merged pieces' included) or vertex may
-move by at most ``tolerance`` times the bounding-box diagonal of the first
-input (Euclidean distance), and weights by ``tolerance`` times the first's
-largest weight. The differences are listed the way ``tests/test_golden.py``
-does: the patch (its kind and source when the file records one), the
-coefficient index, where it was and where it went, how far it moved.
+Patch sets are compared as surfaces. Structure must match exactly: patch
+counts and degrees run by run, weights present or not, the sources where both
+files record them; for meshes the vertex and face counts, face sizes and face
+vertices. Then every control point or vertex may move by at most
+``tolerance`` times the bounding-box diagonal of the first input (Euclidean
+distance), and weights by ``tolerance`` times the first's largest weight. The
+differences are listed the way ``tests/test_golden.py`` does: the patch (its
+kind and source when the file records one), the coefficient index, where it
+was and where it went, how far it moved.
 
-A file that does not keep the patch order (a STEP file: faces in shell order;
-its reader sets ``header["ordered"] = False``) is compared after pairing its
-patches with the other's, degree run by degree run, by their centres
-(``paired``); a patch keeps its own (u, v), so a turned one counts as moved.
+Merged pieces (``convert --merge``, and the packed faces of IGES and STEP
+files) are a way of writing patches, not part of the surface: each piece is
+cut into its patches and compared with the patches it stands for in its own
+file (``piece_differences``), so a packed file and an unpacked one of the
+same surface compare equal, and a piece that is not its patches is a difference.
+
+When the two files do not hold their patches in the same order (a STEP file:
+faces in shell order, its reader sets ``header["ordered"] = False``; or the
+two files pack their patches into other pieces: an IGES or STEP file lists a
+piece's patches together) B's patches are paired with A's, degree run by
+degree run, by their centres (``paired``), and each is turned in its parameter
+square (quarter turns: the orientation, hence the normal, is kept) to the turn
+nearest A's patch (``turned_like``), since a packed face gives its patches
+the piece's (u, v). Files of the same order and packing are compared patch by
+patch as they are: a turned patch counts as moved.
 """
 from __future__ import annotations
 
@@ -24,6 +35,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from scipy.spatial import cKDTree
 
+from .merge import piece_patches
 from .patch_set import KIND_BY_DEGREE, PatchSet
 
 SHOW = 8  # differences listed of each kind; the rest are counted
@@ -129,13 +141,6 @@ def patch_structure(a: PatchSet, b: PatchSet, show: int = SHOW) -> list[str]:
     if (a.weights is None) != (b.weights is None):
         problems.append(f"weights: {'rational' if a.weights is not None else 'polynomial'} -> "
                         f"{'rational' if b.weights is not None else 'polynomial'} patches")
-    spans = [[p.patches.shape for p in s.merged] for s in (a, b)]
-    if spans[0] != spans[1]:
-        shown = [", ".join(f"{m} x {n}" for m, n in s) or "none" for s in spans]
-        problems.append(f"merged pieces (spans): {shown[0]} -> {shown[1]}")
-    elif any(not np.array_equal(p.patches, q.patches) or not np.array_equal(p.rotation, q.rotation)
-             for p, q in zip(a.merged, b.merged)):
-        problems.append("merged pieces: the same spans over different patches or rotations")
     if not problems and a.source_kind is not None and b.source_kind is not None:
         problems += _source_changes(a, b, show)
     return problems
@@ -160,8 +165,9 @@ def compare_patch_sets(a: PatchSet, b: PatchSet, tolerance: float = 1e-12, show:
     structural = patch_structure(a, b, show)
     if structural:
         return Comparison(structural, tolerance=tolerance)
-    if not (a.header.get("ordered", True) and b.header.get("ordered", True)):
-        b = paired(a, b)
+    written = b  # its pieces number its patches as the file holds them
+    if not (a.header.get("ordered", True) and b.header.get("ordered", True)) or not same_packing(a, b):
+        b = turned_like(a, paired(a, b))
     diagonal = bbox_diagonal(np.concatenate([g[..., :3].reshape(-1, 3) for g in a.groups] or [np.zeros((0, 3))]))
     labels, found = patch_labels(a), []
     starts = np.cumsum([0] + [len(g) for g in a.groups])
@@ -174,7 +180,72 @@ def compare_patch_sets(a: PatchSet, b: PatchSet, tolerance: float = 1e-12, show:
             found.append((largest_moves(p[..., None], q[..., None], top, tolerance, show), p, q, "weights", starts[k],
                           "the largest weight"))
     comparison = _collect(found, labels, tolerance, show)
-    return _with_merged(comparison, a, b, diagonal, show)
+    return _with_pieces(comparison, a, written, diagonal, show)
+
+
+def same_packing(a: PatchSet, b: PatchSet) -> bool:
+    """Both patch sets pack the same patches, with the same turns, into merged pieces (or neither has any)."""
+    return len(a.merged) == len(b.merged) and all(
+        np.array_equal(p.patches, q.patches) and np.array_equal(p.rotation, q.rotation) for p, q in zip(a.merged, b.merged))
+
+
+def _turns(square: bool) -> tuple:
+    """Quarter turns of a patch's parameter rectangle onto itself that keep its orientation."""
+    return (0, 1, 2, 3) if square else (0, 2)
+
+
+def turned_like(a: PatchSet, b: PatchSet) -> PatchSet:
+    """``b`` with each patch turned in its parameter square (``np.rot90``, 0-3 quarter turns; a half turn for
+    du != dv) to the turn whose control points lie nearest those of ``a``'s patch at the same place (the
+    first such turn on a tie). The surface is unchanged. Same runs as ``a`` (``patch_structure``)."""
+    groups, weights = list(b.groups), None if b.weights is None else list(b.weights)
+    for k, (p, q) in enumerate(zip(a.groups, b.groups)):
+        if not len(p):
+            continue
+        best, chosen = np.full(len(p), np.inf), np.zeros(len(p), np.int64)
+        for turn in _turns(p.shape[1] == p.shape[2]):
+            distance = np.abs(np.rot90(q, turn, axes=(1, 2))[..., :3] - p[..., :3]).max(axis=(1, 2, 3))
+            better = distance < best
+            best[better], chosen[better] = distance[better], turn
+        for turn in np.unique(chosen[chosen > 0]).tolist():
+            rows = chosen == turn
+            groups[k] = groups[k].copy() if groups[k] is q else groups[k]
+            groups[k][rows] = np.rot90(q[rows], turn, axes=(1, 2))
+            if weights is not None:
+                weights[k] = weights[k].copy() if weights[k] is b.weights[k] else weights[k]
+                weights[k][rows] = np.rot90(b.weights[k][rows], turn, axes=(1, 2))
+    return dataclasses.replace(b, groups=groups, weights=weights)
+
+
+def piece_differences(patch_set: PatchSet, scale: float, tolerance: float, show: int = SHOW):
+    """The merged pieces of ``patch_set`` against the patches they stand for (A2, Lemma 1.3.4: a piece is its
+    patches, each turned by its rotation), control points relative to ``scale``.
+
+    Returns
+    -------
+    list of (relative move, line) of at most ``show`` per piece, the count of coefficients beyond the
+    tolerance and the largest relative move (0 without pieces)
+    """
+    quads = [g for g in patch_set.groups if g.shape[1:3] == (3, 3)]
+    if not patch_set.merged or not quads:
+        return [], 0, 0.0
+    quad = np.concatenate(quads)[..., :3] if len(quads) > 1 else quads[0][..., :3]
+    rows, count, largest = [], 0, 0.0
+    for k, piece in enumerate(patch_set.merged):
+        cut = piece_patches(piece)[0][..., :3]
+        numbers, turns = piece.patches.ravel(), piece.rotation.ravel() % 4
+        own = np.empty_like(cut)
+        for turn in range(4):
+            rows_k = turns == turn
+            if rows_k.any():
+                own[rows_k] = np.rot90(quad[numbers[rows_k]], turn, axes=(1, 2))
+        worst, n, top = largest_moves(own, cut, scale, tolerance, show)
+        count, largest = count + n, max(largest, top)
+        n_v = piece.patches.shape[1]
+        rows += [(relative, _move_line(f"merged piece {k} (span {index[0] // n_v} {index[0] % n_v} against patch "
+                                       f"{int(numbers[index[0]])})", "points", index[1:], own[index], cut[index],
+                                       relative, "the bounding-box diagonal", tolerance)) for relative, index in worst]
+    return rows, count, largest
 
 
 def patch_centres(group: np.ndarray, weights: np.ndarray | None = None) -> np.ndarray:
@@ -221,15 +292,15 @@ def _collect(found, labels, tolerance: float, show: int) -> Comparison:
     return Comparison([], [line for _, line in rows[:show]], count, largest, tolerance)
 
 
-def _with_merged(comparison: Comparison, a: PatchSet, b: PatchSet, diagonal: float, show: int) -> Comparison:
-    """``comparison`` with the merged pieces' control points compared as well."""
-    moved, count, largest = list(comparison.moved), comparison.n_moved, comparison.max_relative
-    for k, (p, q) in enumerate(zip(a.merged, b.merged)):
-        worst, n, top = largest_moves(p.points[None, ..., :3], q.points[None, ..., :3], diagonal, comparison.tolerance, show)
+def _with_pieces(comparison: Comparison, a: PatchSet, b: PatchSet, diagonal: float, show: int) -> Comparison:
+    """``comparison`` with every merged piece of A and of B compared with its own patches (``piece_differences``)."""
+    rows = [(-1.0, line) for line in comparison.moved]  # the patches' own moves first, as they were
+    count, largest = comparison.n_moved, comparison.max_relative
+    for name, patch_set in (("A", a), ("B", b)):
+        found, n, top = piece_differences(patch_set, diagonal, comparison.tolerance, show)
+        rows += [(relative, f"{name}: {line}") for relative, line in found]
         count, largest = count + n, max(largest, top)
-        moved += [_move_line(f"merged piece {k}", "points", index[1:], p.points[index[1:]][:3], q.points[index[1:]][:3],
-                             relative, "the bounding-box diagonal", comparison.tolerance) for relative, index in worst]
-    return Comparison([], moved[:show], count, largest, comparison.tolerance)
+    return Comparison([], [line for _, line in rows[:show]], count, largest, comparison.tolerance)
 
 
 def mesh_structure(sizes_a, vertices_a, n_a: int, sizes_b, vertices_b, n_b: int, show: int = SHOW) -> list[str]:
@@ -278,5 +349,5 @@ def compare_meshes(points_a, sizes_a, vertices_a, points_b, sizes_b, vertices_b,
     return _collect(found, [f"vertex {v}" for v in range(len(points_a))], tolerance, show)
 
 
-__all__ = ["Comparison", "compare_patch_sets", "paired", "patch_centres", "compare_meshes", "patch_structure", "mesh_structure", "largest_moves",
+__all__ = ["Comparison", "compare_patch_sets", "paired", "turned_like", "same_packing", "piece_differences", "patch_centres", "compare_meshes", "patch_structure", "mesh_structure", "largest_moves",
            "bbox_diagonal", "patch_labels", "SHOW"]

@@ -190,6 +190,38 @@ def merge_biquadratic(surface, min_patches: int = 2) -> list[MergedPiece]:
     return pieces
 
 
+def _cut(net: np.ndarray) -> np.ndarray:
+    """Cut a C1 quadratic B-spline net (m + 2, ...) along its first axis into m Bezier spans (m, 3, ...).
+
+    Span i is (left, net[i + 1], right): its end points are the midpoints of
+    neighbouring net points, and the first and last net points at the clamped ends.
+    """
+    joints = 0.5 * (net[1:-2] + net[2:-1])  # the points at the m - 1 inner knots
+    return np.stack([np.concatenate([net[:1], joints]), net[1:-1], np.concatenate([joints, net[-1:]])], axis=1)
+
+
+def piece_patches(piece: MergedPiece):
+    """The m x n Bezier patches of a merged piece, row by row (span i slowest), in the piece's (u, v).
+
+    Rational pieces are cut in homogeneous coordinates (w x, w).
+
+    Returns
+    -------
+    points : (m n, 3, 3, d) float
+    weights : (m n, 3, 3) float, or None for a polynomial piece
+    """
+    net = piece.points if piece.weights is None else np.concatenate(
+        [piece.points * piece.weights[..., None], piece.weights[..., None]], axis=-1)
+    along_u = _cut(net)  # (m, 3, n + 2, d)
+    both = _cut(along_u.transpose(2, 0, 1, 3))  # (n, 3, m, 3, d): v span, v index, u span, u index
+    m, n = along_u.shape[0], both.shape[0]
+    patches = both.transpose(2, 0, 3, 1, 4).reshape(m * n, 3, 3, -1)
+    if piece.weights is None:
+        return np.ascontiguousarray(patches), None
+    w = patches[..., -1]
+    return np.ascontiguousarray(patches[..., :-1] / w[..., None]), np.ascontiguousarray(w)
+
+
 def piece_dicts(pieces: list[MergedPiece]) -> list[dict]:
     """The pieces as ``io.iges.write_iges`` B-spline dicts (positions only)."""
     return [{"points": np.ascontiguousarray(p.points[..., :3]), "weights": p.weights, "knots_u": p.knots_u,

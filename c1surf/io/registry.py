@@ -60,6 +60,8 @@ class Format:
     scratch_bytes : int, bytes per vertex a streamed mesh writer keeps on the disk beside its output while writing
         (the vertex blocks of OBJ and GLB, evaluated once and read back: 6 float64)
     merged : bool, patch writers: merged B-spline pieces by default (CAD opens few large faces: IGES, STEP)
+    memory : (base, per patch) bytes, the peak memory a patch writer takes beyond the patch set it is
+        given, measured (``/usr/bin/time -v``, see ``writer_memory``); (0, 0) where it is small beside the patches
     """
 
     suffixes: tuple
@@ -72,6 +74,13 @@ class Format:
     held_points: bool = False
     scratch_bytes: int = 0
     merged: bool = False
+    memory: tuple = (0, 0)
+
+    def writer_memory(self, n_patches: int) -> int:
+        """Bytes of memory the writer needs at its peak for a surface of ``n_patches`` patches (an upper estimate:
+        every patch its own face, as ``--no-merge`` writes them; packed files take less)."""
+        base, per_patch = self.memory
+        return int(base + per_patch * n_patches) if per_patch else 0
 
     @property
     def function(self):
@@ -158,6 +167,13 @@ def suffix_of(path, table: Mapping) -> str:
 
 
 _MESHES, _PATCHES, _IMAGES = "c1surf.io.meshes.", "c1surf.io.patches.", "c1surf.io.images."
+# Peak memory of the CAD writers: (base, bytes per patch), the whole process's peak (/usr/bin/time -v) writing a
+# patch set read from NPZ, torus (1,536 patches), penguin (3,360) and fandisk (12,224), packed and --no-merge, the
+# larger of the two (--no-merge: one face per patch). STEP 456-605 MB for the first two (61 KB a patch more
+# with --no-merge, 47 KB packed; 840 MB packed fandisk); IGES 85-136 MB (10 KB a patch with --no-merge, 4 KB packed).
+# Open CASCADE's libraries take about 290 MB on their own (363 MB with Python, numpy and the patch set).
+IGES_MEMORY = (80 << 20, 10_000)
+STEP_MEMORY = (400 << 20, 62_000)
 _BOTH = frozenset({"attributes", "properties"})
 
 MESH_READERS = FormatTable("mesh format", "reads", [
@@ -194,9 +210,9 @@ PATCH_WRITERS = FormatTable("patch format", "writes", [
     Format((".npz",), _PATCHES + "npz:write_patch_set_npz", "c1surf patch file as NumPy arrays",
            streamed=_PATCHES + "npz:write_patch_stream_npz", file_bytes=(45,)),
     Format((".igs", ".iges"), _PATCHES + "iges:write_patch_set_iges", "IGES 5.3 rational B-spline surfaces (type 128)",
-           file_bytes=(330,), merged=True),
+           file_bytes=(330,), merged=True, memory=IGES_MEMORY),
     Format((".step", ".stp"), _PATCHES + "step:write_patch_set_step", "STEP AP214 faces, sewn (Open CASCADE)",
-           file_bytes=(460,), merged=True),
+           file_bytes=(460,), merged=True, memory=STEP_MEMORY),
 ])
 
 IMAGE_WRITERS = FormatTable("image format", "writes", [

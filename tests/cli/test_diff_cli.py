@@ -87,3 +87,25 @@ def test_unreadable_or_mixed_inputs_are_one_line_errors(files, tmp_path, second)
     result = run("diff", files["cube"][".json"], target)
     assert result.exit_code == 1
     assert result.stderr.startswith("c1surf: error: ") and result.stderr.count("\n") == 1
+
+
+def test_packed_and_unpacked_files_of_one_surface_compare_equal(tmp_path):
+    """diff compares surfaces: the JSON (one entry per patch) and the packed STEP and IGES (strips of merged
+    pieces, their patches in the pieces' (u, v) and in another order) of one conversion are equal, both ways;
+    a surface made with another blend ratio is not (its coefficients moved, the structure is the same)."""
+    pytest.importorskip("OCP")
+    files = {s: tmp_path / f"t{s}" for s in (".json", ".step", ".igs")}
+    result = run("convert", SAMPLES / "twisted.obj", "-o", tmp_path / "t.ply", "-r", "2", "-q",
+                 *[a for p in files.values() for a in ("--patches", p)])
+    assert result.exit_code == 0, result.output
+    for a, b in ((".json", ".step"), (".step", ".json"), (".json", ".igs"), (".igs", ".step")):
+        result = run("diff", files[a], files[b])
+        assert result.exit_code == 0, (a, b, result.output)
+        assert result.stdout.startswith("equal within 1e-12")
+    other = tmp_path / "other.step"
+    result = run("convert", SAMPLES / "twisted.obj", "-o", tmp_path / "o.ply", "-r", "2", "-q", "--blend", "0.4",
+                 "--patches", other)
+    assert result.exit_code == 0, result.output
+    result = run("diff", files[".json"], other)
+    assert result.exit_code == 1 and "differ in structure" not in result.stdout
+    assert "coefficients moved by more than 1e-12" in result.stdout.splitlines()[-1]

@@ -52,12 +52,12 @@ def test_structure_weights_merged_and_sources():
     heavier.weights[0][7, 1, 1] = 1.5
     result = compare_patch_sets(rational, heavier)
     assert result.n_moved == 1 and "patch 7 " in result.moved[0] and "weights[1][1] 1.0 -> 1.5" in result.moved[0]
-    unmerged = copy(ps, merged=[])
-    assert compare_patch_sets(ps, unmerged).structural[0].startswith("merged pieces (spans): ")
+    unmerged = copy(ps, merged=[])  # the same surface, its patches not packed into pieces
+    assert compare_patch_sets(ps, unmerged).equal and compare_patch_sets(unmerged, ps).equal
     piece = ps.merged[0]
     shifted = copy(ps, merged=[dataclasses.replace(piece, points=piece.points + 1e-6)] + ps.merged[1:])
-    result = compare_patch_sets(ps, shifted)
-    assert result.n_moved == piece.points.shape[0] * piece.points.shape[1] and result.moved[0].startswith("merged piece 0:")
+    result = compare_patch_sets(ps, shifted)  # a piece that is not its patches: each of its 9 m n coefficients
+    assert result.n_moved == 9 * piece.patches.size and result.moved[0].startswith("B: merged piece 0 (span ")
     other_source = copy(ps, source=ps.source.copy())
     other_source.source[3, 0] += 1
     assert compare_patch_sets(ps, other_source).structural[0].startswith("patch 3 (biquadratic, source ")
@@ -77,3 +77,24 @@ def test_meshes_compare_counts_sizes_vertices_and_positions():
     moved[2, 1] += 1e-3
     result = compare_meshes(points, sizes, vertices, moved, sizes, vertices, tolerance=1e-6)
     assert result.n_moved == 1 and result.moved[0].startswith("vertex 2: position ")
+
+
+def test_surfaces_compare_equal_whatever_the_packing_order_and_turns():
+    """A file of other packing (IGES/STEP: pieces' patches first, in the pieces' (u, v)) is paired by centres and
+    turned to match: equal; with the same packing and order a turned patch is a move; a moved one stays one."""
+    ps = twisted()
+    rng = np.random.default_rng(3)
+    order = [rng.permutation(len(g)) for g in ps.groups]
+    turns = [rng.integers(0, 4, len(g)) for g in ps.groups]
+    shuffled = [np.stack([np.rot90(p, k, axes=(0, 1)) for p, k in zip(g[o], t[o])])
+                for g, o, t in zip(ps.groups, order, turns)]
+    repacked = copy(ps, groups=shuffled, merged=[], source_kind=None, source=None)
+    assert compare_patch_sets(ps, repacked).equal and compare_patch_sets(repacked, ps).equal
+    moved = copy(repacked, groups=[g.copy() for g in shuffled])
+    moved.groups[1][5, 1, 2, 0] += 1e-6
+    result = compare_patch_sets(ps, moved)
+    assert not result.equal and result.n_moved == 1 and not result.structural
+    plain = copy(ps, merged=[])
+    turned = copy(plain)
+    turned.groups[0][3] = np.rot90(turned.groups[0][3], 1, axes=(0, 1))
+    assert compare_patch_sets(plain, turned).n_moved > 0  # same packing, same order: compared as written

@@ -21,6 +21,7 @@ from ...construction.topology import build_topology
 from ...errors import ResourceRefusal
 from ...evaluation.adjacency import patch_adjacency
 from ...io.errors import MeshInputError
+from ...io.patches.formats import patch_writer_memory
 from ...io.meshes.mesh_file import collapse_repeated_corners
 from ...io.meshes.read import read_mesh
 from ...io.registry import MESH_WRITERS
@@ -190,6 +191,7 @@ def output_sizes(topology, resolution: int) -> dict:
         "resolution": n, "patches": patches, "vertices": int(vertices), "triangles": int(triangles),
         "ply_bytes": int(PLY_HEADER_BYTES + PLY_VERTEX_BYTES * vertices + PLY_TRIANGLE_BYTES * triangles),
         "memory_bytes": int(tessellation_bytes(patches, n) + cell_work_bytes(topology)),
+        "cad_memory_bytes": {suffix: patch_writer_memory(suffix, patches) for suffix in (".igs", ".step")},
     }
 
 
@@ -261,6 +263,7 @@ def text_lines(report: dict) -> list[str]:
         rows.append((f"output at -r {o['resolution']}", f"{o['vertices']} vertices, {o['triangles']} triangles, "
                                                          f"PLY about {_bytes(o['ply_bytes'])}, "
                                                          f"memory about {_bytes(o['memory_bytes'])}"))
+        rows.append(("CAD patch files", ", ".join(f"{s} writer about {_bytes(b)}" for s, b in o["cad_memory_bytes"].items())))
         if o["in_memory_refusal"]:
             streamed = ", ".join(MESH_WRITERS.streamed())
             rows.append(("held in memory", f"refused (plain {streamed} outputs stream): {o['in_memory_refusal']}"))

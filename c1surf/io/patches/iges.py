@@ -37,7 +37,7 @@ from ..errors import MeshInputError
 from ..finite import refuse_non_finite_patch_set
 from .brep.iges_brep import iges_brep
 from .iges_writer import DEFAULT_UNITS, UNITS, bezier_patches_to_surfaces, write_iges
-from .merged import is_piece_knots, piece_patches, uncovered_groups
+from .merged import cad_patch_set, is_piece_knots, piece_patches, uncovered_groups
 
 
 
@@ -58,6 +58,7 @@ def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNIT
         None: when ``group``. ``brep=False, group=True``: the surfaces in one 402 group (no B-rep)
     """
     refuse_non_finite_patch_set(patch_set, path)
+    patch_set = cad_patch_set(patch_set)
     surfaces = piece_dicts(patch_set.merged)
     for points, weights in zip(*uncovered_groups(patch_set)):
         surfaces.extend(bezier_patches_to_surfaces(points, weights))

@@ -8,17 +8,20 @@ of the file, in file order.
 
 - JSON and NPZ keep every patch and add the pieces (their readers check
   them with ``checks.checked_piece``).
-- IGES and STEP write a piece *instead of* its patches (:func:`uncovered_groups`);
-  the IGES reader gives the patches back by cutting each piece at its knots
+- IGES and STEP write a piece *instead of* its patches (:func:`uncovered_groups`),
+  cut into strips one span wide (:func:`cad_patch_set`); the IGES and STEP
+  readers give the patches back by cutting each piece at its knots
   (:func:`piece_patches`), in the piece's orientation.
 """
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 
-from ...evaluation.merge import MergedPiece
+from ...evaluation.merge import MergedPiece, piece_patches
 
-__all__ = ["uncovered_groups", "piece_patches", "clamped_knots", "is_piece_knots"]
+__all__ = ["uncovered_groups", "piece_patches", "clamped_knots", "is_piece_knots", "strip_pieces", "cad_patch_set"]
 
 
 def clamped_knots(spans: int) -> np.ndarray:
@@ -56,33 +59,66 @@ def uncovered_groups(patch_set) -> tuple[list, list]:
     return groups, kept_weights
 
 
-def _cut(net: np.ndarray) -> np.ndarray:
-    """Cut a C1 quadratic B-spline net (m + 2, ...) along its first axis into m Bezier spans (m, 3, ...).
+def _sub_net(net: np.ndarray, start: int, stop: int) -> np.ndarray:
+    """The control net (k + 2, ...) of spans ``start .. stop - 1`` (k = stop - start) of a clamped uniform quadratic
+    B-spline net (m + 2, ...) along its first axis: the inner points as they are, each end the joint point (the
+    midpoint of its two neighbours) where the cut is inside, the net's own end where it is not. Homogeneous
+    coordinates for a rational net."""
+    m = net.shape[0] - 2
+    first = net[:1] if start == 0 else 0.5 * (net[start : start + 1] + net[start + 1 : start + 2])
+    last = net[-1:] if stop == m else 0.5 * (net[stop : stop + 1] + net[stop + 1 : stop + 2])
+    return np.concatenate([first, net[start + 1 : stop + 1], last])
 
-    Span i is (left, net[i + 1], right): its end points are the midpoints of
-    neighbouring net points, and the first and last net points at the clamped ends.
-    """
-    joints = 0.5 * (net[1:-2] + net[2:-1])  # the points at the m - 1 inner knots
-    return np.stack([np.concatenate([net[:1], joints]), net[1:-1], np.concatenate([joints, net[-1:]])], axis=1)
+
+def _turned(piece: MergedPiece) -> MergedPiece:
+    """The same surface turned a quarter turn in its parameter plane (u becomes v, v becomes -u): orientation kept."""
+    weights = None if piece.weights is None else np.rot90(piece.weights)
+    return MergedPiece(np.rot90(piece.points, axes=(0, 1)).copy(), None if weights is None else weights.copy(),
+                       piece.knots_v, piece.knots_u, np.rot90(piece.patches).copy(),
+                       (np.rot90(piece.rotation) + 1) % 4)
 
 
-def piece_patches(piece: MergedPiece):
-    """The m x n Bezier patches of a merged piece, row by row (span i slowest), in the piece's (u, v).
-
-    Rational pieces are cut in homogeneous coordinates (w x, w).
+def strip_pieces(piece: MergedPiece, max_spans: int) -> list:
+    """``piece`` cut into strips one span wide in u and at most ``max_spans`` long in v, turned first where that
+    gives fewer strips: the faces of the CAD B-reps (``io.patches.brep``), see ``cad_patch_set``.
 
     Returns
     -------
-    points : (m n, 3, 3, d) float
-    weights : (m n, 3, 3) float, or None for a polynomial piece
+    list of MergedPiece, each (3, k + 2) control points, knots 0 0 0 1 1 1 in u and 0 0 0 1 .. k k k in v
+    (k <= max_spans), its patches and rotations those of the spans it covers
     """
+    m, n = piece.patches.shape
+    if m * -(-n // max_spans) > n * -(-m // max_spans):
+        piece = _turned(piece)
+        m, n = n, m
     net = piece.points if piece.weights is None else np.concatenate(
         [piece.points * piece.weights[..., None], piece.weights[..., None]], axis=-1)
-    along_u = _cut(net)  # (m, 3, n + 2, d)
-    both = _cut(along_u.transpose(2, 0, 1, 3))  # (n, 3, m, 3, d): v span, v index, u span, u index
-    m, n = along_u.shape[0], both.shape[0]
-    patches = both.transpose(2, 0, 3, 1, 4).reshape(m * n, 3, 3, -1)
-    if piece.weights is None:
-        return np.ascontiguousarray(patches), None
-    w = patches[..., -1]
-    return np.ascontiguousarray(patches[..., :-1] / w[..., None]), np.ascontiguousarray(w)
+    out = []
+    for i in range(m):
+        column = _sub_net(net, i, i + 1)  # (3, n + 2, d)
+        for j0 in range(0, n, max_spans):
+            j1 = min(n, j0 + max_spans)
+            strip = np.swapaxes(_sub_net(np.swapaxes(column, 0, 1), j0, j1), 0, 1)
+            points, weights = strip, None
+            if piece.weights is not None:
+                weights = np.ascontiguousarray(strip[..., -1])
+                points = strip[..., :-1] / weights[..., None]
+            out.append(MergedPiece(np.ascontiguousarray(points), weights, clamped_knots(1), clamped_knots(j1 - j0),
+                                   piece.patches[i : i + 1, j0:j1].copy(), piece.rotation[i : i + 1, j0:j1].copy()))
+    return out
+
+
+CAD_SPANS = 4  # longest strip: Open CASCADE's default integration takes max(8, 6 k) points per edge of a k-span strip
+
+
+def cad_patch_set(patch_set, max_spans: int = CAD_SPANS):
+    """``patch_set`` as the IGES and STEP B-reps write it: its merged pieces cut into strips (:func:`strip_pieces`),
+    strips of a single span left out (their patch is written as a Bezier face like any uncovered patch).
+
+    Why strips: Open CASCADE's default mass properties integrate a face with one Gauss rule across it in u and
+    one along each edge, over the whole range (not cut at knots), exact over one span only (docs/patch-format.md).
+    """
+    if not patch_set.merged:
+        return patch_set
+    strips = [s for p in patch_set.merged for s in strip_pieces(p, max_spans)]
+    return dataclasses.replace(patch_set, merged=[s for s in strips if s.patches.size > 1])

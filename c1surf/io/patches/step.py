@@ -8,7 +8,7 @@ of the patches it stands for. The faces' shared edges, vertices and shells
 come from c1surf's own adjacency (``brep.step_brep``), not from a sewing by
 tolerance: each closed component of the surface is one solid, each open one
 a shell. The header's time stamp is fixed, so the output is reproducible.
-Every real is written with 17 significant digits (``_step_text``), so the
+Every real is written with 17 significant digits (``_write_step_text``), so the
 doubles come back.
 
 Reading (``read_patch_set_step``, ``c1surf check`` / ``measure`` / ``diff`` /
@@ -31,7 +31,7 @@ from ...evaluation.patch_set import PatchSet
 from ..errors import MeshInputError
 from ..finite import refuse_non_finite_patch_set
 from .brep.step_brep import brep_shape, occ_classes
-from .merged import is_piece_knots, piece_patches
+from .merged import cad_patch_set, is_piece_knots, piece_patches
 
 _FACE_ENTITY = re.compile(rb"=\s*(?:ADVANCED_FACE|FACE_SURFACE)\s*\(")
 _READ_HINT = "reading STEP needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
@@ -49,7 +49,7 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_op
                             + [np.zeros((0, 3))])
     _check_range(path, points)
     refuse_non_finite_patch_set(patch_set, path)
-    write_step_shape(path, brep_shape(patch_set).shape, file_name or os.path.basename(os.fspath(path)))
+    write_step_shape(path, brep_shape(cad_patch_set(patch_set)).shape, file_name or os.path.basename(os.fspath(path)))
 
 
 def write_step_shape(path, shape, name: str) -> None:
@@ -69,15 +69,16 @@ def write_step_shape(path, shape, name: str) -> None:
         writer = STEPControl_Writer()
         if writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone:
             raise OutputError(path, "Open CASCADE could not translate the surface to STEP")
+        del shape  # the caller's B-rep may go now: the STEP model holds what is written
         header = APIHeaderSection_MakeHeader(writer.Model())
         header.SetName(TCollection_HAsciiString(name))
         header.SetTimeStamp(TCollection_HAsciiString("1970-01-01T00:00:00"))
         header.SetOriginatingSystem(TCollection_HAsciiString("c1surf"))
-        text = _step_text(writer)
-    if text is None:
+        with open(path, "wb") as f:
+            written = _write_step_text(writer, f)
+        del writer, header
+    if not written:
         raise OutputError(path, "Open CASCADE could not write the STEP file")
-    with open(path, "wb") as f:
-        f.write(text)
     _fix_header(path, name)
 
 
@@ -89,17 +90,16 @@ def _check_range(path, points: np.ndarray) -> None:
         raise OutputError(path, "STEP output needs finite coordinates below 1e100 in magnitude")
 
 
-def _step_text(writer) -> bytes | None:
-    """The STEP file of ``writer``'s model, every real with 17 significant digits (None if Open CASCADE fails).
+def _write_step_text(writer, stream) -> bool:
+    """Write the STEP file of ``writer``'s model to the binary ``stream``, every real with 17 significant digits.
 
     ``STEPControl_Writer.Write`` prints reals with 12 digits; this does what it
     does (``StepSelect_WorkLibrary::WriteFile``: a ``StepData_StepWriter`` on the
     model, ``SendModel``, ``Print``) with the float format ``%.16E``, so every
     double reads back to the same bits. Magnitudes below 1e-99 take ``%.15E``:
     their 3-digit exponent would not fit Open CASCADE's 24-character buffer.
+    Printed straight into the file (not into memory first): spot's 150 MB of text is never held.
     """
-    import io
-
     from OCP.StepData import StepData_StepWriter
 
     step_writer = StepData_StepWriter(writer.Model())
@@ -107,8 +107,7 @@ def _step_text(writer) -> bytes | None:
     floats.SetFormat("%.16E")  # resets the range format and the zero suppression (which cuts long numbers)
     floats.SetFormatForRange("%.15E", 0.0, 1e-99)
     step_writer.SendModel(writer.WS().Protocol())
-    buffer = io.BytesIO()
-    return buffer.getvalue() if step_writer.Print(buffer) else None
+    return bool(step_writer.Print(stream))
 
 
 # ----------------------------------------------------------------------------
@@ -323,22 +322,38 @@ def _quiet_stdout():
         os.close(saved)
 
 
+_HEAD_BYTES = 1 << 16  # the header and the first entities (the PRODUCT) of a STEP file
+
+
 def _fix_header(path, name: str) -> None:
     """Pin FILE_NAME's name and time stamp and the product name.
 
     Open CASCADE may put the clock and the temporary file name in the header,
     and numbers product names with a per-process counter; neither belongs in
-    a reproducible file.
+    a reproducible file. Both are near the top: the first 64 KiB are fixed
+    and the rest copied after them by blocks (never the whole file in memory).
     """
-    with open(path, "r", encoding="latin-1", newline="") as f:
-        text = f.read()
+    import shutil
+
+    with open(path, "rb") as f:
+        head = f.read(_HEAD_BYTES)
+    text = head.decode("latin-1")
     quoted = _step_string(name)
     fixed = re.sub(r"FILE_NAME\('(?:[^']|'')*','[^']*'", lambda m: f"FILE_NAME({quoted},'1970-01-01T00:00:00'", text, count=1)
     product = _step_string(os.path.splitext(name)[0] or "c1surf")
     fixed = re.sub(r"= PRODUCT\('(?:[^']|'')*',\s*'(?:[^']|'')*'", lambda m: f"= PRODUCT({product},{product}", fixed, count=1)
-    if fixed != text:
-        with open(path, "w", encoding="latin-1", newline="") as f:
-            f.write(fixed)
+    if fixed == text:
+        return
+    fixed_path = os.fspath(path) + ".h"
+    try:
+        with open(path, "rb") as source, open(fixed_path, "wb") as target:
+            target.write(fixed.encode("latin-1"))
+            source.seek(len(head))
+            shutil.copyfileobj(source, target, 1 << 20)
+        os.replace(fixed_path, path)
+    finally:
+        if os.path.exists(fixed_path):
+            os.remove(fixed_path)
 
 
 def _step_string(text: str) -> str:

@@ -7,8 +7,12 @@ one edge there: Open CASCADE's STEP reader spends its time per edge (spot:
 14,139 sides, 12 s to read; 2,720 chains, 4 s), and the files are smaller.
 
 A vertex is *inner* to a chain when exactly two distinct edges end there and
-every face loop that passes it goes straight on (the same unit step of its
-domain before and after: not a corner of the face). Around such a vertex the
+every face loop that passes it goes straight on along u (the same unit step of
+its domain before and after, with v constant: not a corner of the face, not a
+side across v). Sides across v stay one edge each: Open CASCADE's default
+mass properties integrate along each edge with one Gauss rule over its whole
+parameter range, exact over one span only (docs/patch-format.md, *CAD faces
+are strips*); along u the pcurves have dv = 0 and add nothing. Around such a vertex the
 two edges split the surface into the two faces on their sides (or one, on a
 boundary), so joining the edges keeps the topology: every chain is used by
 the same faces as each of its edges. Face corners and vertices where three or
@@ -61,7 +65,8 @@ class EdgeChains:
 
 
 def inner_vertices(topology: BRepTopology) -> np.ndarray:
-    """(V,) bool: the vertices inside chains (two distinct edges end there, every loop through it goes straight on)."""
+    """(V,) bool: the vertices inside chains (two distinct edges end there, every loop through it goes straight on
+    along u)."""
     n = len(topology.vertex_points)
     ev = topology.edge_vertices
     ends = np.bincount(ev.ravel(), minlength=n)
@@ -70,7 +75,7 @@ def inner_vertices(topology: BRepTopology) -> np.ndarray:
     step = topology.loop_uv[:, 1] - topology.loop_uv[:, 0]  # (L, 2)
     following = np.arange(len(step)) + 1  # the next entry of the same loop, cyclically
     following[topology.loop_start[1:] - 1] = topology.loop_start[:-1]
-    turning = np.any(step != step[following], axis=1)
+    turning = np.any(step != step[following], axis=1) | (step[:, 1] != 0)  # a corner, or a side across v
     end = np.where(topology.loop_forward, ev[topology.loop_edge, 1], ev[topology.loop_edge, 0])
     turned = np.zeros(n, dtype=bool)
     turned[end[turning]] = True
