@@ -404,16 +404,10 @@ SIDE_SAMPLES = np.array([0.25, 0.5, 0.75])
 
 
 def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
-    """(k,) int64 label per point of (k, 3) ``points``; points closer than ``tolerance`` share one."""
-    # imported here: a conversion never matches by geometry, and these take 0.3 s to import
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    tree = cKDTree(points)
-    pairs = tree.query_pairs(tolerance, output_type="ndarray")
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
-    return connected_components(graph, directed=False)[1].astype(np.int64)  # int32 labels would overflow in keys
+    """(k,) int64 label per point of (k, 3) ``points``; points closer than ``tolerance`` share one
+    (``stream.clusters.cluster_points``: labels in order of each cluster's first point)."""
+    from .stream.clusters import cluster_points as clustered  # imported here: a conversion never matches by geometry
+    return clustered(points, tolerance)
 
 
 def _side_points(patch_groups, weights=None):
@@ -501,6 +495,7 @@ class SideMatching:
 
 def _match(corners: np.ndarray, samples: np.ndarray, tolerance: float) -> SideMatching:
     """SideMatching of corners (P, 4, 3) and side points (P, 4, 3, 3), absolute ``tolerance``."""
+    from .stream.clusters import row_ranks
     p = corners.shape[0]
     corner_label = cluster_points(corners.reshape(-1, 3), tolerance).reshape(p, 4)
     # one cluster over quarter, mid and three-quarter points, so a side's
@@ -510,7 +505,7 @@ def _match(corners: np.ndarray, samples: np.ndarray, tolerance: float) -> SideMa
     mid = side_label[..., 1]
     quarter = np.minimum(side_label[..., 0], side_label[..., 2])
     key = np.stack([ends[..., 0], ends[..., 1], mid, quarter], axis=-1).reshape(-1, 4)
-    _, edge_label = np.unique(key, axis=0, return_inverse=True)
+    edge_label = row_ranks(key)
     return SideMatching(corner_label, edge_label.reshape(p, 4), side_label[..., 0], ends[..., 0] == ends[..., 1])
 
 
