@@ -35,6 +35,7 @@ from functools import cached_property, partial
 
 import numpy as np
 
+from ..mesh.clusters import cluster_points as clustered_points, row_ranks
 from ..mesh.halfedges import component_roots
 from ..parallel import run_tasks
 from .bezier import bernstein_basis
@@ -405,9 +406,8 @@ SIDE_SAMPLES = np.array([0.25, 0.5, 0.75])
 
 def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
     """(k,) int64 label per point of (k, 3) ``points``; points closer than ``tolerance`` share one
-    (``stream.clusters.cluster_points``: labels in order of each cluster's first point)."""
-    from .stream.clusters import cluster_points as clustered  # imported here: a conversion never matches by geometry
-    return clustered(points, tolerance)
+    (``mesh.clusters.cluster_points``: labels in order of each cluster's first point)."""
+    return clustered_points(points, tolerance)
 
 
 def _side_points(patch_groups, weights=None):
@@ -495,7 +495,6 @@ class SideMatching:
 
 def _match(corners: np.ndarray, samples: np.ndarray, tolerance: float) -> SideMatching:
     """SideMatching of corners (P, 4, 3) and side points (P, 4, 3, 3), absolute ``tolerance``."""
-    from .stream.clusters import row_ranks
     p = corners.shape[0]
     corner_label = cluster_points(corners.reshape(-1, 3), tolerance).reshape(p, 4)
     # one cluster over quarter, mid and three-quarter points, so a side's

@@ -1,4 +1,4 @@
-"""Points closer than a tolerance, clustered by sorting grid cells (the geometric side matcher's points).
+"""Points closer than a tolerance, clustered by sorting grid cells (the geometric side matcher's points, ``evaluation.adjacency``).
 
 ``cluster_points`` gives the labels that connected components of the pairs within the tolerance give
 (``scipy.spatial.cKDTree.query_pairs`` then ``connected_components``, what ``adjacency.cluster_points`` did),
