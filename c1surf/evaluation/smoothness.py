@@ -14,6 +14,7 @@ from .adjacency import SIDE_SAMPLES, _match, _side_points, side_offsets
 from .bezier import bernstein_basis, unit_normals
 from .rational import euclidean_derivatives
 from .stream.patches import BLOCK, ArrayPatches, cubic_patches, patch_blocks
+from .stream.welded import in_order_on_threads
 
 
 @dataclass(frozen=True)
@@ -139,13 +140,16 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
                                 unpaired_crease_sides=0 if crease_sides is None else len(crease_sides))
     t = np.linspace(0.0, 1.0, samples)
     listed = None if crease_sides is None else _crease_edges(first, second, crease_sides)
-    edges = _EdgeMaxima()
-    bent = []
-    for a in range(0, first.size, block):
+    edges, reversed_ = _EdgeMaxima(), sides.reversed
+    bend = crease_angle if crease_sides is None else None
+
+    def measure(a: int):  # a block of shared edges, on the thread pool
         z = min(a + block, first.size)
+        return a, z, _edge_samples(patches, first[a:z], second[a:z], reversed_[a:z], t, unoriented)
+    bent = []
+    for a, z, (gap, angle) in in_order_on_threads(range(0, first.size, block), measure, per_task=2):
         crease = None if listed is None else listed[0][a:z]
-        bent.append(edges.add(patches, first[a:z], second[a:z], sides.reversed[a:z], t, unoriented, crease,
-                              crease_angle if crease_sides is None else None, a))
+        bent.append(edges.add(gap, angle, first[a:z], second[a:z], samples, crease, bend, a))
         if progress is not None:
             progress("measuring the shared edges", z - a, int(first.size))
     if crease_sides is None and crease_angle is not None:  # the edges that bend more than it: crease pieces
@@ -190,11 +194,10 @@ class _EdgeMaxima:
         self.max_gap = self.max_angle = self.max_crease_gap = 0.0
         self.best, self.worst, self.crease_edges = -1.0, 0, 0
 
-    def add(self, patches, first, second, reversed_, t, unoriented, crease, crease_angle, offset: int):
-        """Measure the edges of sides first, second (k,) int; return the (b, 2) side pairs found bent more
-        than ``crease_angle`` (none without it); ``crease``: (k,) bool, the listed crease pieces, or None."""
-        samples = t.size
-        gap, angle = _edge_samples(patches, first, second, reversed_, t, unoriented)
+    def add(self, gap, angle, first, second, samples: int, crease, crease_angle, offset: int):
+        """Take in the ``_edge_samples`` of the edges of sides first, second (k,) int (the k edges from
+        ``offset`` on); return the (b, 2) side pairs found bent more than ``crease_angle`` (none without it);
+        ``crease``: (k,) bool, the listed crease pieces, or None."""
         bent = np.zeros((0, 2), dtype=np.int64)
         if crease is None and crease_angle is not None:
             crease = angle.reshape(first.size, -1).max(axis=1) > crease_angle
@@ -214,10 +217,8 @@ class _EdgeMaxima:
 
 def _edge_samples(patches, first, second, reversed_, t, unoriented: bool):
     """(gap, angle) (k * m,) float at the m parameters ``t`` along the k shared edges of sides ``first``, ``second``."""
-    ids = np.concatenate([first // 4, second // 4])
-    unique, local = np.unique(ids, return_inverse=True)
-    cubic = cubic_patches(patches, unique)
-    local = 4 * local.reshape(-1) + np.concatenate([first % 4, second % 4])
+    cubic = cubic_patches(patches, np.concatenate([first // 4, second // 4]))
+    local = 4 * np.arange(2 * first.size) + np.concatenate([first % 4, second % 4])
     xa, na = side_frames(cubic, local[: first.size], t, rational=patches.rational)
     xb, nb = side_frames(cubic, local[first.size :], t, reversed_, rational=patches.rational)
     return np.linalg.norm(xa - xb, axis=1), normal_angles(na, nb, unoriented)

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import numpy as np
 
+_CHUNK = 1 << 20  # points (or pairs) of a block of the hashing and of the distance checks
 CELL_TOLERANCES = 1024.0  # a cell's side in tolerances: a point is near a face with a chance of ~6 / 1024
 _HASH = np.array([0x9E3779B97F4A7C15 - (1 << 64), 0xC2B2AE3D27D4EB4F - (1 << 64), 0x165667B19E3779F9],
                  dtype=np.int64)  # odd multipliers: cells of one hash are rare (and checked by distance anyway)
@@ -29,27 +30,33 @@ def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
     n = points.shape[0]
     if n == 0:
         return np.zeros(0, dtype=np.int64)
-    pairs = np.concatenate([_same_cell_pairs(points, tolerance), _near_face_pairs(points, tolerance)])
+    key, near = _hashes(points, tolerance)
+    pairs = np.concatenate([_same_cell_pairs(points, key, tolerance), _near_face_pairs(points, near, tolerance)])
+    del key, near
     graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    del pairs
     return connected_components(graph, directed=False)[1].astype(np.int64)
 
 
-def _cells(points: np.ndarray, tolerance: float):
-    """(cell (k, 3) float: each point's cell corner in cells, position within it (k, 3) in [0, 1)), cell size."""
+def _hashes(points: np.ndarray, tolerance: float):
+    """(key (k,) int64, the hash of each point's cell; near (m,) int, the points within about a tolerance of
+    their cell's faces), by blocks of ``_CHUNK`` points (block-sized temporaries only)."""
     size = tolerance * CELL_TOLERANCES if tolerance > 0 else 1.0
-    scaled = points / size
-    cell = np.floor(scaled)
-    scaled -= cell
-    return cell, scaled
+    margin = 2.0 / CELL_TOLERANCES if tolerance > 0 else -1.0  # twice a tolerance: rounding cannot hide a point
+    key, near = np.empty(points.shape[0], dtype=np.int64), []
+    for a in range(0, points.shape[0], _CHUNK):
+        scaled = points[a : a + _CHUNK] / size
+        cell = np.floor(scaled)
+        scaled -= cell
+        cell += 0.0  # -0.0 and 0.0: one cell
+        key[a : a + _CHUNK] = cell.view(np.int64) @ _HASH  # wraps around: a hash
+        near.append(np.flatnonzero(((scaled < margin) | (scaled > 1.0 - margin)).any(axis=1)) + a)
+    return key, np.concatenate(near)
 
 
-def _same_cell_pairs(points: np.ndarray, tolerance: float) -> np.ndarray:
+def _same_cell_pairs(points: np.ndarray, key: np.ndarray, tolerance: float) -> np.ndarray:
     """(m, 2) int: the pairs of points of one cell hash within ``tolerance`` of each other."""
-    cell, _ = _cells(points, tolerance)
-    cell += 0.0  # -0.0 and 0.0: one cell
-    key = cell.view(np.int64) @ _HASH  # wraps around: a hash
-    del cell
-    order = np.argsort(key, kind="stable")
+    order = np.argsort(key)  # the order within a hash does not matter: every pair of it is tried
     key = key[order]
     found = []
     run = np.flatnonzero(key[:-1] == key[1:])  # i with key[i] == key[i + d], d = 1, 2, ...
@@ -64,15 +71,11 @@ def _same_cell_pairs(points: np.ndarray, tolerance: float) -> np.ndarray:
     return np.concatenate(found) if found else np.zeros((0, 2), dtype=np.int64)
 
 
-def _near_face_pairs(points: np.ndarray, tolerance: float) -> np.ndarray:
-    """(m, 2) int: the pairs within ``tolerance`` among the points within about a tolerance of a cell's face."""
+def _near_face_pairs(points: np.ndarray, near: np.ndarray, tolerance: float) -> np.ndarray:
+    """(m, 2) int: the pairs within ``tolerance`` among the points ``near`` a cell's face (their partner may lie
+    in the next cell)."""
     from scipy.spatial import cKDTree
 
-    if not tolerance > 0:
-        return np.zeros((0, 2), dtype=np.int64)
-    _, within = _cells(points, tolerance)
-    margin = 2.0 / CELL_TOLERANCES  # twice a tolerance: the rounding of the division cannot hide a point
-    near = np.flatnonzero(((within < margin) | (within > 1.0 - margin)).any(axis=1))
     if near.size < 2:
         return np.zeros((0, 2), dtype=np.int64)
     pairs = cKDTree(points[near]).query_pairs(tolerance, output_type="ndarray")
@@ -80,12 +83,14 @@ def _near_face_pairs(points: np.ndarray, tolerance: float) -> np.ndarray:
 
 
 def _within(points: np.ndarray, a: np.ndarray, b: np.ndarray, tolerance: float) -> np.ndarray:
-    """(m,) bool: points a and b lie within ``tolerance`` (as the k-d tree's query: distance <= tolerance)."""
-    difference = points[a] - points[b]
-    return np.einsum("ij,ij->i", difference, difference) <= tolerance * tolerance
-
-
-
+    """(m,) bool: points a and b lie within ``tolerance`` (as the k-d tree's query: distance <= tolerance), by
+    blocks of pairs (the two gathers in increasing order of ``a`` where they can be: points near in the file are
+    near in memory)."""
+    out = np.empty(a.size, dtype=bool)
+    for lo in range(0, a.size, _CHUNK):
+        difference = points[a[lo : lo + _CHUNK]] - points[b[lo : lo + _CHUNK]]
+        out[lo : lo + _CHUNK] = np.einsum("ij,ij->i", difference, difference) <= tolerance * tolerance
+    return out
 
 
 def row_ranks(key: np.ndarray) -> np.ndarray:
