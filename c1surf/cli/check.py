@@ -13,13 +13,18 @@ from ..io.patches.formats import load_patch_set
 from ..io.registry import PATCH_READERS
 from ..io.meshes.read import read_mesh
 from ..io.meshes.surface_data import prepare_surface_input
-from .common import crease_notes, dissolve_notes, file_notes, friendly_errors, weld_notes
+from ..evaluation.stream import StreamedSurface
+from ..evaluation.stream.patches import StreamedPatchSet
+from .common import Progress, crease_notes, dissolve_notes, file_notes, friendly_errors, weld_notes
 from .convert import build_or_fail, extension_setup
 from .options import extension_options, surface_options, weld_options, weld_tolerance
 
 
-def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
+def read_or_build(path, shape: dict, weld: float | None = 0.0, progress=None) -> PatchSet:
     """The patches of a patch file, or of the surface of a mesh file built with the options ``shape``.
+
+    With a ``Progress``: a polynomial surface is kept as a streamed one (``StreamedPatchSet``: its patches
+    computed by blocks when read, never all held), the phases shown on a terminal.
 
     ``shape``: the values of the surface and extension options (``options.py``),
     keyed by ``convert.extension_setup``'s parameter names; ``weld``: the welding
@@ -27,14 +32,22 @@ def read_or_build(path, shape: dict, weld: float | None = 0.0) -> PatchSet:
     the sharp-feature tags and the welding go to stderr (the commands using this
     print a report on stdout).
     """
+    phase = (lambda name: None) if progress is None else progress.phase
+    phase(f"reading {path}")
     if Path(path).suffix.lower() in PATCH_READERS:
         return load_patch_set(path)
     mesh = read_mesh(path)
     options, data = extension_setup(mesh, None, **shape)
     mesh, data = prepare_surface_input(mesh, data, weld, options.exact_creases)
-    surface = build_or_fail(mesh, options, data)
-    for note in data.feature_notes + crease_notes(surface) + file_notes(mesh) + weld_notes(mesh.weld) + dissolve_notes(mesh):
+    phase(f"building the surface of {mesh.n_faces} faces")
+    surface = build_or_fail(mesh, options, data, lazy_patches=progress is not None)
+    notes = data.feature_notes + crease_notes(surface) + file_notes(mesh) + weld_notes(mesh.weld) + dissolve_notes(mesh)
+    if notes and progress is not None:
+        progress.end_line()  # a note on a line of its own, never inside a phase's line
+    for note in notes:
         click.echo(f"c1surf: note: {note}", err=True)
+    if surface.lazy_patches:  # polynomial: by blocks
+        return StreamedPatchSet(StreamedSurface(surface))
     return surface_patch_set(surface, str(path))
 
 
@@ -64,8 +77,9 @@ def patch_file_crease_angle(shape: dict, weld, no_weld) -> float | None:
 @surface_options
 @extension_options
 @weld_options
+@click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
-def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
+def check(path, tolerance, samples, unoriented, weld, no_weld, quiet, **shape):
     """Check that a surface is G1 (tangent-plane continuous).
 
     PATCHES is a patch file written by `convert --patches`; a mesh INPUT is
@@ -80,15 +94,17 @@ def check(path, tolerance, samples, unoriented, weld, no_weld, **shape):
     """
     patch_file = Path(path).suffix.lower() in PATCH_READERS
     bend = patch_file_crease_angle(shape, weld, no_weld) if patch_file else None
-    patch_set = read_or_build(path, shape, weld_tolerance(weld, no_weld))
+    progress = Progress(quiet)
+    patch_set = read_or_build(path, shape, weld_tolerance(weld, no_weld), progress)
     groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     if bend is not None and patch_set.crease_sides is not None:
         click.echo(f"c1surf: note: {path} lists its crease sides: --crease-angle is not used", err=True)
         bend = None
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,
                                 unoriented=unoriented, crease_sides=patch_set.crease_sides,
-                                crease_angle=None if bend is None else math.radians(bend))
-    n_patches = sum(len(g) for g in groups)
+                                crease_angle=None if bend is None else math.radians(bend), progress=progress.advance)
+    progress.done()
+    n_patches = patch_set.n_patches
     click.echo(f"patches:          {n_patches}")
     click.echo(f"shared edges:     {report.shared_edges}")
     click.echo(f"boundary edges:   {report.boundary_edges}")

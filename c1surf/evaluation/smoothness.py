@@ -131,8 +131,12 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     if not patches.counts:
         return SmoothnessReport(0, 0, 0, 0.0, 0.0, 0.0, (-1, -1))
     corners, points, diagonal = _side_keys(patches, block, progress)
+    if progress is not None:
+        progress("matching the patch sides", 0, 1)
     sides = _match(corners, points, tolerance * max(diagonal, 1e-300))
     del corners, points
+    if progress is not None:
+        progress("matching the patch sides", 1, 1)
     first, second = sides.first, sides.second
     boundary, overshared = int(sides.lone.size), sides.overshared
     if first.size == 0:

@@ -10,7 +10,7 @@ import numpy as np
 from ..bezier import raise_degree
 from ..rational import homogeneous
 
-__all__ = ["ArrayPatches", "SourcePatches", "patch_blocks", "cubic_patches"]
+__all__ = ["ArrayPatches", "SourcePatches", "StreamedPatchSet", "patch_blocks", "cubic_patches"]
 
 # Patches per block of the checks (bicubic: 12 MB of coefficients, and the side points and frames of a block).
 BLOCK = 1 << 15
@@ -91,3 +91,32 @@ def cubic_patches(patches, ids: np.ndarray) -> np.ndarray:
         points, weights = patches.take(int(k), ids[mine] - starts[k])
         out[mine] = raise_degree(points if weights is None else homogeneous(points, weights), 3, 3)
     return out
+
+
+class StreamedPatchSet:
+    """What ``check`` and ``measure`` read of a ``PatchSet``, for a streamed polynomial Surface: ``groups`` a
+    ``SourcePatches`` reader (``measure_smoothness`` and ``mass_properties`` take it in place of the arrays),
+    ``weights`` None, the crease sides, and the adjacency made on first use (``StreamedSurface.adjacency``).
+
+    kept : ``stream.StreamedSurface`` (its caller drops the Surface, so the build's memory goes)
+    """
+
+    weights = None
+
+    def __init__(self, kept):
+        self.kept = kept
+        self.groups = SourcePatches(kept.source)
+        crease = np.asarray(kept.crease_sides).reshape(-1, 2)
+        self.crease_sides = crease if len(crease) else None  # as ``PatchSet.crease_sides``: None when none listed
+
+    @property
+    def n_patches(self) -> int:
+        return self.kept.n_patches
+
+    @property
+    def adjacency(self):
+        return self.kept.adjacency
+
+    def welding(self, tolerance: float = 1e-9):
+        """The construction's adjacency (as ``PatchSet.welding`` of the surface's patch set)."""
+        return self.kept.adjacency
