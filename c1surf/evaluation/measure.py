@@ -203,6 +203,7 @@ def _integrate_group(patches, k: int, integrand, origin, rtol, block: int, progr
         if values is None:
             values = np.empty((count, part.shape[1]))
         values[a:z] = part
+        patches.release()
         if progress is not None and rtol is None:
             progress(label, z - a, sum(patches.counts))
     if rtol is None:
@@ -211,6 +212,7 @@ def _integrate_group(patches, k: int, integrand, origin, rtol, block: int, progr
     for a in range(0, count, block):
         z = min(a + block, count)
         _refine(*patches.block(k, a, z), integrand, origin, rtol, (ku, kv), values[a:z], error[a:z], scale[a:z])
+        patches.release()
         if progress is not None:
             progress(label, z - a, sum(patches.counts))
     return values, error

@@ -154,6 +154,7 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     for a, z, (gap, angle) in in_order_on_threads(range(0, first.size, block), measure, per_task=2):
         crease = None if listed is None else listed[0][a:z]
         bent.append(edges.add(gap, angle, first[a:z], second[a:z], samples, crease, bend, a))
+        patches.release()
         if progress is not None:
             progress("measuring the shared edges", z - a, int(first.size))
     if crease_sides is None and crease_angle is not None:  # the edges that bend more than it: crease pieces

@@ -31,8 +31,12 @@ def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
     if n == 0:
         return np.zeros(0, dtype=np.int64)
     key, near = _hashes(points, tolerance)
-    pairs = np.concatenate([_same_cell_pairs(points, key, tolerance), _near_face_pairs(points, near, tolerance)])
-    del key, near
+    index = np.int32 if n < 2**31 else np.int64  # point ids: half the bytes while they fit
+    order = np.argsort(key).astype(index)  # the order within a hash does not matter: every pair of it is tried
+    key = key[order]
+    pairs = np.concatenate([_same_cell_pairs(points, key, order, tolerance),
+                            _near_face_pairs(points, near, tolerance).astype(index)])
+    del key, near, order
     graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
     del pairs
     return connected_components(graph, directed=False)[1].astype(np.int64)
@@ -54,10 +58,9 @@ def _hashes(points: np.ndarray, tolerance: float):
     return key, np.concatenate(near)
 
 
-def _same_cell_pairs(points: np.ndarray, key: np.ndarray, tolerance: float) -> np.ndarray:
-    """(m, 2) int: the pairs of points of one cell hash within ``tolerance`` of each other."""
-    order = np.argsort(key)  # the order within a hash does not matter: every pair of it is tried
-    key = key[order]
+def _same_cell_pairs(points: np.ndarray, key: np.ndarray, order: np.ndarray, tolerance: float) -> np.ndarray:
+    """(m, 2) int: the pairs of points of one cell hash within ``tolerance`` of each other; ``key`` (k,) the
+    hashes sorted, ``order`` (k,) the points in that order."""
     found = []
     run = np.flatnonzero(key[:-1] == key[1:])  # i with key[i] == key[i + d], d = 1, 2, ...
     d = 1
@@ -68,7 +71,7 @@ def _same_cell_pairs(points: np.ndarray, key: np.ndarray, tolerance: float) -> n
         run = run[run + d + 1 < key.size]
         run = run[key[run] == key[run + d + 1]]
         d += 1
-    return np.concatenate(found) if found else np.zeros((0, 2), dtype=np.int64)
+    return np.concatenate(found) if found else np.zeros((0, 2), dtype=order.dtype)
 
 
 def _near_face_pairs(points: np.ndarray, near: np.ndarray, tolerance: float) -> np.ndarray:

@@ -5,6 +5,8 @@ mesh input, none of them).
 """
 from __future__ import annotations
 
+import mmap
+
 import numpy as np
 
 from ..bezier import raise_degree
@@ -29,6 +31,15 @@ class ArrayPatches:
         self.weights = None if weights is None else [weights[k] for k in keep]
         self.counts = [int(len(g)) for g in self.groups]
         self.degrees = [(g.shape[1] - 1, g.shape[2] - 1) for g in self.groups]
+        arrays = self.groups + ([] if self.weights is None else self.weights)
+        self._maps = list({id(m): m for m in (_mapping(a) for a in arrays) if m is not None}.values())
+
+    def release(self) -> None:
+        """Give back the pages of memory-mapped arrays read so far (an NPZ's members: they stay in the page
+        cache, and are read again from there): a pass over the patches then holds a block of them, not all."""
+        advice = getattr(mmap, "MADV_DONTNEED", None)  # POSIX; elsewhere the pages stay
+        for mapped in self._maps if advice is not None else ():
+            mapped.madvise(advice)
 
     @property
     def rational(self) -> bool:
@@ -61,12 +72,24 @@ class SourcePatches:
 
     rational = False
 
+    def release(self) -> None:
+        """Nothing to give back (``PatchSource`` keeps its own cache)."""
+
     def take(self, k: int, ids: np.ndarray):
         """As ``ArrayPatches.take``."""
         return np.ascontiguousarray(self.source.coefficients(self.kinds[k], ids)[0][..., :3]), None
 
     def block(self, k: int, a: int, z: int):
         return self.take(k, np.arange(a, z))
+
+
+def _mapping(array):
+    """The ``mmap.mmap`` an array's memory comes from (``np.frombuffer`` of a mapped file), or None."""
+    while array is not None:
+        if isinstance(array, mmap.mmap):
+            return array
+        array = array.obj if isinstance(array, memoryview) else getattr(array, "base", None)
+    return None
 
 
 def patch_blocks(patches, size: int):
@@ -76,6 +99,7 @@ def patch_blocks(patches, size: int):
     for k, count in enumerate(patches.counts):
         for a in range(0, count, size):
             yield start + a, k, a, min(a + size, count)
+            patches.release()
         start += count
 
 
