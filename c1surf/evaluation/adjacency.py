@@ -499,7 +499,12 @@ def _match(corners: np.ndarray, samples: np.ndarray, tolerance: float) -> SideMa
     corner_label = cluster_points(corners.reshape(-1, 3), tolerance).reshape(p, 4)
     # one cluster over quarter, mid and three-quarter points, so a side's
     # quarter point can be compared with another side's three-quarter point
-    side_label = cluster_points(samples.reshape(-1, 3), tolerance).reshape(p, 4, 3)
+    return _matching(corner_label, cluster_points(samples.reshape(-1, 3), tolerance).reshape(p, 4, 3))
+
+
+def _matching(corner_label: np.ndarray, side_label: np.ndarray) -> SideMatching:
+    """SideMatching of the corners' labels (P, 4) and the side points' (P, 4, 3) (``_match``'s clusters)."""
+    p = corner_label.shape[0]
     ends = np.sort(corner_label[:, SIDE_CORNERS], axis=-1)  # (P, 4, 2)
     mid = side_label[..., 1]
     quarter = np.minimum(side_label[..., 0], side_label[..., 2])

@@ -10,7 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from .adjacency import SIDE_SAMPLES, _match, _side_points, side_offsets
+from .adjacency import SIDE_SAMPLES, _matching, _side_points, cluster_points, side_offsets
 from .bezier import bernstein_basis, unit_normals
 from .rational import euclidean_derivatives
 from .stream.patches import BLOCK, ArrayPatches, cubic_patches, patch_blocks
@@ -133,8 +133,13 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
     corners, points, diagonal = _side_keys(patches, block, progress)
     if progress is not None:
         progress("matching the patch sides", 0, 1)
-    sides = _match(corners, points, tolerance * max(diagonal, 1e-300))
-    del corners, points
+    n, absolute = corners.shape[0], tolerance * max(diagonal, 1e-300)
+    corner_label = cluster_points(corners.reshape(-1, 3), absolute).reshape(n, 4)
+    del corners  # as ``adjacency._match``, each array let go once clustered
+    side_label = cluster_points(points.reshape(-1, 3), absolute).reshape(n, 4, len(SIDE_SAMPLES))
+    del points
+    sides = _matching(corner_label, side_label)
+    del corner_label, side_label
     if progress is not None:
         progress("matching the patch sides", 1, 1)
     first, second = sides.first, sides.second
