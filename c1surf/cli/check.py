@@ -98,6 +98,7 @@ def check(path, tolerance, samples, unoriented, weld, no_weld, quiet, **shape):
     patch_set = read_or_build(path, shape, weld_tolerance(weld, no_weld), progress)
     groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     if bend is not None and patch_set.crease_sides is not None:
+        progress.end_line()
         click.echo(f"c1surf: note: {path} lists its crease sides: --crease-angle is not used", err=True)
         bend = None
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,
