@@ -13,7 +13,11 @@ every sample mesh's patch file).
 """
 from __future__ import annotations
 
+from functools import partial
+
 import numpy as np
+
+from ..parallel import run_tasks
 
 _CHUNK = 1 << 20  # points (or pairs) of a block of the hashing and of the distance checks
 CELL_TOLERANCES = 1024.0  # a cell's side in tolerances: a point is near a face with a chance of ~6 / 1024
@@ -91,9 +95,11 @@ def _within(points: np.ndarray, a: np.ndarray, b: np.ndarray, tolerance: float) 
     blocks of pairs (the two gathers in increasing order of ``a`` where they can be: points near in the file are
     near in memory)."""
     out = np.empty(a.size, dtype=bool)
-    for lo in range(0, a.size, _CHUNK):
+
+    def check(lo: int) -> None:  # a block of pairs, a task of the thread pool (the gathers run without the GIL)
         difference = points[a[lo : lo + _CHUNK]] - points[b[lo : lo + _CHUNK]]
         out[lo : lo + _CHUNK] = np.einsum("ij,ij->i", difference, difference) <= tolerance * tolerance
+    run_tasks([partial(check, lo) for lo in range(0, a.size, _CHUNK)])
     return out
 
 
