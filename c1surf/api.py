@@ -25,6 +25,8 @@ from .errors import MeshInputError
 from .evaluation.adjacency import patch_adjacency
 from .evaluation.patch_set import PatchSet, surface_patch_set
 from .evaluation.smoothness import measure_smoothness
+from .evaluation.stream import StreamedSurface
+from .evaluation.stream.patches import StreamedPatchSet
 from .evaluation.tessellate import tessellate
 from .evaluation.tolerance import tessellate_to_tolerance
 from .fitting.control_mesh import ControlMesh
@@ -34,7 +36,7 @@ from .io.meshes.sidecars import read_blend_file, read_creases_file
 from .io.patches.formats import load_patch_set
 from .io.registry import PATCH_READERS
 from .mesh.errors import TopologyError
-from .mesh.geometry_checks import GeometryError, check_geometry
+from .mesh.points.geometry_checks import GeometryError, check_geometry
 from .prepare.extension_data import Sidecars, SurfaceData
 from .prepare.mesh_edits import weld_mesh_file
 from .prepare.notes import repair_notes, seam_notes
@@ -131,8 +133,11 @@ def load_surface(path, surface_options: SurfaceOptions | None = None, input_opti
     return surface, LoadReport(prepared.path, mesh, data, repair_notes(surface, mesh, data))
 
 def load_patches(path, surface_options: SurfaceOptions | None = None, input_options: InputOptions | None = None,
-                 progress=None):
+                 progress=None, streamed: bool = False):
     """The patches of a patch file (JSON, NPZ, IGES, STEP: read as they are) or of the surface of a mesh file.
+
+    ``streamed``: a polynomial surface of a mesh file is kept as an ``evaluation.stream.patches.StreamedPatchSet``
+    (its patches computed by blocks when read, never all held: ``check`` and ``measure``).
 
     Returns
     -------
@@ -140,9 +145,11 @@ def load_patches(path, surface_options: SurfaceOptions | None = None, input_opti
     """
     if Path(path).suffix.lower() in PATCH_READERS:
         if progress is not None:
-            progress(f"reading the patches of {path}")
+            progress(f"reading {path}")
         return load_patch_set(path), []
-    surface, report = load_surface(path, surface_options, input_options, progress=progress)
+    surface, report = load_surface(path, surface_options, input_options, lazy_patches=streamed, progress=progress)
+    if surface.lazy_patches:  # polynomial: by blocks
+        return StreamedPatchSet(StreamedSurface(surface)), report.notes
     return surface_patch_set(surface, str(path)), report.notes
 
 def topology_error(error: TopologyError, mesh_file) -> MeshInputError:

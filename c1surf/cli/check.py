@@ -10,17 +10,22 @@ from click.core import ParameterSource
 from ..api import load_patches
 from ..evaluation.smoothness import measure_smoothness
 from ..io.registry import MESH_READERS, PATCH_READERS
-from .common import echo_notes, friendly_errors, with_formats
+from .common import Progress, echo_notes, friendly_errors, with_formats
 from .options import FiniteFloat, input_options, surface_options
 
 
 def read_or_build(path, surface, inputs, progress=None):
     """The patches of a patch file, or of the surface of a mesh file built with the options (``api.load_patches``).
 
-    The notes on the mesh's repairs and sharp features go to stderr (the commands using this print a report on
-    stdout); ``progress``: a ``Progress`` (its phases), or None.
+    With a ``Progress``: a polynomial surface is kept as a streamed one (``StreamedPatchSet``: its patches
+    computed by blocks when read, never all held), the phases shown on a terminal. The notes on the mesh's
+    repairs and sharp features go to stderr, each on a line of its own (the commands using this print a report
+    on stdout).
     """
-    patch_set, notes = load_patches(path, surface, inputs, None if progress is None else progress.phase)
+    patch_set, notes = load_patches(path, surface, inputs, None if progress is None else progress.phase,
+                                    streamed=progress is not None)
+    if notes and progress is not None:
+        progress.end_line()  # a note on a line of its own, never inside a phase's line
     echo_notes(notes)
     return patch_set
 
@@ -55,9 +60,10 @@ MESH_ONLY = ("blend", "alpha", "beta", "tangent_rule", "interpolate_vertices", "
               help="Compare normals up to sign (tangent-plane continuity of non-orientable surfaces such as a Moebius strip).")
 @surface_options
 @input_options
+@click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
 @with_formats
-def check(path, tolerance, samples, unoriented, surface, inputs):
+def check(path, tolerance, samples, unoriented, surface, inputs, quiet):
     """Check that a surface is G1 (tangent-plane continuous).
 
     PATCHES is a patch file ({patch_inputs}) written by `convert --patches`; a
@@ -72,15 +78,18 @@ def check(path, tolerance, samples, unoriented, surface, inputs):
     """
     patch_file = Path(path).suffix.lower() in PATCH_READERS
     bend = patch_file_crease_angle(inputs) if patch_file else None
-    patch_set = read_or_build(path, surface, inputs)
+    progress = Progress(quiet)
+    patch_set = read_or_build(path, surface, inputs, progress)
     groups, patch_weights = patch_set.groups, patch_set.weights  # weights: rational patches (A2a)
     if bend is not None and patch_set.crease_sides is not None:
+        progress.end_line()
         click.echo(f"c1surf: note: {path} lists its crease sides: --crease-angle is not used", err=True)
         bend = None
     report = measure_smoothness(groups, samples=samples, tolerance=min(tolerance, 1e-9), weights=patch_weights,
                                 unoriented=unoriented, crease_sides=patch_set.crease_sides,
-                                crease_angle=None if bend is None else math.radians(bend))
-    n_patches = sum(len(g) for g in groups)
+                                crease_angle=None if bend is None else math.radians(bend), progress=progress.advance)
+    progress.done()
+    n_patches = patch_set.n_patches
     click.echo(f"patches:          {n_patches}")
     click.echo(f"shared edges:     {report.shared_edges}")
     click.echo(f"boundary edges:   {report.boundary_edges}")

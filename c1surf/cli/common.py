@@ -175,6 +175,12 @@ class Progress:
         if self.bar.pos >= total:
             self._end_bar()
 
+    def end_line(self) -> None:
+        """End the open phase or bar line (with its time), so that a note printed next has a line of its own."""
+        if self.enabled:
+            self._end_bar()
+            self._end_phase()
+
     def done(self) -> None:
         """End the last line: its time and the total time."""
         if not self.enabled:

@@ -35,6 +35,7 @@ from functools import cached_property, partial
 
 import numpy as np
 
+from ..mesh.points.clusters import cluster_points as clustered_points, row_ranks
 from ..mesh.halfedges import component_roots
 from ..parallel import run_tasks
 from .bezier import bernstein_basis
@@ -404,16 +405,9 @@ SIDE_SAMPLES = np.array([0.25, 0.5, 0.75])
 
 
 def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
-    """(k,) int64 label per point of (k, 3) ``points``; points closer than ``tolerance`` share one."""
-    # imported here: a conversion never matches by geometry, and these take 0.3 s to import
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    tree = cKDTree(points)
-    pairs = tree.query_pairs(tolerance, output_type="ndarray")
-    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
-    return connected_components(graph, directed=False)[1].astype(np.int64)  # int32 labels would overflow in keys
+    """(k,) int64 label per point of (k, 3) ``points``; points closer than ``tolerance`` share one
+    (``mesh.points.clusters.cluster_points``: labels in order of each cluster's first point)."""
+    return clustered_points(points, tolerance)
 
 
 def _side_points(patch_groups, weights=None):
@@ -505,12 +499,17 @@ def _match(corners: np.ndarray, samples: np.ndarray, tolerance: float) -> SideMa
     corner_label = cluster_points(corners.reshape(-1, 3), tolerance).reshape(p, 4)
     # one cluster over quarter, mid and three-quarter points, so a side's
     # quarter point can be compared with another side's three-quarter point
-    side_label = cluster_points(samples.reshape(-1, 3), tolerance).reshape(p, 4, 3)
+    return _matching(corner_label, cluster_points(samples.reshape(-1, 3), tolerance).reshape(p, 4, 3))
+
+
+def _matching(corner_label: np.ndarray, side_label: np.ndarray) -> SideMatching:
+    """SideMatching of the corners' labels (P, 4) and the side points' (P, 4, 3) (``_match``'s clusters)."""
+    p = corner_label.shape[0]
     ends = np.sort(corner_label[:, SIDE_CORNERS], axis=-1)  # (P, 4, 2)
     mid = side_label[..., 1]
     quarter = np.minimum(side_label[..., 0], side_label[..., 2])
     key = np.stack([ends[..., 0], ends[..., 1], mid, quarter], axis=-1).reshape(-1, 4)
-    _, edge_label = np.unique(key, axis=0, return_inverse=True)
+    edge_label = row_ranks(key)
     return SideMatching(corner_label, edge_label.reshape(p, 4), side_label[..., 0], ends[..., 0] == ends[..., 1])
 
 

@@ -31,6 +31,7 @@ import numpy as np
 
 from .bezier import bernstein_basis, evaluate_grid
 from .rational import euclidean_derivatives, homogeneous
+from .stream.patches import BLOCK, ArrayPatches, patch_blocks
 
 AREA_RTOL = 1e-13  # two levels of the area quadrature agree to this, relative, patch by patch
 MOMENT_RTOL = 1e-13  # the same for the moments of rational patches
@@ -136,6 +137,8 @@ def moment_integrand(x: np.ndarray, xu: np.ndarray, xv: np.ndarray, origin: np.n
 
 def _integrate_fixed(points, weights, integrand, origin, rule_u, rule_v) -> np.ndarray:
     """Integrals of ``integrand`` over every patch with one tensor rule: (p, c), in chunks of patches."""
+    if not len(points):
+        return np.zeros((0, 1))
     (u, wu), (v, wv) = rule_u, rule_v
     w = wu[:, None] * wv[None, :]
     chunk = max(1, CHUNK_SAMPLES // w.size)
@@ -143,8 +146,18 @@ def _integrate_fixed(points, weights, integrand, origin, rule_u, rule_v) -> np.n
     for start in range(0, len(points), chunk):
         part = slice(start, start + chunk)
         frames = patch_frames(points[part], None if weights is None else weights[part], u, v)
-        out.append(np.einsum("pabc,ab->pc", integrand(*frames, origin), w))
+        out.append(_weighted_sums(integrand(*frames, origin), w))
     return np.concatenate(out) if out else np.zeros((0, 1))
+
+
+def _weighted_sums(values: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """(p, c) float: ``sum_ab values[p, a, b, c] w[a, b]``, each patch's sum over one contiguous row of its
+    products (numpy's pairwise sum of a row), so that a patch's integral does not depend on how many patches
+    are integrated with it (``einsum`` sums a single patch in another order)."""
+    p, c = values.shape[0], values.shape[-1]
+    rows = np.ascontiguousarray(np.moveaxis(values, -1, 1)).reshape(p, c, -1)
+    rows *= w.reshape(-1)
+    return rows.sum(axis=-1)
 
 
 def integrate_patches(points, weights, integrand, origin, rtol: float | None = None):
@@ -168,13 +181,49 @@ def integrate_patches(points, weights, integrand, origin, rtol: float | None = N
     -------
     values : (p, c) float; error : (p,) float, the last difference of two levels (0 without rtol)
     """
-    ku, kv = moment_points(points.shape[1] - 1), moment_points(points.shape[2] - 1)
-    values = _integrate_fixed(points, weights, integrand, origin, gauss_rule(ku), gauss_rule(kv))
-    error = np.zeros(len(points))
-    if rtol is None or not len(points):
+    patches = ArrayPatches([points], None if weights is None else [weights])
+    if not patches.counts:
+        return _integrate_fixed(points, weights, integrand, origin, None, None), np.zeros(0)
+    return _integrate_group(patches, 0, integrand, origin, rtol, len(points))
+
+
+def _integrate_group(patches, k: int, integrand, origin, rtol, block: int, progress=None, label: str = ""):
+    """``integrate_patches`` of group ``k`` of a ``stream.patches`` reader, ``block`` patches at a time.
+
+    Every patch's value is computed patch by patch (the fixed rule, then the levels of the adaptive one, whose
+    test reads the mean over the whole group: taken from the fixed values of all patches, held as (p, c)), so
+    the values do not depend on ``block``.
+    """
+    count, (du, dv) = patches.counts[k], patches.degrees[k]
+    ku, kv = moment_points(du), moment_points(dv)
+    values, error = None, np.zeros(count)
+    for a in range(0, count, block):
+        z = min(a + block, count)
+        part = _integrate_fixed(*patches.block(k, a, z), integrand, origin, gauss_rule(ku), gauss_rule(kv))
+        if values is None:
+            values = np.empty((count, part.shape[1]))
+        values[a:z] = part
+        patches.release()
+        if progress is not None and rtol is None:
+            progress(label, z - a, sum(patches.counts))
+    if rtol is None:
         return values, error
     scale = np.maximum(np.abs(values), np.abs(values).mean(axis=0))
-    active, s = np.arange(len(points)), 1
+    for a in range(0, count, block):
+        z = min(a + block, count)
+        _refine(patches.block(k, a, z), (integrand, origin), rtol, (ku, kv), (values[a:z], error[a:z], scale[a:z]))
+        patches.release()
+        if progress is not None:
+            progress(label, z - a, sum(patches.counts))
+    return values, error
+
+
+def _refine(block: tuple, integral: tuple, rtol: float, rule: tuple, state: tuple) -> None:
+    """The adaptive levels of ``integrate_patches`` on a ``block`` (points, weights) of patches, for the
+    ``integral`` (integrand, origin): ``state`` (values (b, c), error (b,), scale (b, c)) updated in place (views
+    into the group's); ``scale``, the test's relative scale of each patch."""
+    (points, weights), (integrand, origin), (values, error, scale) = block, integral, state
+    (ku, kv), active, s = rule, np.arange(len(points)), 1
     while active.size and s < MAX_SUBDIVISIONS:
         s *= 2
         finer = _integrate_fixed(points[active], None if weights is None else weights[active], integrand, origin,
@@ -182,7 +231,6 @@ def integrate_patches(points, weights, integrand, origin, rtol: float | None = N
         change = np.abs(finer - values[active])
         values[active], error[active] = finer, change.max(axis=1)
         active = active[np.any(change > rtol * scale[active], axis=1)]
-    return values, error
 
 
 def closed_surface(edges: np.ndarray, reversed_: np.ndarray):
@@ -213,51 +261,67 @@ def closed_surface(edges: np.ndarray, reversed_: np.ndarray):
     return True, None
 
 
-def _bbox_centre(groups) -> np.ndarray:
-    flat = np.concatenate([g.reshape(-1, 3) for g in groups])
-    return 0.5 * (flat.min(axis=0) + flat.max(axis=0))
+def _bbox_centre(patches, block: int = BLOCK) -> np.ndarray:
+    """(3,) float: the centre of the bounding box of the control points (x, y, z), read by blocks."""
+    low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    for _, k, a, z in patch_blocks(patches, block):
+        flat = patches.block(k, a, z)[0].reshape(-1, 3)
+        low, high = np.minimum(low, flat.min(axis=0)), np.maximum(high, flat.max(axis=0))
+    return 0.5 * (low + high)
 
 
-def surface_area(groups, weights=None, rtol: float = AREA_RTOL):
+def _reader(groups, weights):
+    """A ``stream.patches`` reader of ``groups`` (lists of arrays, or a reader already)."""
+    if hasattr(groups, "take"):
+        return groups
+    return ArrayPatches([np.asarray(g)[..., :3] for g in groups], weights)
+
+
+def surface_area(groups, weights=None, rtol: float = AREA_RTOL, block: int = BLOCK, progress=None):
     """Area of the patches and its estimated absolute error.
 
     Parameters
     ----------
-    groups : list of (p_k, du+1, dv+1, 3) float
+    groups : list of (p_k, du+1, dv+1, 3) float, or a ``stream.patches`` reader (``weights`` None)
     weights : None or a list parallel to ``groups`` of (p_k, du+1, dv+1) float
+    block : int, patches integrated at a time (the result does not depend on it)
+    progress : callable(label, advance, total) or None
 
     Returns
     -------
     area, error : float
     """
+    patches = _reader(groups, weights)
     area = error = 0.0
-    for k, g in enumerate(groups):
-        values, err = integrate_patches(np.asarray(g, np.float64)[..., :3], None if weights is None else weights[k],
-                                        area_integrand, np.zeros(3), rtol)
+    for k in range(len(patches.counts)):
+        values, err = _integrate_group(patches, k, area_integrand, np.zeros(3), rtol, block, progress,
+                                       "measuring the area")
         area, error = area + float(values.sum()), error + float(err.sum())
     return area, error
 
 
-def solid_moments(groups, weights=None, rtol: float = MOMENT_RTOL):
+def solid_moments(groups, weights=None, rtol: float = MOMENT_RTOL, block: int = BLOCK, progress=None):
     """Volume, centroid and central inertia tensor of the solid the closed patches bound.
 
     Parameters
     ----------
-    groups : list of (p_k, du+1, dv+1, 3) float, a closed, consistently oriented surface
+    groups : list of (p_k, du+1, dv+1, 3) float, a closed, consistently oriented surface; or a
+        ``stream.patches`` reader (``weights`` None)
     weights : None or a list parallel to ``groups`` of (p_k, du+1, dv+1) float (rational
         patches: adaptive quadrature to ``rtol``; polynomial ones are exact)
+    block, progress : as ``surface_area``'s
 
     Returns
     -------
     volume : float (negative when the normals point inwards); centroid : (3,) float;
     inertia : (3, 3) float, about the centroid, of the density sign(volume)
     """
-    groups = [np.asarray(g, np.float64)[..., :3] for g in groups]
-    origin = _bbox_centre(groups)
+    patches = _reader(groups, weights)
+    origin = _bbox_centre(patches, block)
     total = np.zeros(13)
-    for k, g in enumerate(groups):
-        values, _ = integrate_patches(g, None if weights is None else weights[k], moment_integrand, origin,
-                                      None if weights is None else rtol)
+    for k in range(len(patches.counts)):
+        values, _ = _integrate_group(patches, k, moment_integrand, origin, rtol if patches.rational else None, block,
+                                     progress, "measuring the volume")
         total += values.sum(axis=0)
     volume, first, second = total[0], total[1:4], total[4:].reshape(3, 3)
     shift = first / volume
@@ -266,27 +330,30 @@ def solid_moments(groups, weights=None, rtol: float = MOMENT_RTOL):
     return float(volume), origin + shift, 0.5 * (inertia + inertia.T)
 
 
-def mass_properties(groups, edges: np.ndarray, reversed_: np.ndarray, weights=None) -> MassProperties:
+def mass_properties(groups, edges: np.ndarray, reversed_: np.ndarray, weights=None, block: int = BLOCK,
+                    progress=None) -> MassProperties:
     """Area; for a closed surface also volume, centroid and inertia tensor (about the centroid).
 
     Parameters
     ----------
-    groups : list of (p_k, du+1, dv+1, 3) float, patches in file order
+    groups : list of (p_k, du+1, dv+1, 3) float, patches in file order (memory-mapped ones are read by
+        blocks); or a ``stream.patches`` reader (``SourcePatches``: a streamed Surface), ``weights`` None
     edges, reversed_ : (P, 4) int, (P, 4) bool, the patch adjacency (decides closedness)
     weights : None or a list parallel to ``groups`` of (p_k, du+1, dv+1) float
+    block : int, patches integrated at a time: the result does not depend on it (every patch's integral is
+        computed patch by patch, and the sums are taken over the (P, c) values of each group, held whole)
+    progress : callable(label, advance, total) or None
 
     Returns
     -------
     MassProperties; a solid whose normals point inwards is measured turned outwards (with a note)
     """
-    groups = [g for g in groups if len(g)]
-    if weights is not None:
-        weights = [np.asarray(w, np.float64) for w in weights if len(w)]
-    area, area_error = surface_area(groups, weights)
+    patches = _reader(groups, weights)
+    area, area_error = surface_area(patches, block=block, progress=progress)
     closed, reason = closed_surface(np.asarray(edges), np.asarray(reversed_, dtype=bool))
     if not closed:
         return MassProperties(area, area_error, False, reason)
-    volume, centroid, inertia = solid_moments(groups, weights)
+    volume, centroid, inertia = solid_moments(patches, block=block, progress=progress)
     note = None
     if volume < 0:
         volume, inertia = -volume, -inertia

@@ -10,9 +10,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from .adjacency import match_patch_sides, side_offsets
-from .bezier import bernstein_basis, raise_degree, unit_normals
-from .rational import euclidean_derivatives, homogeneous
+from .adjacency import SIDE_SAMPLES, _matching, _side_points, cluster_points, side_offsets
+from .bezier import bernstein_basis, unit_normals
+from .rational import euclidean_derivatives
+from .stream.patches import BLOCK, ArrayPatches, cubic_patches, patch_blocks
+from .stream.welded import in_order_on_threads
 
 
 @dataclass(frozen=True)
@@ -99,13 +101,24 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
     return boundary.reshape(-1, 3), unit_normals(du.reshape(-1, 3), dv.reshape(-1, 3))
 
 
-def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False, tolerance: float = 1e-9,
-                       weights=None, crease_sides=None, crease_angle: float | None = None) -> SmoothnessReport:
+@dataclass(frozen=True)
+class SmoothnessSettings:
+    """How ``measure_smoothness`` samples and matches (its keywords; see its docstring)."""
+
+    samples: int = 11
+    unoriented: bool = False
+    tolerance: float = 1e-9
+    crease_angle: float | None = None
+    block: int = BLOCK
+
+
+def measure_smoothness(patch_groups, weights=None, crease_sides=None, progress=None, **settings) -> SmoothnessReport:
     """Sample every shared patch edge; measure position gap and normal jump.
 
     Parameters
     ----------
-    patch_groups : list of (p, du+1, dv+1, 3) float arrays, du, dv <= 3
+    patch_groups : list of (p, du+1, dv+1, 3) float arrays, du, dv <= 3 (memory-mapped ones are read by blocks);
+        or a ``stream.patches`` reader (``ArrayPatches``, ``SourcePatches``: a streamed Surface), ``weights`` None
     weights : None, or a list of (p, du+1, dv+1) float arrays (one per group):
         rational patches, evaluated as sum(w P B) / sum(w B)
     samples : int, points per edge (end points included)
@@ -115,50 +128,126 @@ def measure_smoothness(patch_groups, samples: int = 11, unoriented: bool = False
         found shared by those two sides, they are measured for their gap only
     crease_angle : float (radians) or None: without ``crease_sides``, the shared edges whose normals
         differ by more somewhere are crease pieces (for files that list none: IGES, STEP)
+    block : int, patches (and shared edges) evaluated at a time: the result does not depend on it (every
+        value is computed patch by patch or side by side, and only maxima are taken across blocks)
+    progress : callable(label, advance, total) or None
+    samples, unoriented, tolerance, crease_angle, block : keywords, the fields of ``SmoothnessSettings``
 
     Returns
     -------
     SmoothnessReport
+
+    Long: the independent check's steps in their order, each array let go as soon as the next step has what
+    it needs (side keys, corner and side clusters, the pairing), then the shared edges by blocks on the thread
+    pool with their maxima: split, the arrays would live on in the callers' frames.
     """
-    groups = [np.asarray(g, dtype=np.float64)[..., :3] for g in patch_groups if len(g)]
-    if not groups:
+    s = SmoothnessSettings(**settings)
+    samples, unoriented, tolerance, crease_angle, block = s.samples, s.unoriented, s.tolerance, s.crease_angle, s.block
+    patches = patch_groups if hasattr(patch_groups, "take") else ArrayPatches(patch_groups, weights)
+    if not patches.counts:
         return SmoothnessReport(0, 0, 0, 0.0, 0.0, 0.0, (-1, -1))
-    patches = np.concatenate([raise_degree(g, 3, 3) for g in groups])
-    flat = patches.reshape(-1, 3)
-    diagonal = float(np.linalg.norm(flat.max(axis=0) - flat.min(axis=0)))
-    if weights is not None:
-        # Rational patches: sides matched by the surface's own points, frames by
-        # the quotient rule from the homogeneous patches (raised as such).
-        weights = [np.asarray(w, dtype=np.float64) for g, w in zip(patch_groups, weights) if len(g)]
-        patches = np.concatenate([raise_degree(homogeneous(g, w), 3, 3) for g, w in zip(groups, weights)])
-    sides = match_patch_sides(groups, tolerance * max(diagonal, 1e-300), weights)
+    corners, points, diagonal = _side_keys(patches, block, progress)
+    if progress is not None:
+        progress("matching the patch sides", 0, 1)
+    n, absolute = corners.shape[0], tolerance * max(diagonal, 1e-300)
+    corner_label = cluster_points(corners.reshape(-1, 3), absolute).reshape(n, 4)
+    del corners  # as ``adjacency._match``, each array let go once clustered
+    side_label = cluster_points(points.reshape(-1, 3), absolute).reshape(n, 4, len(SIDE_SAMPLES))
+    del points
+    sides = _matching(corner_label, side_label)
+    del corner_label, side_label
+    if progress is not None:
+        progress("matching the patch sides", 1, 1)
     first, second = sides.first, sides.second
     boundary, overshared = int(sides.lone.size), sides.overshared
     if first.size == 0:
         return SmoothnessReport(0, boundary, overshared, 0.0, 0.0, diagonal, (-1, -1),
                                 unpaired_crease_sides=0 if crease_sides is None else len(crease_sides))
-
     t = np.linspace(0.0, 1.0, samples)
-    xa, na = side_frames(patches, first, t, rational=weights is not None)
-    xb, nb = side_frames(patches, second, t, sides.reversed, rational=weights is not None)
-    pa_r, pb_r = np.repeat(first // 4, samples), np.repeat(second // 4, samples)
-    gap = np.linalg.norm(xa - xb, axis=1)
-    angle = normal_angles(na, nb, unoriented)
+    listed = None if crease_sides is None else _crease_edges(first, second, crease_sides)
+    edges, reversed_ = _EdgeMaxima(), sides.reversed
+    bend = crease_angle if crease_sides is None else None
+
+    def measure(a: int):  # a block of shared edges, on the thread pool
+        z = min(a + block, first.size)
+        return a, z, _edge_samples(patches, first[a:z], second[a:z], reversed_[a:z], t, unoriented)
+    bent = []
+    for a, z, (gap, angle) in in_order_on_threads(range(0, first.size, block), measure, per_task=2):
+        crease = None if listed is None else listed[0][a:z]
+        bent.append(edges.add(gap, angle, first[a:z], second[a:z], samples, crease, bend, a))
+        patches.release()
+        if progress is not None:
+            progress("measuring the shared edges", z - a, int(first.size))
     if crease_sides is None and crease_angle is not None:  # the edges that bend more than it: crease pieces
-        crease_sides = _bent_sides(angle, first, second, crease_angle)
-    gap, angle, creases = _set_creases_apart(gap, angle, first, second, crease_sides, samples)
-    overshared = _sheet_creases(creases, sides, patches, crease_sides, t, weights is not None, tolerance * diagonal)
-    worst = int(np.argmax(angle))
+        crease_sides = np.concatenate(bent)
+    creases = {"crease_edges": edges.crease_edges, "max_crease_gap": edges.max_crease_gap,
+               "unpaired_crease_sides": 0 if listed is None else listed[1]}
+    overshared = _sheet_creases(creases, sides, patches, crease_sides, t, tolerance * diagonal)
+    worst = edges.worst // samples
     return SmoothnessReport(
         shared_edges=int(first.size),
         boundary_edges=boundary,
         overshared_edges=overshared,
-        max_gap=float(gap.max()),
-        max_normal_jump=float(angle.max()),
+        max_gap=edges.max_gap,
+        max_normal_jump=edges.max_angle,
         bbox_diagonal=diagonal,
-        worst_pair=(int(pa_r[worst]), int(pb_r[worst])),
+        worst_pair=(int(first[worst] // 4), int(second[worst] // 4)),
         **creases,
     )
+
+
+def _side_keys(patches, block: int, progress):
+    """(corners (P, 4, 3), side points (P, 4, 3, 3), diagonal of the control points' bounding box), by blocks."""
+    n = int(sum(patches.counts))
+    corners, points = np.empty((n, 4, 3)), np.empty((n, 4, len(SIDE_SAMPLES), 3))
+    low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    for start, k, a, z in patch_blocks(patches, block):
+        part, weights = patches.block(k, a, z)
+        corners[start : start + z - a], points[start : start + z - a] = _side_points(
+            [part], None if weights is None else [weights])
+        flat = part.reshape(-1, 3)
+        low, high = np.minimum(low, flat.min(axis=0)), np.maximum(high, flat.max(axis=0))
+        if progress is not None:
+            progress("finding the shared edges", z - a, n)
+    return corners, points, float(np.linalg.norm(high - low))
+
+
+class _EdgeMaxima:
+    """The maxima over blocks of shared edges: gap and normal jump (first position of the largest, as
+    ``np.argmax`` over all samples), crease pieces' gap and count."""
+
+    def __init__(self):
+        self.max_gap = self.max_angle = self.max_crease_gap = 0.0
+        self.best, self.worst, self.crease_edges = -1.0, 0, 0
+
+    def add(self, gap, angle, first, second, samples: int, crease, crease_angle, offset: int):
+        """Take in the ``_edge_samples`` of the edges of sides first, second (k,) int (the k edges from
+        ``offset`` on); return the (b, 2) side pairs found bent more than ``crease_angle`` (none without it);
+        ``crease``: (k,) bool, the listed crease pieces, or None."""
+        bent = np.zeros((0, 2), dtype=np.int64)
+        if crease is None and crease_angle is not None:
+            crease = angle.reshape(first.size, -1).max(axis=1) > crease_angle
+            bent = np.stack([first[crease], second[crease]], axis=1)
+        if crease is not None:
+            on_crease = np.repeat(crease, samples)
+            self.crease_edges += int(crease.sum())
+            self.max_crease_gap = max(self.max_crease_gap, float(gap[on_crease].max(initial=0.0)))
+            gap, angle = np.where(on_crease, 0.0, gap), np.where(on_crease, 0.0, angle)
+        self.max_gap = max(self.max_gap, float(gap.max()))
+        worst = int(np.argmax(angle))
+        if angle[worst] > self.best:
+            self.best, self.worst = float(angle[worst]), offset * samples + worst
+        self.max_angle = max(self.best, 0.0)
+        return bent
+
+
+def _edge_samples(patches, first, second, reversed_, t, unoriented: bool):
+    """(gap, angle) (k * m,) float at the m parameters ``t`` along the k shared edges of sides ``first``, ``second``."""
+    cubic = cubic_patches(patches, np.concatenate([first // 4, second // 4]))
+    local = 4 * np.arange(2 * first.size) + np.concatenate([first % 4, second % 4])
+    xa, na = side_frames(cubic, local[: first.size], t, rational=patches.rational)
+    xb, nb = side_frames(cubic, local[first.size :], t, reversed_, rational=patches.rational)
+    return np.linalg.norm(xa - xb, axis=1), normal_angles(na, nb, unoriented)
 
 
 def normal_angles(na: np.ndarray, nb: np.ndarray, unoriented: bool = False) -> np.ndarray:
@@ -169,23 +258,7 @@ def normal_angles(na: np.ndarray, nb: np.ndarray, unoriented: bool = False) -> n
     return np.where(np.isnan(angle), 0.0, angle)  # singular points (zero-length derivative) have no normal
 
 
-def _bent_sides(angle: np.ndarray, first: np.ndarray, second: np.ndarray, crease_angle: float) -> np.ndarray:
-    """(k, 2) int: the matched side pairs whose normals differ by more than ``crease_angle`` somewhere along
-    them (``angle``: (pairs * samples,) radians), to be measured as crease pieces."""
-    bent = angle.reshape(first.size, -1).max(axis=1) > crease_angle
-    return np.stack([first[bent], second[bent]], axis=1)
-
-
-def _set_creases_apart(gap: np.ndarray, angle: np.ndarray, first, second, crease_sides, samples: int):
-    """(gap, angle) with the samples on crease pieces zeroed, and the crease fields of the report."""
-    crease, unpaired = _crease_edges(first, second, crease_sides)
-    on_crease = np.repeat(crease, samples)
-    creases = {"crease_edges": int(crease.sum()), "max_crease_gap": float(gap[on_crease].max(initial=0.0)),
-               "unpaired_crease_sides": unpaired}
-    return np.where(on_crease, 0.0, gap), np.where(on_crease, 0.0, angle), creases
-
-
-def _sheet_creases(creases: dict, sides, patches, crease_sides, t, rational: bool, tolerance: float) -> int:
+def _sheet_creases(creases: dict, sides, patches, crease_sides, t, tolerance: float) -> int:
     """Measure the listed crease pieces on edges in more than two sides (non-manifold edges cut into
     sheets that meet along one crease: ``mesh.creases.non_manifold``) side against side, into
     ``creases``; return the edges in more than two sides that no listed piece accounts for."""
@@ -196,9 +269,10 @@ def _sheet_creases(creases: dict, sides, patches, crease_sides, t, rational: boo
     direct = pairs[np.isin(pairs, over).all(axis=1)]
     if len(direct):
         forward = sides.forward.ravel()
-        xa, _ = side_frames(patches, direct[:, 0], t, rational=rational)
-        xb, _ = side_frames(patches, direct[:, 1], t, forward[direct[:, 0]] != forward[direct[:, 1]], rational=rational)
-        gap = np.linalg.norm(xa - xb, axis=1).reshape(len(direct), -1).max(axis=1)
+        gap = np.concatenate([_edge_samples(patches, part[:, 0], part[:, 1],
+                                            forward[part[:, 0]] != forward[part[:, 1]], t, False)[0]
+                              for part in np.array_split(direct, -(-len(direct) // BLOCK))])
+        gap = gap.reshape(len(direct), -1).max(axis=1)
         creases["crease_edges"] += len(direct)
         creases["max_crease_gap"] = max(creases["max_crease_gap"], float(gap.max()))
         creases["unpaired_crease_sides"] += int(np.count_nonzero(gap > tolerance)) - len(direct)

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..construction.features import INFINITELY_SHARP
 from ..errors import MeshInputError
-from ..mesh.geometry_checks import GeometryError, check_geometry
+from ..mesh.points.geometry_checks import GeometryError, check_geometry
 from .extension_data import Sidecars, SurfaceData, surface_data
 from .options import InputOptions
 from .renumber import dissolve_surface_input, drop_repeated_surface_faces, weld_surface_input
@@ -31,7 +31,7 @@ def prepare_mesh(mesh, options: InputOptions, exact_creases: bool, sidecars: Sid
     sidecars : Sidecars, what ``options``' sidecar files say (``io.meshes.sidecars``), or None
 
     Raises MeshInputError for coordinates out of the construction's range or a mesh spanning no surface
-    (``mesh.geometry_checks``), and for data the options ask for that the file lacks.
+    (``mesh.points.geometry_checks``), and for data the options ask for that the file lacks.
 
     Returns
     -------

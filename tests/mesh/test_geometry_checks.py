@@ -1,11 +1,11 @@
-"""mesh.geometry_checks: coordinates out of the construction's range and meshes spanning no surface, refused
+"""mesh.points.geometry_checks: coordinates out of the construction's range and meshes spanning no surface, refused
 with the reason; everything else passes (issue 30)."""
 from __future__ import annotations
 
 import numpy as np
 import pytest
 
-from c1surf.mesh.geometry_checks import (MAX_COORDINATE, MAX_SIZE, MIN_SIZE, GeometryError, check_coordinate_range,
+from c1surf.mesh.points.geometry_checks import (MAX_COORDINATE, MAX_SIZE, MIN_SIZE, GeometryError, check_coordinate_range,
                                          check_geometry, check_spans_surface)
 
 CUBE = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (-1.0, 1.0)])

@@ -7,7 +7,7 @@ import click
 
 from ...evaluation.measure import AREA_RTOL, MassProperties, mass_properties
 from ..check import read_or_build
-from ..common import friendly_errors, with_formats
+from ..common import Progress, friendly_errors, with_formats
 from ..options import input_options, surface_options
 
 
@@ -18,9 +18,10 @@ from ..options import input_options, surface_options
                    '"area_error", "reason" (why volume, centroid and inertia are null) and "note".')
 @surface_options
 @input_options
+@click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
 @with_formats
-def measure(path, as_json, surface, inputs):
+def measure(path, as_json, surface, inputs, quiet):
     """Surface area and, for a closed surface, enclosed volume, centroid and inertia tensor.
 
     PATCHES is a patch file ({patch_inputs}); a mesh INPUT ({mesh_inputs}) is
@@ -32,9 +33,12 @@ def measure(path, as_json, surface, inputs):
     centroid. A surface is closed when every patch side is shared by two
     consistently oriented patches; an open one has no volume.
     """
-    patch_set = read_or_build(path, surface, inputs)
+    progress = Progress(quiet)
+    patch_set = read_or_build(path, surface, inputs, progress)
     adjacency = patch_set.welding()
-    result = mass_properties(patch_set.groups, adjacency.edges, adjacency.reversed, patch_set.weights)
+    result = mass_properties(patch_set.groups, adjacency.edges, adjacency.reversed, patch_set.weights,
+                             progress=progress.advance)
+    progress.done()
     if as_json:
         click.echo(json.dumps(result_document(result)))
     else:

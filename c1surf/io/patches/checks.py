@@ -11,7 +11,7 @@ import numpy as np
 from ...evaluation.adjacency import PatchAdjacency
 from ...evaluation.merge import MergedPiece
 from ...evaluation.patch_set import FORMAT_NAME, FORMAT_VERSION
-from ...mesh.geometry_checks import GeometryError, check_coordinate_range
+from ...mesh.points.geometry_checks import GeometryError, check_coordinate_range
 from ..errors import MeshInputError
 from .merged import clamped_knots
 
@@ -104,7 +104,7 @@ def check_crease_sides(path, header: dict, n_patches: int) -> None:
 
 def check_patch_range(path, patch_set) -> None:
     """Refuse (``MeshInputError``) control points whose bounding box is out of the range c1surf's evaluation
-    takes (``mesh.geometry_checks.check_coordinate_range``: products of lengths would overflow or underflow)."""
+    takes (``mesh.points.geometry_checks.check_coordinate_range``: products of lengths would overflow or underflow)."""
     arrays = [np.asarray(g)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)]
     arrays += [np.asarray(p.points)[..., :3].reshape(-1, 3) for p in patch_set.merged or ()]
     boxes = [np.stack([a.min(axis=0), a.max(axis=0)]) for a in arrays if a.size]

@@ -21,7 +21,7 @@ import math
 
 import numpy as np
 
-from ..arrays import column_bounds
+from ...arrays import column_bounds
 
 __all__ = ["GeometryError", "check_geometry", "check_coordinate_range", "check_spans_surface",
            "MIN_SIZE", "MAX_SIZE", "MAX_COORDINATE", "FLAT_RELATIVE"]

@@ -1,0 +1,123 @@
+"""Points closer than a tolerance, clustered by sorting grid cells (the geometric side matcher's points, ``evaluation.adjacency``).
+
+``cluster_points`` gives the labels that connected components of the pairs within the tolerance give
+(``scipy.spatial.cKDTree.query_pairs`` then ``connected_components``, what ``adjacency.cluster_points`` did),
+numbered alike (in order of each cluster's first point), without a k-d tree over all the points: the points
+are hashed by grid cells of ``CELL_TOLERANCES`` tolerances and sorted by hash; the candidate pairs are the
+points of one hash (their distance checked) and, for the few points within a tolerance of a cell's face
+(whose partner may lie in the next cell), the pairs a k-d tree finds among those points only.
+
+Measured on the sides of a 147,840-patch surface (2.4 M corner and side points), the whole side matching
+(``adjacency._match``): 7.8 s with the k-d tree over all points, 3.4 s this way (the labels identical, as on
+every sample mesh's patch file).
+"""
+from __future__ import annotations
+
+from functools import partial
+
+import numpy as np
+
+from ...parallel import run_tasks
+
+_CHUNK = 1 << 20  # points (or pairs) of a block of the hashing and of the distance checks
+CELL_TOLERANCES = 1024.0  # a cell's side in tolerances: a point is near a face with a chance of ~6 / 1024
+_HASH = np.array([0x9E3779B97F4A7C15 - (1 << 64), 0xC2B2AE3D27D4EB4F - (1 << 64), 0x165667B19E3779F9],
+                 dtype=np.int64)  # odd multipliers: cells of one hash are rare (and checked by distance anyway)
+
+
+def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
+    """(k,) int64 label per point of (k, 3) ``points``: points closer than ``tolerance`` (a chain of such
+    pairs) share one; labels 0, 1, 2, ... in order of each cluster's first point."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    points = np.ascontiguousarray(points, dtype=np.float64).reshape(-1, 3)
+    n = points.shape[0]
+    if n == 0:
+        return np.zeros(0, dtype=np.int64)
+    key, near = _hashes(points, tolerance)
+    index = np.int32 if n < 2**31 else np.int64  # point ids: half the bytes while they fit
+    order = np.argsort(key).astype(index)  # the order within a hash does not matter: every pair of it is tried
+    key = key[order]
+    pairs = np.concatenate([_same_cell_pairs(points, key, order, tolerance),
+                            _near_face_pairs(points, near, tolerance).astype(index)])
+    del key, near, order
+    graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    del pairs
+    return connected_components(graph, directed=False)[1].astype(np.int64)
+
+
+def _hashes(points: np.ndarray, tolerance: float):
+    """(key (k,) int64, the hash of each point's cell; near (m,) int, the points within about a tolerance of
+    their cell's faces), by blocks of ``_CHUNK`` points (block-sized temporaries only)."""
+    size = tolerance * CELL_TOLERANCES if tolerance > 0 else 1.0
+    margin = 2.0 / CELL_TOLERANCES if tolerance > 0 else -1.0  # twice a tolerance: rounding cannot hide a point
+    key, near = np.empty(points.shape[0], dtype=np.int64), []
+    for a in range(0, points.shape[0], _CHUNK):
+        scaled = points[a : a + _CHUNK] / size
+        cell = np.floor(scaled)
+        scaled -= cell
+        cell += 0.0  # -0.0 and 0.0: one cell
+        key[a : a + _CHUNK] = cell.view(np.int64) @ _HASH  # wraps around: a hash
+        near.append(np.flatnonzero(((scaled < margin) | (scaled > 1.0 - margin)).any(axis=1)) + a)
+    return key, np.concatenate(near)
+
+
+def _same_cell_pairs(points: np.ndarray, key: np.ndarray, order: np.ndarray, tolerance: float) -> np.ndarray:
+    """(m, 2) int: the pairs of points of one cell hash within ``tolerance`` of each other; ``key`` (k,) the
+    hashes sorted, ``order`` (k,) the points in that order."""
+    found = []
+    run = np.flatnonzero(key[:-1] == key[1:])  # i with key[i] == key[i + d], d = 1, 2, ...
+    d = 1
+    while run.size:
+        a, b = order[run], order[run + d]
+        close = _within(points, a, b, tolerance)
+        found.append(np.stack([a[close], b[close]], axis=1))
+        run = run[run + d + 1 < key.size]
+        run = run[key[run] == key[run + d + 1]]
+        d += 1
+    return np.concatenate(found) if found else np.zeros((0, 2), dtype=order.dtype)
+
+
+def _near_face_pairs(points: np.ndarray, near: np.ndarray, tolerance: float) -> np.ndarray:
+    """(m, 2) int: the pairs within ``tolerance`` among the points ``near`` a cell's face (their partner may lie
+    in the next cell)."""
+    from scipy.spatial import cKDTree
+
+    if near.size < 2:
+        return np.zeros((0, 2), dtype=np.int64)
+    pairs = cKDTree(points[near]).query_pairs(tolerance, output_type="ndarray")
+    return near[pairs].reshape(-1, 2)
+
+
+def _within(points: np.ndarray, a: np.ndarray, b: np.ndarray, tolerance: float) -> np.ndarray:
+    """(m,) bool: points a and b lie within ``tolerance`` (as the k-d tree's query: distance <= tolerance), by
+    blocks of pairs (the two gathers in increasing order of ``a`` where they can be: points near in the file are
+    near in memory)."""
+    out = np.empty(a.size, dtype=bool)
+
+    def check(lo: int) -> None:  # a block of pairs, a task of the thread pool (the gathers run without the GIL)
+        difference = points[a[lo : lo + _CHUNK]] - points[b[lo : lo + _CHUNK]]
+        out[lo : lo + _CHUNK] = np.einsum("ij,ij->i", difference, difference) <= tolerance * tolerance
+    run_tasks([partial(check, lo) for lo in range(0, a.size, _CHUNK)])
+    return out
+
+
+def row_ranks(key: np.ndarray) -> np.ndarray:
+    """(k,) int64: the rank of each row of ``key`` (k, 4) non-negative int among its distinct rows, in
+    lexicographic order (``np.unique(key, axis=0, return_inverse=True)[1]``), by ranking the pairs of
+    columns (two int64 sorts instead of one of rows)."""
+    key = np.asarray(key, dtype=np.int64)
+    if key.shape[0] == 0:
+        return np.zeros(0, dtype=np.int64)
+    left, right = _pair_ranks(key[:, 0], key[:, 1]), _pair_ranks(key[:, 2], key[:, 3])
+    return _pair_ranks(left, right)
+
+
+def _pair_ranks(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """(k,) int64: ranks of the pairs (a, b) of non-negative ints among the distinct pairs, lexicographic."""
+    width = int(b.max()) + 1
+    if int(a.max()) < (1 << 62) // width:  # the pair as one int64, in the same order
+        return np.unique(a * width + b, return_inverse=True)[1].reshape(-1)
+    return np.unique(np.stack([a, b], axis=1), axis=0, return_inverse=True)[1].reshape(-1)
+__all__ = ["cluster_points", "row_ranks", "CELL_TOLERANCES"]

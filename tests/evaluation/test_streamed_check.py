@@ -1,0 +1,188 @@
+"""``check`` and ``measure`` by blocks of patches give the in-memory results bit for bit.
+
+The smoothness check and the mass properties read patches through ``evaluation.stream.patches`` (arrays,
+memory-mapped NPZ members, or a streamed Surface's ``PatchSource``), a block at a time. Every value is
+computed patch by patch or side by side; across blocks only maxima are taken (the smoothness report) or the
+per-patch integrals are kept whole and summed as before (the mass properties), so the reports are equal
+exactly, whatever the block: compared with ``==`` on every float here, with blocks of 1, 3 and 7 patches.
+
+The geometric matcher's clustering (``mesh.points.clusters``: grid-cell hashes) is compared with the k-d tree's
+connected components it replaced, on points placed at a cell's faces and corners.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from c1surf.construction.surface import Surface, SurfaceOptions
+from c1surf.evaluation.adjacency import adjacency_from_geometry
+from c1surf.evaluation.measure import mass_properties
+from c1surf.evaluation.patch_set import surface_patch_set
+from c1surf.evaluation.smoothness import measure_smoothness
+from c1surf.evaluation.stream.patches import ArrayPatches, SourcePatches
+from c1surf.io.meshes.obj import read_obj
+from c1surf.io.patches.formats import load_patch_set, write_patch_set
+from c1surf.mesh.points.clusters import CELL_TOLERANCES, cluster_points
+
+from conftest import SAMPLES, shared_mesh, weighted_cube
+
+SAMPLE_NAMES = sorted(p.stem for p in SAMPLES.glob("*.obj"))
+TINY = (1, 3, 7)
+
+
+def _lazy_and_whole(path, **options):
+    """(the Surface built in memory, the same mesh's Surface with lazy patches: its PatchSource)."""
+    mesh = read_obj(path)
+    build = lambda lazy: Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(**options),
+                                 lazy_patches=lazy)
+    return build(False), build(True)
+
+
+def _assert_same_smoothness(whole, *others):
+    for other in others:
+        assert other == whole  # a frozen dataclass: every count, float and the worst pair, exactly
+
+
+def _assert_same_mass(whole, *others):
+    for other in others:
+        assert (other.area, other.area_error, other.closed, other.reason, other.volume, other.note) == (
+            whole.area, whole.area_error, whole.closed, whole.reason, whole.volume, whole.note)
+        for name in ("centroid", "inertia"):
+            a, b = getattr(whole, name), getattr(other, name)
+            assert (a is None and b is None) or np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("name", SAMPLE_NAMES)
+def test_check_and_measure_by_blocks_equal_the_whole_surface_on_every_sample_mesh(name):
+    surface, lazy = _lazy_and_whole(SAMPLES / f"{name}.obj")
+    patch_set = surface_patch_set(surface)
+    groups, adjacency = patch_set.groups, patch_set.adjacency
+    whole = measure_smoothness(groups, samples=7)
+    assert whole.shared_edges > 0 and whole.is_g1(1e-9, 1e-9)
+    source = SourcePatches(lazy.patch_source())
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(groups), samples=7, block=b) for b in TINY),
+                            measure_smoothness(source, samples=7, block=5))
+    mass = mass_properties(groups, adjacency.edges, adjacency.reversed)
+    _assert_same_mass(mass, *(mass_properties(ArrayPatches(groups), adjacency.edges, adjacency.reversed, block=b)
+                              for b in TINY), mass_properties(source, adjacency.edges, adjacency.reversed, block=5))
+
+
+def test_a_rational_surface_by_blocks(tmp_path):
+    from c1surf.api import surface_from_file
+
+    surface, _ = surface_from_file(weighted_cube(tmp_path, rational=True))
+    patch_set = surface_patch_set(surface)
+    assert patch_set.weights is not None
+    groups, weights, adjacency = patch_set.groups, patch_set.weights, patch_set.adjacency
+    whole = measure_smoothness(groups, weights=weights)
+    assert whole.shared_edges == 2 * surface.n_patches and whole.is_g1(1e-9, 1e-9)
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(groups, weights), block=b) for b in TINY))
+    mass = mass_properties(groups, adjacency.edges, adjacency.reversed, weights)
+    assert mass.closed and mass.volume > 0
+    _assert_same_mass(mass, *(mass_properties(ArrayPatches(groups, weights), adjacency.edges, adjacency.reversed,
+                                              block=b) for b in (3, 7)))
+
+
+@pytest.mark.parametrize("name", ["catmark_single_crease", "catmark_cube_creases2"])
+def test_listed_crease_sides_by_blocks(name):
+    from c1surf.api import surface_from_file
+
+    surface, _ = surface_from_file(shared_mesh(f"opensubdiv/{name}.obj"), exact_creases=True)
+    patch_set = surface_patch_set(surface)
+    crease = patch_set.crease_sides
+    assert crease is not None and len(crease)
+    whole = measure_smoothness(patch_set.groups, crease_sides=crease)
+    assert whole.crease_edges == len(crease) and whole.unpaired_crease_sides == 0 and whole.is_g1(1e-9, 1e-9)
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(patch_set.groups), crease_sides=crease,
+                                                        block=b) for b in TINY))
+
+
+def test_non_manifold_sheets_by_blocks():
+    from c1surf.api import surface_from_file
+
+    # edges of more than two faces cut into sheets meeting along one crease: pieces measured side against side
+    surface, _ = surface_from_file(shared_mesh("opensubdiv/catmark_fan.obj"), exact_creases=True)
+    patch_set = surface_patch_set(surface)
+    whole = measure_smoothness(patch_set.groups, crease_sides=patch_set.crease_sides)
+    assert whole.crease_edges == len(patch_set.crease_sides) > 0 and whole.overshared_edges == 0
+    assert whole.unpaired_crease_sides == 0 and whole.is_g1(1e-9, 1e-9)
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(patch_set.groups), block=b,
+                                                        crease_sides=patch_set.crease_sides) for b in TINY))
+
+
+@pytest.mark.parametrize("suffix", [".json", ".npz", ".igs", ".step"])
+def test_patch_files_of_each_format_by_blocks(tmp_path, suffix):
+    if suffix == ".step":
+        pytest.importorskip("OCP")
+    surface, _ = _lazy_and_whole(SAMPLES / "cube.obj")
+    path = tmp_path / f"cube{suffix}"
+    write_patch_set(path, surface_patch_set(surface))
+    patch_set = load_patch_set(path)
+    adjacency = patch_set.welding()
+    bend = np.radians(1.0)  # IGES and STEP list no crease sides: the bent edges' path (none on the cube)
+    whole = measure_smoothness(patch_set.groups, weights=patch_set.weights, crease_angle=bend)
+    assert whole.shared_edges == 2 * patch_set.n_patches and whole.is_g1(1e-9, 1e-9)
+    reader = ArrayPatches(patch_set.groups, patch_set.weights)
+    _assert_same_smoothness(whole, *(measure_smoothness(reader, crease_angle=bend, block=b) for b in TINY))
+    mass = mass_properties(patch_set.groups, adjacency.edges, adjacency.reversed, patch_set.weights)
+    assert mass.closed
+    _assert_same_mass(mass, *(mass_properties(reader, adjacency.edges, adjacency.reversed, block=b) for b in (3, 7)))
+
+
+def test_bent_edges_as_creases_by_blocks():
+    # a surface with a kink: the cube's patches with one patch's inner rows pulled out (its four sides bend)
+    surface, _ = _lazy_and_whole(SAMPLES / "cube.obj")
+    groups = [g.copy() for g in surface_patch_set(surface).groups]
+    groups[-1][5, 1:-1, 1:-1] *= 1.3
+    whole = measure_smoothness(groups, crease_angle=np.radians(0.5))
+    assert whole.crease_edges >= 4 and whole.max_crease_gap <= 1e-15
+    kinked = measure_smoothness(groups)
+    assert kinked.max_normal_jump > np.radians(0.5) and kinked.crease_edges == 0
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(groups), crease_angle=np.radians(0.5), block=b)
+                                     for b in TINY))
+    _assert_same_smoothness(kinked, *(measure_smoothness(ArrayPatches(groups), block=b) for b in TINY))
+
+
+def _tree_labels(points, tolerance):
+    """The clustering ``mesh.points.clusters`` replaced: connected components of the k-d tree's pairs."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(points).query_pairs(tolerance, output_type="ndarray")
+    graph = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(len(points),) * 2)
+    return connected_components(graph, directed=False)[1]
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_cell_clustering_equals_the_k_d_trees_components(seed):
+    rng = np.random.default_rng(seed)
+    tolerance = 1e-6
+    cell = tolerance * CELL_TOLERANCES
+    # centres on cell faces, edges and corners (and anywhere), each with a few points within a tolerance,
+    # chains of points a bit less than a tolerance apart, and points a bit more than one apart
+    centres = np.round(rng.uniform(-3, 3, (300, 3)) * 4) / 4 * cell
+    centres[::3] += rng.uniform(-1, 1, (100, 3)) * cell
+    points = [centres[:, None, :] + rng.normal(0.0, 0.2 * tolerance, (300, 4, 3))]
+    chain = centres[:40, None, :] + np.arange(5)[None, :, None] * np.array([0.95 * tolerance, 0.0, 0.0])
+    apart = centres[40:80, None, :] + np.arange(3)[None, :, None] * np.array([0.0, 1.05 * tolerance, 0.0])
+    points = np.concatenate([points[0].reshape(-1, 3), chain.reshape(-1, 3), apart.reshape(-1, 3)])
+    points = points[rng.permutation(len(points))]
+    expected = _tree_labels(points, tolerance)
+    assert np.array_equal(cluster_points(points, tolerance), expected)
+    assert len(np.unique(expected)) < len(points)  # clusters were found at all
+
+
+def test_cell_clustering_of_exact_duplicates_and_no_tolerance():
+    points = np.array([[0.0, 0.0, 0.0], [-0.0, 0.0, 0.0], [1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [1.0, 2.0, 3.0 + 1e-15]])
+    assert cluster_points(points, 0.0).tolist() == [0, 0, 1, 1, 2]
+    assert cluster_points(points, 1e-12).tolist() == [0, 0, 1, 1, 1]
+    assert cluster_points(np.zeros((0, 3)), 1e-9).shape == (0,)
+
+
+def test_geometric_adjacency_unchanged_by_the_cell_clustering():
+    # adjacency_from_geometry (which the clustering serves) against the construction's bookkeeping
+    for name in ("torus", "high_valence", "twisted"):
+        surface, _ = _lazy_and_whole(SAMPLES / f"{name}.obj")
+        patch_set = surface_patch_set(surface)
+        assert adjacency_from_geometry(patch_set.groups) == patch_set.adjacency
