@@ -17,6 +17,7 @@ integrand (the area element) that is not smooth enough for them. Its volume agre
 from __future__ import annotations
 
 import json
+import os
 
 import pytest
 from click.testing import CliRunner
@@ -49,7 +50,12 @@ def default_volume_and_area(shape) -> tuple:
     return volume.Mass(), area.Mass()
 
 
-@pytest.mark.parametrize("name", CLOSED_SAMPLES + [SPOT])
+# spot's packed STEP has 12,517 faces: writing it and reading it back twice takes minutes (11 on a loaded 2-core
+# machine), more than the whole suite's budget; it runs with C1SURF_SLOW_TESTS=1 (issue 30's note has its numbers)
+SLOW = pytest.mark.skipif(not os.environ.get("C1SURF_SLOW_TESTS"), reason="minutes: set C1SURF_SLOW_TESTS=1")
+
+
+@pytest.mark.parametrize("name", CLOSED_SAMPLES + [pytest.param(SPOT, marks=SLOW)])
 def test_default_mass_properties_of_packed_files_agree_with_measure(tmp_path, name):
     mesh = shared_mesh(name) if name == SPOT else SAMPLES / name
     step, iges, js = tmp_path / "s.step", tmp_path / "s.igs", tmp_path / "s.json"
