@@ -112,7 +112,7 @@ def convert(input_path, output, patches_paths, resolution, tolerance, patch_file
                                                            surface), force)
     progress.phase(f"writing {output}")
     patch_options = {"adjacency": adjacency, "units": patch_files.units, "group": patch_files.group,
-                     "force": force}
+                     "force": force, "strips": patch_files.strips}
     merged = merged_pieces(surface, patch_suffixes, patch_files.merge)
     with atomic_output(output, inputs=[input_path]) as mesh_tmp:
         write_mesh(mesh_tmp, mesh_suffix, tess, extra, report.data if inputs.attributes else None, float32)

@@ -118,7 +118,7 @@ def fit(scan_path, outputs, resolution, plan, control_path, patch_files, surface
                                  progress=progress.advance)
     echo_notes(report.notes, quiet)
     progress.phase("checking the fitted surface")
-    document = fit_document(fitted, report, patch_files.merge)
+    document = fit_document(fitted, report, patch_files)
     for line in summary_lines(document):
         click.echo(line)
     write_outputs(scan_path, outputs, suffixes, (fitted, report, document), resolution, patch_files, progress)
@@ -142,17 +142,18 @@ def check_outputs(outputs: FitOutputs) -> dict:
     return suffixes
 
 
-def cad_face_count(surface: Surface, merge: bool | None) -> int:
-    """The faces of the STEP/IGES file (``io.patches.merged.cad_patch_set``: merged biquadratic rectangles cut into
-    strips one span wide, then every other patch)."""
-    if merge is False:
+def cad_face_count(surface: Surface, patch_files) -> int:
+    """The faces of the STEP/IGES file: merged biquadratic rectangles (cut into strips one span wide with
+    --cad-strips, ``io.patches.merged.cad_patch_set``), then every other patch."""
+    if patch_files.merge is False:
         return surface.n_patches
-    packed = cad_patch_set(dataclasses.replace(surface_patch_set(surface, ""), merged=merge_biquadratic(surface)))
+    packed = dataclasses.replace(surface_patch_set(surface, ""), merged=merge_biquadratic(surface))
+    packed = cad_patch_set(packed) if patch_files.strips else packed
     covered = sum(int(np.size(piece.patches)) for piece in packed.merged)
     return len(packed.merged) + surface.n_patches - covered
 
 
-def fit_document(surface: Surface, report: FitReport, merge: bool | None) -> dict:
+def fit_document(surface: Surface, report: FitReport, patch_files) -> dict:
     """The JSON report of ``fit`` (``--report``; docs/fit.md lists its keys)."""
     result = report.fit
     g1 = check_surface(surface)
@@ -164,7 +165,7 @@ def fit_document(surface: Surface, report: FitReport, merge: bool | None) -> dic
                          "crease_edges": int(result.control.crease_edges.shape[0]), **result.control.report},
         "patches": {"biquadratic": int(surface.quad_frames.shape[0]), "bicubic": int(surface.cubic_frames.shape[0]),
                     "total": surface.n_patches, "refinements": int(surface.refinements)},
-        "cad_faces": cad_face_count(surface, merge),
+        "cad_faces": cad_face_count(surface, patch_files),
         "scan_to_surface": deviation.scan_stats, "surface_to_scan": deviation.surface_stats,
         "g1": {"max_normal_jump": float(g1.max_normal_jump), "max_gap": float(g1.relative_gap),
                "is_g1": bool(g1.is_g1(1e-9, 1e-9))},
@@ -212,7 +213,8 @@ def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, fitted: tuple,
 
                 merged = merged_pieces(surface, wanted, patch_files.merge)
             write_patch_files([(p, suffixes[p]) for p in outputs.patches], surface, scan_path,
-                              {"adjacency": adjacency, "units": patch_files.units, "group": patch_files.group},
+                              {"adjacency": adjacency, "units": patch_files.units, "group": patch_files.group,
+                               "strips": patch_files.strips},
                               progress, merged)
         if outputs.report:
             with open(target(outputs.report), "w") as f:

@@ -59,7 +59,7 @@ SLOW = pytest.mark.skipif(not os.environ.get("C1SURF_SLOW_TESTS"), reason="minut
 def test_default_mass_properties_of_packed_files_agree_with_measure(tmp_path, name):
     mesh = shared_mesh(name) if name == SPOT else SAMPLES / name
     step, iges, js = tmp_path / "s.step", tmp_path / "s.igs", tmp_path / "s.json"
-    result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "s.ply"), "-r", "2", "-q",
+    result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "s.ply"), "-r", "2", "-q", "--cad-strips",
                                        "--patches", str(step), "--patches", str(iges), "--patches", str(js)],
                                 catch_exceptions=False)
     assert result.exit_code == 0, result.output

@@ -11,7 +11,6 @@ Open CASCADE comes from `cadquery-ocp` (test extra); without it these tests fail
 """
 from __future__ import annotations
 
-import dataclasses
 import json
 
 import numpy as np
@@ -24,8 +23,6 @@ from c1surf.api import surface_from_file
 from c1surf.cli.main import main
 from c1surf.evaluation.bezier import evaluate_patches
 from c1surf.evaluation.merge import merge_biquadratic
-from c1surf.evaluation.patch_set import surface_patch_set
-from c1surf.io.patches.merged import cad_patch_set
 
 from conftest import ocp_shapes as shapes
 from conftest import CLOSED_SAMPLES, SAMPLES, read_step, shared_mesh, surface_of
@@ -219,10 +216,10 @@ def test_cad_files_are_packed_by_default(tmp_path, suffix):
                                        "--patches", str(packed), "--patches", str(js)], catch_exceptions=False)
     assert result.exit_code == 0, result.output
     surface = surface_from_file(mesh)[0]
-    pieces = cad_patch_set(dataclasses.replace(surface_patch_set(surface), merged=merge_biquadratic(surface))).merged
+    pieces = merge_biquadratic(surface)
     covered = sum(p.patches.size for p in pieces)
     expected_faces = len(pieces) + len(surface.biquadratic) - covered + len(surface.bicubic)
-    assert expected_faces < 0.6 * surface.n_patches  # strips one span wide (cad_patch_set): 189 of 320 faces
+    assert expected_faces < surface.n_patches / 2
     if suffix == ".igs":
         face_list = faces(read_iges(packed)[1])
     else:

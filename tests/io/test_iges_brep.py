@@ -25,7 +25,6 @@ from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.bezier import evaluate_patches
 from c1surf.evaluation.measure import solid_moments
 from c1surf.evaluation.merge import merge_biquadratic
-from c1surf.io.patches.merged import cad_patch_set
 from c1surf.evaluation.patch_set import surface_patch_set
 from c1surf.evaluation.rational import evaluate_rational
 from c1surf.io.errors import MeshInputError
@@ -80,8 +79,7 @@ def expected_patch_set(mesh, merge: bool):
     """The patch set convert writes: the surface's patches, with its merged pieces unless --no-merge."""
     surface = surface_from_file(mesh)[0]
     patch_set = surface_patch_set(surface)
-    # packed: the strips the IGES writer makes of the merged pieces (io.patches.merged.cad_patch_set)
-    return cad_patch_set(dataclasses.replace(patch_set, merged=merge_biquadratic(surface))) if merge else patch_set
+    return dataclasses.replace(patch_set, merged=merge_biquadratic(surface)) if merge else patch_set
 
 
 def read_iges(path):
@@ -185,20 +183,13 @@ def test_closed_sample_mesh_is_one_valid_solid_sewn_by_c1surf(tmp_path, name, me
 
 
 def test_a_piece_closing_on_itself_has_seams(tmp_path):
-    """The torus's one merged piece (48 x 32 spans, closed both ways) cut into strips as long as it goes around
-    (``cad_patch_set(.., max_spans=64)``): 32 faces of 1 x 48 spans, each using its seam edge (one span across
-    u, closed in v) twice, as Open CASCADE's own tori do. The file convert writes (shorter strips, no seams) is
-    one valid solid, every edge in two faces."""
+    """The torus packs into one face whose loop uses its two seam edges (closed runs, one vertex) twice each,
+    as Open CASCADE's own tori do; still one valid solid."""
     path = convert(tmp_path, SAMPLES / "torus.obj")
-    surface = surface_from_file(SAMPLES / "torus.obj")[0]
-    patch_set = cad_patch_set(dataclasses.replace(surface_patch_set(surface), merged=merge_biquadratic(surface)),
-                              max_spans=64)
-    topology = iges_brep(patch_set, 32).topology
-    assert topology.n_faces == 32 and all(p.patches.shape == (1, 48) for p in patch_set.merged)
-    uses = np.bincount(topology.loop_edge, minlength=topology.n_edges)
-    face_of = np.repeat(np.arange(32), np.diff(topology.loop_start))
-    seams = [e for e in range(topology.n_edges) if uses[e] == 2 and np.unique(face_of[topology.loop_edge == e]).size == 1]
-    assert np.all(uses == 2) and len(seams) == 32
+    patch_set = expected_patch_set(SAMPLES / "torus.obj", True)
+    topology = iges_brep(patch_set, 1).topology
+    assert (topology.n_faces, topology.n_edges, len(topology.vertex_points)) == (1, 2, 1)
+    assert np.array_equal(np.bincount(topology.loop_edge), [2, 2]) and np.all(topology.edge_vertices == 0)
     _, shape = read_iges(path)
     assert BRepCheck_Analyzer(shape).IsValid() and count(shape, TopAbs_SOLID) == 1
     assert np.all(edge_face_uses(shape) == 2)
@@ -213,7 +204,7 @@ def test_open_grid_is_one_valid_open_shell(tmp_path, merge):
     surface = Surface(*grid(4, lambda x, y: 0.1 * x * y), SurfaceOptions())
     patch_set = surface_patch_set(surface)
     if merge:
-        patch_set = cad_patch_set(dataclasses.replace(patch_set, merged=merge_biquadratic(surface)))
+        patch_set = dataclasses.replace(patch_set, merged=merge_biquadratic(surface))
     topology = iges_brep(patch_set, brep_topology(patch_set).n_faces).topology
     path = tmp_path / "grid.igs"
     write_patch_set_iges(path, patch_set)

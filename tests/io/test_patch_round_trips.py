@@ -20,7 +20,7 @@ from c1surf.evaluation.merge import merge_biquadratic
 from c1surf.evaluation.patch_set import surface_patch_set
 from c1surf.io.meshes.obj import read_obj
 from c1surf.io.patches.formats import load_patch_set, write_patch_set
-from c1surf.io.patches.merged import cad_patch_set, piece_patches, uncovered_groups
+from c1surf.io.patches.merged import piece_patches, uncovered_groups
 
 from conftest import SAMPLES, weighted_cube
 
@@ -83,20 +83,19 @@ def test_iges_gives_back_merged_pieces_and_their_patches(tmp_path, rational):
     original = merged_patch_set(surface)
     write_patch_set(tmp_path / "s.igs", original)
     back = load_patch_set(tmp_path / "s.igs")
-    strips = cad_patch_set(original)  # the writer's faces: the pieces cut into strips
-    assert_same_pieces(back.merged, strips.merged, bookkeeping=False)
+    assert_same_pieces(back.merged, original.merged, bookkeeping=False)
     # IGES holds the pieces instead of their patches: the reader cuts them out again, piece by piece
     cut = sum(piece.patches.size for piece in back.merged)
     quad = back.groups[0]
     assert len(quad) == len(surface.biquadratic) and back.groups[1].shape == surface.bicubic.shape
     scale = np.abs(surface.biquadratic).max()
-    for got, want in zip(back.merged, strips.merged):
+    for got, want in zip(back.merged, original.merged):
         assert np.array_equal(got.rotation, np.zeros_like(want.rotation))
         for (a, b), k in zip(np.ndindex(want.patches.shape), got.patches.ravel()):
             turned = np.rot90(surface.biquadratic[want.patches[a, b]], k=want.rotation[a, b], axes=(0, 1))
             assert np.abs(quad[k] - turned).max() <= 1e-14 * scale
     # the patches no piece stands for follow, exactly as written
-    kept, kept_weights = uncovered_groups(strips)
+    kept, kept_weights = uncovered_groups(original)
     read = [quad[cut:], back.groups[1]]
     written = [next((g for g in kept if g.shape[1] == n), np.zeros((0, n, n, 3))) for n in (3, 4)]
     assert all(np.array_equal(a, b) for a, b in zip(read, written))
@@ -118,7 +117,7 @@ def test_convert_merge_writes_pieces_to_every_patch_format(tmp_path, rational):
     assert CliRunner().invoke(main, args, catch_exceptions=False).exit_code == 0
     json_set, npz_set, iges_set = (load_patch_set(p) for p in paths)
     assert_same_pieces(npz_set.merged, json_set.merged)
-    assert_same_pieces(iges_set.merged, cad_patch_set(json_set).merged, bookkeeping=False)
+    assert_same_pieces(iges_set.merged, json_set.merged, bookkeeping=False)
     assert iges_set.n_patches == json_set.n_patches
     assert all((s.weights is not None) == rational for s in (json_set, npz_set, iges_set))
     assert (json_set.merged[0].weights is not None) == rational
@@ -164,8 +163,8 @@ def step_spans(path) -> tuple[list, np.ndarray]:
 
 def test_step_writes_rational_faces_and_merged_pieces(tmp_path):
     surface = weighted_surface(True)
-    write_patch_set(tmp_path / "s.step", merged_patch_set(surface))
-    patch_set = cad_patch_set(merged_patch_set(surface))  # the faces written: the pieces cut into strips
+    patch_set = merged_patch_set(surface)
+    write_patch_set(tmp_path / "s.step", patch_set)
     surfaces, got = step_spans(tmp_path / "s.step")
     kept, kept_weights = uncovered_groups(patch_set)
     assert len(surfaces) == len(patch_set.merged) + sum(len(g) for g in kept)

@@ -45,8 +45,8 @@ from c1surf.io.patches.brep.edge_chains import chain_curve, edge_chains, inner_v
 from c1surf.io.patches.brep.solids import face_components, signed_volumes  # noqa: E402
 from c1surf.io.patches.brep.step_brep import brep_shape, brep_tolerance  # noqa: E402
 from c1surf.io.patches.brep.topology import FACE_PIECE, brep_topology, edge_curves  # noqa: E402
-from c1surf.io.patches.merged import cad_patch_set, piece_patches  # noqa: E402
-from c1surf.io.patches.step import write_patch_set_step, write_step_shape  # noqa: E402
+from c1surf.io.patches.merged import piece_patches  # noqa: E402
+from c1surf.io.patches.step import write_patch_set_step  # noqa: E402
 
 from conftest import CLOSED_SAMPLES, SAMPLES, grid, ocp_shapes, read_step, shared_mesh, weighted_cube  # noqa: E402
 
@@ -61,8 +61,7 @@ WORST = {}  # what -> largest relative disagreement, for the summary at the end
 
 def patch_set_of(surface, merge: bool) -> PatchSet:
     patch_set = surface_patch_set(surface)
-    # packed: the strips the STEP writer makes of the merged pieces (io.patches.merged.cad_patch_set)
-    return cad_patch_set(dataclasses.replace(patch_set, merged=merge_biquadratic(surface))) if merge else patch_set
+    return dataclasses.replace(patch_set, merged=merge_biquadratic(surface)) if merge else patch_set
 
 
 def convert_step(tmp_path, mesh, merge: bool):
@@ -178,24 +177,18 @@ def test_closed_sample_mesh_is_one_valid_solid(tmp_path, name, merge):
     assert worst <= 1e-12, worst
 
 
-def test_strips_closing_on_themselves_have_seams(tmp_path):
-    """The torus's merged piece (48 x 32 spans, closed both ways) cut into strips as long as it goes around
-    (``cad_patch_set(.., max_spans=64)``): 32 faces of 1 x 48 spans, each closed in v, each with one seam edge
-    it uses twice (two pcurves). The writer's shorter strips (``CAD_SPANS``) close on nothing; this is
-    the seam path of ``brep_shape`` for any strip that goes all the way round."""
+def test_torus_piece_closes_on_itself_with_two_seams(tmp_path):
+    """The packed torus is one B-spline face that closes in u and in v: two seam edges, each used twice by it."""
     surface = surface_from_file(SAMPLES / "torus.obj")[0]
-    raw = dataclasses.replace(surface_patch_set(surface), merged=merge_biquadratic(surface))
-    assert [p.patches.shape for p in raw.merged] == [(48, 32)]
-    patch_set = cad_patch_set(raw, max_spans=64)
+    patch_set = patch_set_of(surface, True)
     topology = brep_topology(patch_set)
-    assert topology.n_faces == 32 and all(p.patches.shape == (1, 48) for p in patch_set.merged)
+    assert topology.n_faces == 1
     shape = brep_shape(patch_set, topology).shape
     assert BRepCheck_Analyzer(shape).IsValid()
     lists = edge_face_lists(shape)
-    seams = [(edge, faces) for edge, faces in lists if faces[0].IsSame(faces[1])]
-    assert all(len(faces) == 2 for _, faces in lists) and len(seams) == 32
-    assert all(BRep_Tool.IsClosed_s(edge, faces[0]) for edge, faces in seams)
-    write_step_shape(tmp_path / "torus.step", shape, "torus.step")
+    assert len(lists) == 2 and all(len(faces) == 2 and faces[0].IsSame(faces[1]) for _, faces in lists)
+    assert all(BRep_Tool.IsClosed_s(edge, faces[0]) for edge, faces in lists)
+    write_patch_set_step(tmp_path / "torus.step", patch_set)
     back = read_step(tmp_path / "torus.step")
     assert BRepCheck_Analyzer(back).IsValid() and len(ocp_shapes(back, TopAbs_SOLID)) == 1
     assert face_disagreement(back, patch_set, topology) <= 1e-12
@@ -380,13 +373,11 @@ def bspline_points(degree, poles, weights, knots, multiplicities, t):
 @pytest.mark.parametrize("name", ["twisted.obj", "torus.obj", "high_valence.obj", "rational cube"])
 def test_edge_chains_join_the_sides_between_the_same_faces(tmp_path, name):
     mesh = weighted_cube(tmp_path, True) if name == "rational cube" else SAMPLES / name
-    surface = surface_from_file(mesh)[0]  # the merged pieces themselves (the writers' strips join nothing)
-    patch_set = dataclasses.replace(surface_patch_set(surface), merged=merge_biquadratic(surface))
+    patch_set = patch_set_of(surface_from_file(mesh)[0], True)
     topology = brep_topology(patch_set)
     chains = edge_chains(topology)
     assert np.array_equal(np.sort(chains.chain_edges), np.arange(topology.n_edges))  # a partition
-    # sides are joined only along u (see inner_vertices): twisted's and torus's pieces have such chains
-    assert chains.n_chains < topology.n_edges if name in ("twisted.obj", "torus.obj") else chains.n_chains <= topology.n_edges
+    assert chains.n_chains < topology.n_edges
     inner = inner_vertices(topology)
     assert not np.any(inner[chains.chain_vertices])  # chains end where more than two edges meet or a face turns
     curves, weights = edge_curves(patch_set, topology)

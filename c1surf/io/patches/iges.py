@@ -42,7 +42,8 @@ from .merged import cad_patch_set, is_piece_knots, piece_patches, uncovered_grou
 
 
 def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNITS, group: bool = True,
-                         file_name: str | None = None, brep: bool | None = None, **_options) -> None:
+                         file_name: str | None = None, brep: bool | None = None, strips: bool = False,
+                         **_options) -> None:
     """Write ``patch_set`` as IGES 5.3: its merged pieces, then the patches they do not stand for, as a B-rep.
 
     Parameters
@@ -56,9 +57,11 @@ def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNIT
     brep : the surfaces as the faces of a B-rep built from the patch adjacency
         (``brep.iges_brep``: 186 solids of the closed components, 514 shells, 510 faces, ...);
         None: when ``group``. ``brep=False, group=True``: the surfaces in one 402 group (no B-rep)
+    strips : the merged pieces cut into strips one span wide (``merged.cad_patch_set``, ``convert --cad-strips``)
     """
     refuse_non_finite_patch_set(patch_set, path)
-    patch_set = cad_patch_set(patch_set)
+    if strips:  # Open CASCADE's default mass properties exact (io.patches.merged.cad_patch_set)
+        patch_set = cad_patch_set(patch_set)
     surfaces = piece_dicts(patch_set.merged)
     for points, weights in zip(*uncovered_groups(patch_set)):
         surfaces.extend(bezier_patches_to_surfaces(points, weights))

@@ -37,19 +37,23 @@ _FACE_ENTITY = re.compile(rb"=\s*(?:ADVANCED_FACE|FACE_SURFACE)\s*\(")
 _READ_HINT = "reading STEP needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
 
 
-def write_patch_set_step(path, patch_set, *, file_name: str | None = None, **_options) -> None:
+def write_patch_set_step(path, patch_set, *, file_name: str | None = None, strips: bool = False,
+                         **_options) -> None:
     """Write ``patch_set`` as STEP AP214: one solid per closed component, one shell per open one.
 
     The B-rep comes from c1surf's own topology (``brep.step_brep.brep_shape``):
     shared patch sides are shared edges, nothing is sewn. Weights make rational
     faces; merged pieces are written as B-spline faces in place of their
-    patches. Other formats' options (IGES units, ...) do not apply.
+    patches; ``strips``: cut into strips one span wide first (``merged.cad_patch_set``, ``convert
+    --cad-strips``). Other formats' options (IGES units, ...) do not apply.
     """
     points = np.concatenate([np.asarray(g, dtype=np.float64)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)]
                             + [np.zeros((0, 3))])
     _check_range(path, points)
     refuse_non_finite_patch_set(patch_set, path)
-    write_step_shape(path, brep_shape(cad_patch_set(patch_set)).shape, file_name or os.path.basename(os.fspath(path)))
+    if strips:  # Open CASCADE's default mass properties exact (io.patches.merged.cad_patch_set)
+        patch_set = cad_patch_set(patch_set)
+    write_step_shape(path, brep_shape(patch_set).shape, file_name or os.path.basename(os.fspath(path)))
 
 
 def write_step_shape(path, shape, name: str) -> None:

@@ -7,12 +7,13 @@ one edge there: Open CASCADE's STEP reader spends its time per edge (spot:
 14,139 sides, 12 s to read; 2,720 chains, 4 s), and the files are smaller.
 
 A vertex is *inner* to a chain when exactly two distinct edges end there and
-every face loop that passes it goes straight on along u (the same unit step of
-its domain before and after, with v constant: not a corner of the face, not a
-side across v). Sides across v stay one edge each: Open CASCADE's default
-mass properties integrate along each edge with one Gauss rule over its whole
-parameter range, exact over one span only (docs/patch-format.md, *CAD faces
-are strips*); along u the pcurves have dv = 0 and add nothing. Around such a vertex the
+every face loop that passes it goes straight on (the same unit step of its
+domain before and after: not a corner of the face), and, on a strip one span
+wide in u (``convert --cad-strips``), along u: there the sides across v stay
+one edge each, since Open CASCADE's default mass properties integrate along
+each edge with one Gauss rule over its whole parameter range, exact over one
+span only (docs/patch-format.md, *CAD faces as strips*); along u the pcurves
+have dv = 0 and add nothing. Around such a vertex the
 two edges split the surface into the two faces on their sides (or one, on a
 boundary), so joining the edges keeps the topology: every chain is used by
 the same faces as each of its edges. Face corners and vertices where three or
@@ -30,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .topology import BRepTopology
+from .topology import FACE_PIECE, BRepTopology
 
 
 @dataclass(frozen=True)
@@ -65,8 +66,8 @@ class EdgeChains:
 
 
 def inner_vertices(topology: BRepTopology) -> np.ndarray:
-    """(V,) bool: the vertices inside chains (two distinct edges end there, every loop through it goes straight on
-    along u)."""
+    """(V,) bool: the vertices inside chains (two distinct edges end there, every loop through it goes straight on,
+    along u on a strip face)."""
     n = len(topology.vertex_points)
     ev = topology.edge_vertices
     ends = np.bincount(ev.ravel(), minlength=n)
@@ -75,7 +76,9 @@ def inner_vertices(topology: BRepTopology) -> np.ndarray:
     step = topology.loop_uv[:, 1] - topology.loop_uv[:, 0]  # (L, 2)
     following = np.arange(len(step)) + 1  # the next entry of the same loop, cyclically
     following[topology.loop_start[1:] - 1] = topology.loop_start[:-1]
-    turning = np.any(step != step[following], axis=1) | (step[:, 1] != 0)  # a corner, or a side across v
+    face = np.repeat(np.arange(topology.n_faces), np.diff(topology.loop_start))
+    strip = (topology.face_kind == FACE_PIECE) & (topology.face_size[:, 0] == 1)  # one span wide (--cad-strips)
+    turning = np.any(step != step[following], axis=1) | (strip[face] & (step[:, 1] != 0))  # a corner, a strip's side
     end = np.where(topology.loop_forward, ev[topology.loop_edge, 1], ev[topology.loop_edge, 0])
     turned = np.zeros(n, dtype=bool)
     turned[end[turning]] = True
