@@ -30,9 +30,17 @@ from .system import vertex_normals
 __all__ = ["ScanFitOptions", "ScanFit", "fit_scan", "default_face_count", "check_scan", "fitting_samples",
            "curved_midpoints"]
 
-DEFAULT_FACES = 1000  # control faces when neither --faces nor a control mesh is given (docs/fit.md: the bench)
+# control faces when neither --faces nor a control mesh is given. Measured (bench/fit.py, docs/fit.md; RMS / max of
+# the diagonal, scan to surface): 1,000 faces leave the small faceted scans short (goathead 6.4e-4 / 7.0e-3 with
+# flat midpoint samples); 3,000 give 1,060-1,300 packed CAD faces (spot 1,063, within issue 29's 1,500) and
+# koala 1.8e-4 / 1.8e-3, spot 5.8e-5 / 1.4e-3 (fit 11-15 s on the loaded 2-core machine)
+DEFAULT_FACES = 3000
 MIN_FACES, FACE_CAP = 8, 6000
-SAMPLES_PER_FACE = 16  # fit samples a control face at least (4 patches a face after one Doo-Sabin step)
+# fit samples a control face at least (4 patches a face after one Doo-Sabin step). Measured at 2,500 faces (scan to
+# surface RMS / max, surface to scan max): 4 (one subdivision of the small scans, none of spot): spot 5.8e-5 /
+# 1.1e-3, 4.2e-3 (bulges between samples), wingnut 1.5e-4 / 1.8e-3, 3.6e-3; 8: spot 6.3e-5 / 1.3e-3, 2.4e-3,
+# wingnut 1.8e-4 / 2.6e-3, 2.2e-3, goathead 2.1e-4 / 1.5e-3, 3.9e-3 (4: 1.8e-4 / 1.2e-3, 3.9e-3)
+SAMPLES_PER_FACE = 8
 
 
 @dataclass(frozen=True)
@@ -89,8 +97,9 @@ class ScanFit:
 
 def default_face_count(n_triangles: int) -> int:
     """Control faces for a scan of ``n_triangles`` without --faces: ``DEFAULT_FACES``, fewer for a small scan
-    (at least about 8 scan triangles per control face, so every patch has samples)."""
-    return int(max(MIN_FACES, min(DEFAULT_FACES, n_triangles // 8)))
+    (at least two scan triangles, about one scan vertex, per control face: ``fitting_samples`` adds samples on the
+    scan's curved-up facets; goathead's 5,522 triangles take 2,761 faces, koala's 7,116 the default)."""
+    return int(max(MIN_FACES, min(DEFAULT_FACES, n_triangles // 2)))
 
 
 def check_scan(points: np.ndarray, triangles: np.ndarray, what: str = "the scan") -> float:
