@@ -27,8 +27,8 @@ sample i, w_i its area, Hbar_i the area-weighted average of H over the samples w
 edge of sample i (a Euclidean ball; the sum runs over ``RIPPLE_CENTRES`` samples picked at random, the average
 over all). Fitted surface: exact H (``evaluation.curvature``) on a 6 x 6 grid of cell centres per patch,
 w = |x_u x x_v| / 36. Catmull-Clark mesh: the cotangent-Laplacian mean curvature at each vertex,
-H = (Delta x . n) / 2 with Delta x = sum_j (cot a_ij + cot b_ij)(x_j - x_i) / (2 A_i), A_i a third of the
-areas of the vertex's triangles, n the area-weighted normal, w = A_i (trimesh gives the mesh, numpy the rest).
+H = (Delta x . n) / 2 with Delta x = sum_j (cot a_ij + cot b_ij)(x_j - x_i) / (2 A_i), A_i the vertex's mixed
+Voronoi area (Meyer et al. 2003), n the area-weighted normal, w = A_i (pymeshlab gives the mesh, numpy the rest).
 """
 from __future__ import annotations
 
@@ -76,7 +76,8 @@ def run_fit(scan: Path, work: Path, name: str, extra: list, timeout: float) -> d
         return {**row, "error": process.get("error", "")}
     document = json.loads(report.read_text())
     a, b = document["scan_to_surface"], document["surface_to_scan"]
-    row.update(control_faces=document["control_mesh"]["faces"], patches=document["patches"]["total"],
+    row.update(control_faces=document["control_mesh"]["faces"],
+               requested_faces=document["control_mesh"].get("requested_faces"), patches=document["patches"]["total"],
                refinements=document["patches"]["refinements"], cad_faces=document["cad_faces"],
                crease_edges=document["control_mesh"]["crease_edges"],
                rms=a["relative_rms"], p99=a["relative_p99"], max=a["relative_max"],
@@ -92,23 +93,33 @@ def run_fit(scan: Path, work: Path, name: str, extra: list, timeout: float) -> d
 # the baselines (in the worker process)
 
 def cotangent_mean_curvature(points: np.ndarray, triangles: np.ndarray):
-    """(H (V,), area (V,)): the cotangent-Laplacian mean curvature per vertex (module docstring) and a third of
-    the areas of its triangles."""
+    """(H (V,), area (V,)): the cotangent-Laplacian mean curvature per vertex and its mixed Voronoi area (Meyer,
+    Desbrun, Schroeder and Barr 2003: the Voronoi part of each non-obtuse triangle, else half the triangle to the
+    obtuse corner and a quarter to the others)."""
     p = points[triangles]  # (T, 3, 3)
     normal_twice = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     twice_area = np.linalg.norm(normal_twice, axis=1)
     laplace = np.zeros_like(points)
+    voronoi = np.zeros((triangles.shape[0], 3))
+    obtuse = np.zeros((triangles.shape[0], 3), dtype=bool)
     for k in range(3):  # the angle at corner k weights the opposite edge (i, j)
         i, j = (k + 1) % 3, (k + 2) % 3
         e1, e2 = p[:, i] - p[:, k], p[:, j] - p[:, k]
-        cot = np.einsum("ij,ij->i", e1, e2) / np.maximum(twice_area, 1e-300)
+        dot = np.einsum("ij,ij->i", e1, e2)
+        cot = dot / np.maximum(twice_area, 1e-300)
+        obtuse[:, k] = dot < 0
         edge = p[:, j] - p[:, i]
         np.add.at(laplace, triangles[:, i], 0.5 * cot[:, None] * edge)
         np.add.at(laplace, triangles[:, j], -0.5 * cot[:, None] * edge)
+        share = cot * np.einsum("ij,ij->i", edge, edge) / 8.0
+        voronoi[:, i] += share
+        voronoi[:, j] += share
+    any_obtuse = obtuse.any(axis=1)
+    voronoi[any_obtuse] = np.where(obtuse[any_obtuse], 0.25, 0.125) * twice_area[any_obtuse, None]
     area = np.zeros(points.shape[0])
     normals = np.zeros_like(points)
     for k in range(3):
-        np.add.at(area, triangles[:, k], twice_area / 6.0)
+        np.add.at(area, triangles[:, k], voronoi[:, k])
         np.add.at(normals, triangles[:, k], normal_twice)
     normals /= np.maximum(np.linalg.norm(normals, axis=1), 1e-300)[:, None]
     H = np.einsum("ij,ij->i", laplace, normals) / np.maximum(2.0 * area, 1e-300)  # Delta x / A_i . n / 2
@@ -372,14 +383,14 @@ def run(args) -> dict:
             row = run_fit(item["scan"], work, item["label"], item["extra"], args.timeout)
             if row["ok"] and not args.no_baselines:
                 log(f"  baselines of {item['label']}")
-                job = {"scan": str(item["scan"]), "label": item["label"], "faces": row["control_faces"],
+                job = {"scan": str(item["scan"]), "label": item["label"], "faces": row["requested_faces"],
                        "crease_angle": item.get("crease_angle"), "npz": row["files"]["npz"],
                        "control": str(item["control"]) if item.get("control") else None,
                        "convert": "control" not in item and "crease_angle" not in item}
                 row["baselines"] = run_baselines(job, work, args.timeout)
             if row["ok"] and args.pictures and item["label"] in args.pictures.split(","):
                 target = Path(args.images) / f"fit_{item['label']}.png"
-                picture(row, item["scan"], row["control_faces"], target, work)
+                picture(row, item["scan"], row["requested_faces"], target, work)
                 row["picture"] = str(target)
             row.pop("files", None)
             results["rows"].append(row)
