@@ -70,7 +70,8 @@ def run_fit(scan: Path, work: Path, name: str, extra: list, timeout: float) -> d
     argv = c1surf_argv("fit", scan, "--patches", files["step"], "--patches", files["npz"], "--report", report,
                        "--deviation", picture, "--quiet", *extra)
     process = run_process(argv, timeout, cwd=SETTINGS["root"])
-    row = {"scan": scan.stem, "label": name, "options": " ".join(map(str, extra)), "ok": process["ok"],
+    options = " ".join(x.name if isinstance(x, Path) else str(x) for x in extra)
+    row = {"scan": scan.stem, "label": name, "options": options, "ok": process["ok"],
            "seconds": process["seconds"], "cpu_seconds": process["cpu_seconds"], "peak_mb": process["peak_mb"]}
     if not process["ok"]:
         return {**row, "error": process.get("error", "")}
@@ -327,8 +328,9 @@ def table(results: dict) -> str:
             f"| {row['g1_jump']:.1e} | {row['seconds']:.1f} ({row['peak_mb']:.0f}) | {rho} "
             + (f"| {control['rms']:.2e} / {control['max']:.2e} " if control else "| - ")
             + (f"| {cc['rms']:.2e} / {cc['max']:.2e} " if cc else "| - ")
-            + (f"| {direct['patches']}, {direct['cad_faces']}, {direct.get('seconds', float('nan')):.1f} s |"
-               if "patches" in direct else "| - |"))
+            + (f"| {direct['patches']}, {direct['cad_faces']}, "
+               + (f"{direct['seconds']:.1f} s |" if "seconds" in direct else "as above |") if "patches" in direct
+               else "| - |"))
     return "\n".join(lines)
 
 
