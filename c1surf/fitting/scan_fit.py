@@ -124,7 +124,8 @@ def fitting_samples(points: np.ndarray, triangles: np.ndarray, faces: int):
     its vertices (``curved_midpoints``): a midpoint on a facet lies a sagitta (edge^2 / 8R) inside a surface of
     radius R through the edge's ends, and those samples pull the fit off the scan's own vertices. Measured on
     goathead (2,763 vertices, 1,510 control faces, two subdivisions; RMS / p99 / max of the diagonal at the
-    scan's vertices): flat midpoints 6.4e-4 / 1.9e-3 / 7.0e-3, lifted 3.2e-4 / 1.1e-3 / 2.9e-3 (docs/fit.md)."""
+    scan's vertices): flat midpoints 6.4e-4 / 1.9e-3 / 7.0e-3, lifted 3.6e-4 / 1.2e-3 / 2.3e-3 (fairness 1e-3,
+    16 samples a face; docs/fit.md)."""
     for _ in range(2):
         if points.shape[0] >= SAMPLES_PER_FACE * faces:
             break
