@@ -19,6 +19,7 @@ For each scan, each measurement in a process of its own (wall seconds, peak resi
    - a Catmull-Clark limit proxy of that control mesh: pymeshlab, 4 subdivision steps; distances from the scan's
      vertices to its triangles (exact point-triangle distances, ``fitting.deviation.closest_on_triangles``);
    - the shape column rho (``ripple``) for the fitted surface and for the Catmull-Clark mesh;
+   - the fit's STEP file read back by Open CASCADE (OCP, when installed): solids, validity, volume over the scan's;
 3. ``spot`` fitted with its own control mesh (../shared/meshes/spot/spot_control_mesh.obj) and ``wingnut``
    with ``--crease-angle 45`` (crease edges tagged, loose ends: darts).
 
@@ -86,7 +87,8 @@ def run_fit(scan: Path, work: Path, name: str, extra: list, timeout: float) -> d
                g1_jump=document["g1"]["max_normal_jump"], is_g1=document["g1"]["is_g1"],
                iterations=document["fit"]["iterations"], notes=document["notes"],
                step_bytes=files["step"].stat().st_size if files["step"].exists() else 0,
-               files={"npz": str(files["npz"]), "deviation": str(picture), "report": str(report)})
+               files={"npz": str(files["npz"]), "step": str(files["step"]), "deviation": str(picture),
+                      "report": str(report)})
     return row
 
 
@@ -227,8 +229,40 @@ def work_baselines(job: dict) -> dict:
                             **_relative(distance_stats(distance, diagonal)),
                             "rho": ripple(cc_points, H, area, radius)}
     out["fit_rho"] = surface_ripple(job["npz"], radius) if job.get("npz") else None
+    if job.get("step"):
+        import trimesh
+
+        out["step"] = step_solid(job["step"], trimesh.Trimesh(points, triangles, process=False).volume)
     out["radius"] = radius / diagonal
     return out
+
+
+def step_solid(path: str, scan_volume: float) -> dict:
+    """The fit's STEP file read back by Open CASCADE (OCP): solids, BRepCheck validity, its volume over the
+    scan's (the scan's triangles, an inscribed polyhedron: a smooth surface near its vertices encloses more)."""
+    try:
+        from OCP.BRepCheck import BRepCheck_Analyzer
+        from OCP.BRepGProp import BRepGProp
+        from OCP.GProp import GProp_GProps
+        from OCP.IFSelect import IFSelect_RetDone
+        from OCP.STEPControl import STEPControl_Reader
+        from OCP.TopAbs import TopAbs_SOLID
+        from OCP.TopExp import TopExp_Explorer
+    except ImportError:
+        return {"error": "OCP (Open CASCADE) is not installed"}
+    reader = STEPControl_Reader()
+    if reader.ReadFile(path) != IFSelect_RetDone:
+        return {"error": "Open CASCADE cannot read the STEP file"}
+    reader.TransferRoots()
+    shape = reader.OneShape()
+    solids, explorer = 0, TopExp_Explorer(shape, TopAbs_SOLID)
+    while explorer.More():
+        solids += 1
+        explorer.Next()
+    props = GProp_GProps()
+    BRepGProp.VolumeProperties_s(shape, props, 1e-9)
+    return {"solids": solids, "valid": bool(BRepCheck_Analyzer(shape).IsValid()),
+            "volume_ratio": float(props.Mass() / scan_volume)}
 
 
 def _relative(stats: dict) -> dict:
@@ -313,7 +347,7 @@ def table(results: dict) -> str:
     """The markdown table of docs/fit.md."""
     head = ("| scan | options | control faces | patches | CAD faces | scan->surface RMS / p99 / max | surface->scan max "
             "| G1 jump (rad) | seconds (peak MB) | rho fit / CC | unfitted control mesh RMS / max "
-            "| Catmull-Clark RMS / max | direct: patches, CAD faces, seconds |")
+            "| Catmull-Clark RMS / max | direct: patches, CAD faces, seconds | STEP: solids, valid, volume / scan's |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for row in results["rows"]:
         if not row.get("ok"):
@@ -321,16 +355,18 @@ def table(results: dict) -> str:
             continue
         base = row.get("baselines", {})
         cc, control, direct = base.get("catmull_clark", {}), base.get("control", {}), base.get("direct", {})
-        rho = f"{base.get('fit_rho') or float('nan'):.3g} / {cc.get('rho', float('nan')):.3g}" if cc else "-"
-        lines.append(
-            f"| {row['scan']} | {row['options'] or 'defaults'} | {row['control_faces']} | {row['patches']} "
-            f"| {row['cad_faces']} | {row['rms']:.2e} / {row['p99']:.2e} / {row['max']:.2e} | {row['surface_max']:.2e} "
-            f"| {row['g1_jump']:.1e} | {row['seconds']:.1f} ({row['peak_mb']:.0f}) | {rho} "
-            + (f"| {control['rms']:.2e} / {control['max']:.2e} " if control else "| - ")
-            + (f"| {cc['rms']:.2e} / {cc['max']:.2e} " if cc else "| - ")
-            + (f"| {direct['patches']}, {direct['cad_faces']}, "
-               + (f"{direct['seconds']:.1f} s |" if "seconds" in direct else "as above |") if "patches" in direct
-               else "| - |"))
+        step = base.get("step", {})
+        cells = [row["scan"], row["options"] or "defaults", row["control_faces"], row["patches"], row["cad_faces"],
+                 f"{row['rms']:.2e} / {row['p99']:.2e} / {row['max']:.2e}", f"{row['surface_max']:.2e}",
+                 f"{row['g1_jump']:.1e}", f"{row['seconds']:.1f} ({row['peak_mb']:.0f})",
+                 f"{base.get('fit_rho') or float('nan'):.3g} / {cc['rho']:.3g}" if cc else "-",
+                 f"{control['rms']:.2e} / {control['max']:.2e}" if control else "-",
+                 f"{cc['rms']:.2e} / {cc['max']:.2e}" if cc else "-",
+                 (f"{direct['patches']}, {direct['cad_faces']}, "
+                  + (f"{direct['seconds']:.1f} s" if "seconds" in direct else "as above")) if "patches" in direct else "-",
+                 f"{step['solids']}, {'yes' if step['valid'] else 'no'}, {step['volume_ratio']:.4f}" if "solids" in step
+                 else "-"]
+        lines.append("| " + " | ".join(map(str, cells)) + " |")
     return "\n".join(lines)
 
 
@@ -350,6 +386,10 @@ def check_targets(results: dict) -> list[str]:
                       ("seconds", row["seconds"], TARGETS["seconds"]), ("peak MB", row["peak_mb"], TARGETS["peak_mb"])]
         for what, value, goal in checks:
             lines.append(f"[{'met' if value <= goal else 'not met'}] {row['label']} {what}: {value:.3g} (goal <= {goal:g})")
+        step = row.get("baselines", {}).get("step", {})
+        if "solids" in step:
+            lines.append(f"[{'met' if step['solids'] == 1 and step['valid'] else 'not met'}] {row['label']} STEP: "
+                         f"{step['solids']} solid(s), valid {step['valid']}, volume {step['volume_ratio']:.4f} of the scan's")
     return lines
 
 
@@ -386,7 +426,7 @@ def run(args) -> dict:
             if row["ok"] and not args.no_baselines:
                 log(f"  baselines of {item['label']}")
                 job = {"scan": str(item["scan"]), "label": item["label"], "faces": row["requested_faces"],
-                       "crease_angle": item.get("crease_angle"), "npz": row["files"]["npz"],
+                       "crease_angle": item.get("crease_angle"), "npz": row["files"]["npz"], "step": row["files"]["step"],
                        "control": str(item["control"]) if item.get("control") else None,
                        "convert": "control" not in item and "crease_angle" not in item}
                 row["baselines"] = run_baselines(job, work, args.timeout)
