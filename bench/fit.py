@@ -370,6 +370,18 @@ def table(results: dict) -> str:
     return "\n".join(lines)
 
 
+def write_doc_table(path: Path, text: str) -> None:
+    """Replace the block between ``<!-- fit-table ... -->`` and ``<!-- /fit-table -->`` of ``path`` by ``text``."""
+    if not path.exists():
+        return
+    lines = path.read_text().split("\n")
+    starts = [i for i, line in enumerate(lines) if line.startswith("<!-- fit-table")]
+    ends = [i for i, line in enumerate(lines) if line.startswith("<!-- /fit-table")]
+    if starts and ends and starts[0] < ends[0]:
+        lines[starts[0] + 1: ends[0]] = text.split("\n")
+        path.write_text("\n".join(lines))
+
+
 def check_targets(results: dict) -> list[str]:
     """One line per target of issue 29: met or not, with the value."""
     lines = []
@@ -455,6 +467,8 @@ def main(argv=None) -> int:
     parser.add_argument("--timeout", type=float, default=900.0)
     parser.add_argument("--c1surf-root", default=str(HERE.parent))
     parser.add_argument("--out", default=str(HERE / "fit_results.json"))
+    parser.add_argument("--doc", default=str(HERE.parent / "docs" / "fit.md"),
+                        help="markdown file whose fit-table block gets the table ('' for none)")
     parser.add_argument("--worker", nargs=2, metavar=("JOB", "RESULT"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
@@ -463,6 +477,8 @@ def main(argv=None) -> int:
         return 0
     results = run(args)
     Path(args.out).write_text(json.dumps(results, indent=1, default=str) + "\n")
+    if args.doc and not args.only and not args.faces:  # the documented table is the full run's
+        write_doc_table(Path(args.doc), table(results))
     print(table(results) + "\n")
     print("\n".join(results["targets"]))
     return 0
