@@ -24,7 +24,7 @@ from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.fitting.deviation import two_sided_deviation
 from c1surf.fitting.iterate import fit_surface_points
 from c1surf.fitting.options import FitOptions
-from c1surf.io.meshes.mesh_file import weld_mesh_file
+from c1surf.prepare.mesh_edits import weld_mesh_file
 from c1surf.io.meshes.read import read_mesh
 
 

@@ -28,6 +28,8 @@ process for the largest outputs):
    enclosed volume (spot, sword, small tori);
 7. ``--tolerance`` (when this c1surf has it): triangles against the uniform
    resolution of the same measured chordal error, on the sample meshes and spot.
+8. then (not with --quick or --no-fit) ``bench/fit.py``: ``c1surf fit`` on every scan of ../shared/scans
+   against its baselines (issue 29), into bench/fit_results.json; docs/fit.md shows its table.
 
 It writes bench/results.json and bench/results.png and prints the tables and
 issue 15's targets (met, not met, or not measured and why). Generated inputs
@@ -362,6 +364,8 @@ def main(argv=None) -> int:
                         help="folder for the generated input files, kept between runs")
     parser.add_argument("--out", default=str(HERE / "results.json"))
     parser.add_argument("--plot", default=str(HERE / "results.png"), help="PNG plot ('' for none)")
+    parser.add_argument("--no-fit", action="store_true",
+                        help="skip bench/fit.py (c1surf fit on ../shared/scans; --quick skips it too)")
     parser.add_argument("--worker", nargs=2, metavar=("JOB", "RESULT"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
@@ -385,6 +389,9 @@ def main(argv=None) -> int:
         tables.plot(results, Path(args.plot))
     print_report(results)
     print(f"\nwrote {args.out}" + (f" and {args.plot}" if args.plot else "") + f" in {results['elapsed_seconds']:.0f} s")
+    if not (args.quick or args.no_fit):  # issue 29's section: its own results file (bench/fit_results.json)
+        print("\nc1surf fit on ../shared/scans (bench/fit.py)\n", flush=True)
+        return subprocess.run([sys.executable, str(HERE / "fit.py"), "--c1surf-root", args.c1surf_root]).returncode
     return 0
 
 

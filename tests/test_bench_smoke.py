@@ -58,3 +58,48 @@ def test_bench_floors_runs():
     lines = done.stdout.splitlines()
     assert lines[0].startswith("3,200 biquadratic patches") and len(lines) == 5, done.stdout
     assert lines[2].startswith("update_points:") and lines[4].startswith("floor, gather 9 points per patch")
+
+
+def test_bench_fit_smoke(tmp_path):
+    """bench/fit.py on the smallest scan at few faces: a row with the fit's numbers and every baseline."""
+    scans = ROOT.parent / "shared" / "scans"
+    if not (scans / "goathead.obj").exists():
+        import pytest
+
+        pytest.skip("../shared/scans is not here")
+    out = tmp_path / "fit.json"
+    subprocess.run([sys.executable, str(ROOT / "bench" / "fit.py"), "--only", "goathead", "--faces", "100",
+                    "--no-extras", "--pictures", "", "--out", str(out)],
+                   check=True, capture_output=True, timeout=600)
+    results = json.loads(out.read_text())
+    assert results["format"] == "c1surf-fit-bench"
+    (row,) = results["rows"]
+    assert row["ok"] and row["scan"] == "goathead" and row["is_g1"] and row["g1_jump"] < 1e-9
+    assert 50 <= row["control_faces"] <= 200 and row["patches"] >= row["control_faces"] and row["cad_faces"] > 0
+    # 100 faces leave the horns coarse: 5 % of the diagonal at the worst vertex, 0.3 % RMS
+    assert 0 < row["rms"] < 0.01 and row["rms"] <= row["p99"] <= row["max"] < 0.1 and 0 < row["surface_max"] < 0.1
+    assert row["seconds"] > 0 and row["peak_mb"] > 0
+    base = row["baselines"]
+    assert base["direct"]["patches"] > 10 * row["patches"] and base["direct"]["ok"] and base["direct"]["seconds"] > 0
+    assert base["control"]["faces"] == row["control_faces"]
+    # fitting moves the surface nearer the scan than the unfitted control mesh's surface and Catmull-Clark's
+    assert row["rms"] < base["control"]["rms"] and row["rms"] < base["catmull_clark"]["rms"]
+    assert base["catmull_clark"]["rho"] > 0 and base["fit_rho"] > 0
+    assert any(line.startswith("[") and "goathead RMS" in line for line in results["targets"])
+    step = base["step"]
+    assert step.get("error") == "OCP (Open CASCADE) is not installed" or (step["solids"] == 1 and step["valid"]), step
+
+
+def test_bench_fit_curvature_on_a_sphere():
+    """The shape column's discrete parts: the cotangent mean curvature of a fine sphere is 1/R, its ripple ~ 0."""
+    import numpy as np
+    import trimesh
+
+    sys.path.insert(0, str(ROOT / "bench"))
+    from fit import cotangent_mean_curvature, ripple
+
+    sphere = trimesh.creation.icosphere(subdivisions=5, radius=2.0)
+    H, area = cotangent_mean_curvature(np.asarray(sphere.vertices), np.asarray(sphere.faces))
+    assert abs(area.sum() - 4 * np.pi * 4.0) < 1e-2 * 4 * np.pi * 4.0
+    assert np.allclose(np.abs(H), 0.5, rtol=2e-2)
+    assert ripple(np.asarray(sphere.vertices), H, area, 0.3) < 1e-2

@@ -66,7 +66,7 @@ def plan_options(command):
     --crease-angle comes with the input options)."""
     return grouped(command, "plan", [
         click.option("--faces", type=click.IntRange(8, None), default=None, metavar="N",
-                     help="Control faces of the quad remesh of the scan [default: 1000, fewer for a small scan]."),
+                     help="Control faces of the quad remesh of the scan [default: 3000, at most one per two scan triangles]."),
         click.option("--tolerance", type=float, default=None, metavar="T",
                      help="Grow the control mesh until every scan vertex is within T times the bounding-box "
                           "diagonal of the surface (e.g. 0.001), or --face-cap is reached (a note says so)."),

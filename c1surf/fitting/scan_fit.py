@@ -25,12 +25,22 @@ from .deviation import bounding_diagonal, distance_stats, two_sided_deviation
 from .iterate import fit_surface_points, project_scan
 from .local_refine import next_face_count
 from .options import FitOptions
+from .system import vertex_normals
 
-__all__ = ["ScanFitOptions", "ScanFit", "fit_scan", "default_face_count", "check_scan"]
+__all__ = ["ScanFitOptions", "ScanFit", "fit_scan", "default_face_count", "check_scan", "fitting_samples",
+           "curved_midpoints"]
 
-DEFAULT_FACES = 1000  # control faces when neither --faces nor a control mesh is given (docs/fit.md: the bench)
+# control faces when neither --faces nor a control mesh is given. Measured (bench/fit.py, docs/fit.md; RMS / max of
+# the diagonal, scan to surface): 1,000 faces leave the small faceted scans short (goathead 6.4e-4 / 7.0e-3 with
+# flat midpoint samples); 3,000 give 1,060-1,300 packed CAD faces (spot 1,063, within issue 29's 1,500) and
+# koala 1.8e-4 / 1.8e-3, spot 5.8e-5 / 1.4e-3 (fit 11-15 s on the loaded 2-core machine)
+DEFAULT_FACES = 3000
 MIN_FACES, FACE_CAP = 8, 6000
-SAMPLES_PER_FACE = 16  # fit samples a control face at least (4 patches a face after one Doo-Sabin step)
+# fit samples a control face at least (4 patches a face after one Doo-Sabin step). Measured at 2,500 faces (scan to
+# surface RMS / max, surface to scan max): 4 (one subdivision of the small scans, none of spot): spot 5.8e-5 /
+# 1.1e-3, 4.2e-3 (bulges between samples), wingnut 1.5e-4 / 1.8e-3, 3.6e-3; 8: spot 6.3e-5 / 1.3e-3, 2.4e-3,
+# wingnut 1.8e-4 / 2.6e-3, 2.2e-3, goathead 2.1e-4 / 1.5e-3, 3.9e-3 (4: 1.8e-4 / 1.2e-3, 3.9e-3)
+SAMPLES_PER_FACE = 8
 
 
 @dataclass(frozen=True)
@@ -87,8 +97,9 @@ class ScanFit:
 
 def default_face_count(n_triangles: int) -> int:
     """Control faces for a scan of ``n_triangles`` without --faces: ``DEFAULT_FACES``, fewer for a small scan
-    (at least about 8 scan triangles per control face, so every patch has samples)."""
-    return int(max(MIN_FACES, min(DEFAULT_FACES, n_triangles // 8)))
+    (at least two scan triangles, about one scan vertex, per control face: ``fitting_samples`` adds samples on the
+    scan's curved-up facets; goathead's 5,522 triangles take 2,761 faces, koala's 7,116 the default)."""
+    return int(max(MIN_FACES, min(DEFAULT_FACES, n_triangles // 2)))
 
 
 def check_scan(points: np.ndarray, triangles: np.ndarray, what: str = "the scan") -> float:
@@ -105,20 +116,43 @@ def check_scan(points: np.ndarray, triangles: np.ndarray, what: str = "the scan"
 
 
 def fitting_samples(points: np.ndarray, triangles: np.ndarray, faces: int):
-    """(points, triangles) the fit samples: the scan, its triangles cut into four (edge midpoints: samples on the
-    scan's own facets) until there are ``SAMPLES_PER_FACE`` samples a control face (twice at most). A scan with
-    fewer vertices than patches leaves the surface between samples to the fairness term alone: it bulges there."""
+    """(points, triangles) the fit samples: the scan, its triangles cut into four until there are
+    ``SAMPLES_PER_FACE`` samples a control face (twice at most). A scan with fewer vertices than patches leaves
+    the surface between samples to the fairness term alone: it bulges there.
+
+    The new samples are the edge midpoints lifted off the scan's flat facets towards the smooth surface through
+    its vertices (``curved_midpoints``): a midpoint on a facet lies a sagitta (edge^2 / 8R) inside a surface of
+    radius R through the edge's ends, and those samples pull the fit off the scan's own vertices. Measured on
+    goathead (2,763 vertices, 1,510 control faces, two subdivisions; RMS / p99 / max of the diagonal at the
+    scan's vertices): flat midpoints 6.4e-4 / 1.9e-3 / 7.0e-3, lifted 3.6e-4 / 1.2e-3 / 2.3e-3 (fairness 1e-3,
+    16 samples a face; docs/fit.md)."""
     for _ in range(2):
         if points.shape[0] >= SAMPLES_PER_FACE * faces:
             break
         edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
         unique, inverse = np.unique(edges, axis=0, return_inverse=True)
         middle = points.shape[0] + inverse.reshape(-1, 3)  # the midpoints of edges 01, 12, 20
-        points = np.concatenate([points, 0.5 * (points[unique[:, 0]] + points[unique[:, 1]])])
+        points = np.concatenate([points, curved_midpoints(points, vertex_normals(points, triangles), unique)])
         a, b, c = triangles.T
         ab, bc, ca = middle.T
         triangles = np.concatenate([np.stack(t, axis=1) for t in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))])
     return points, triangles
+
+
+def curved_midpoints(points: np.ndarray, normals: np.ndarray, edges: np.ndarray) -> np.ndarray:
+    """(k, 3) float: the midpoints of ``edges`` (k, 2) moved off the chord onto the circle-like curve through
+    the ends that is tangent there to the planes of the unit vertex ``normals`` (m, 3).
+
+    With d_a = (m - a) . n_a the midpoint m's height over a's tangent plane, Phong tessellation (Boubekeur and
+    Alexa 2008) moves m by -(d_a n_a + d_b n_b) / 2; on a circle of radius R through an edge of length c that
+    is c^2 / 4R, twice the sagitta c^2 / 8R, so half of it is taken (Phong's shape factor 1/2): the midpoint
+    lands on the circle to second order in c / R. Zero normals (undefined) leave the midpoint on the chord."""
+    a, b = points[edges[:, 0]], points[edges[:, 1]]
+    na, nb = normals[edges[:, 0]], normals[edges[:, 1]]
+    m = 0.5 * (a + b)
+    da = np.einsum("ij,ij->i", m - a, na)
+    db = np.einsum("ij,ij->i", m - b, nb)
+    return m - 0.25 * (da[:, None] * na + db[:, None] * nb)
 
 
 def _surface(control: ControlMesh, options: SurfaceOptions, features=None) -> Surface:
