@@ -251,7 +251,8 @@ def fit_surface(scan_path, options: ScanFitOptions | None = None, surface_option
     Raises MeshInputError (one line) for a scan or control mesh that cannot be fitted.
     """
     options = options or ScanFitOptions()
-    surface_options = surface_options or SurfaceOptions(refinements="auto")
+    surface_options = (input_options or InputOptions()).surface_options(surface_options or
+                                                                         SurfaceOptions(refinements="auto"))
     scan_points, scan_triangles, scan_mesh = read_scan(scan_path)
     control = features = prepared = None
     if control_path is not None:
