@@ -207,7 +207,7 @@ def test_inspect_predicts_the_memory_of_converting_a_10000_sided_cell_within_2x(
     # measured 176 MB for both, predicted 157 MB (before: 1.3 GB for a 1,000-gon, predicted 13 MB)
     path = tmp_path / "big.obj"
     write_obj(path, *make(10_000))
-    predicted = inspection(path, 2, 2)["output"]["memory_bytes"]
+    predicted = inspection(path, 2, SurfaceOptions(refinements=2))["output"]["memory_bytes"]
     # VmHWM: this process's own peak (ru_maxrss would keep the forking pytest's across exec)
     script = ("import sys\nfrom c1surf.cli.main import main\nsys.argv = ['c1surf'] + sys.argv[1:]\n"
               "try:\n    main()\nexcept SystemExit as e:\n    assert not e.code, e.code\n"

@@ -50,8 +50,11 @@ def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
 def _hashes(points: np.ndarray, tolerance: float):
     """(key (k,) int64, the hash of each point's cell; near (m,) int, the points within about a tolerance of
     their cell's faces), by blocks of ``_CHUNK`` points (block-sized temporaries only)."""
-    size = tolerance * CELL_TOLERANCES if tolerance > 0 else 1.0
-    margin = 2.0 / CELL_TOLERANCES if tolerance > 0 else -1.0  # twice a tolerance: rounding cannot hide a point
+    # cells no finer than the coordinates' own resolution (a tolerance of 1e-320 would overflow the division);
+    # larger cells only bring more candidate pairs, each checked, and a margin of at least two tolerances
+    largest = float(np.abs(points).max(initial=0.0))
+    size = max(tolerance * CELL_TOLERANCES, largest * 2.0**-40) if tolerance > 0 else 1.0
+    margin = 2.0 * max(tolerance, 0.0) / size if tolerance > 0 else -1.0  # twice a tolerance: rounding cannot hide a point
     key, near = np.empty(points.shape[0], dtype=np.int64), []
     for a in range(0, points.shape[0], _CHUNK):
         scaled = points[a : a + _CHUNK] / size
