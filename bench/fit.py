@@ -196,6 +196,7 @@ def work_baselines(job: dict) -> dict:
     Catmull-Clark proxy's deviation, rho of both surfaces."""
     from c1surf.api import load_surface, read_scan
     from c1surf.cli.fit import cad_face_count
+    from c1surf.cli.options import PatchFileOptions
     from c1surf.construction.surface import Surface, SurfaceOptions
     from c1surf.fitting.control_mesh import control_mesh_from_scan
     from c1surf.fitting.deviation import closest_on_triangles, distance_stats
@@ -207,7 +208,7 @@ def work_baselines(job: dict) -> dict:
     diagonal = float(np.linalg.norm(points.max(0) - points.min(0)))
     start = time.perf_counter()
     direct, _ = load_surface(job["scan"])
-    out["direct"] = {"patches": int(direct.n_patches), "cad_faces": int(cad_face_count(direct, None)),
+    out["direct"] = {"patches": int(direct.n_patches), "cad_faces": int(cad_face_count(direct, PatchFileOptions())),
                      "build_seconds": time.perf_counter() - start}
     del direct
     if job.get("control"):

@@ -100,8 +100,10 @@ def test_the_report_distances_agree_with_trimesh(fitted):
 
 
 def test_a_faulty_control_mesh_is_repaired_and_fitted(tmp_path):
-    """--control-mesh takes any polygons: a valence-2 vertex, an edge in three faces and a flipped face are what
-    the input preparation repairs (each named in a note), and the fit succeeds on the cube's sampled surface."""
+    """--control-mesh takes any polygons: a valence-2 vertex and a flipped face are what the input preparation
+    repairs (each named in a note), and the fit succeeds on the cube's sampled surface. (An edge in three faces
+    of a user's control mesh is refused as `convert` refuses it where its sheets cannot meet exactly; the
+    remesher's own flaps are dropped by its cleanup: tests/fitting/test_control_mesh.py.)"""
     from c1surf.io.meshes.read import read_mesh
 
     cube = read_mesh(SAMPLES / "cube.obj")
@@ -116,9 +118,6 @@ def test_a_faulty_control_mesh_is_repaired_and_fitted(tmp_path):
                 faces[k] = np.insert(face, i + 1, mid)
                 break
     faces[1] = faces[1][::-1]  # a flipped face
-    c, d = faces[2][0], faces[2][1]  # a flap on edge c-d: that edge in three faces
-    points.append(cube.points[c] + 0.3 * (cube.points[d] - cube.points[c]) + [0.0, 0.0, 0.05])
-    faces.append(np.array([c, d, len(points) - 1]))
     control = tmp_path / "cage.obj"
     control.write_text("".join(f"v {float(x)!r} {float(y)!r} {float(z)!r}\n" for x, y, z in points)
                        + "".join("f " + " ".join(str(v + 1) for v in face) + "\n" for face in faces))
@@ -127,7 +126,7 @@ def test_a_faulty_control_mesh_is_repaired_and_fitted(tmp_path):
     report = tmp_path / "r.json"
     result = run("fit", scan, "--control-mesh", control, "--report", report)
     assert result.exit_code == 0, result.output
-    for repair in ("dissolved 1 interior vertices of valence 2", "flipped 1 faces", "edges in more than two faces"):
+    for repair in ("dissolved 1 interior vertices of valence 2", "flipped 1 faces"):
         assert repair in result.stderr, repair
     document = json.loads(report.read_text())
     assert document["g1"]["is_g1"] and document["scan_to_surface"]["relative_rms"] < 1e-2
