@@ -29,8 +29,6 @@ from .evaluation.stream import StreamedSurface
 from .evaluation.stream.patches import StreamedPatchSet
 from .evaluation.tessellate import tessellate
 from .evaluation.tolerance import tessellate_to_tolerance
-from .fitting.control_mesh import ControlMesh
-from .fitting.scan_fit import ScanFitOptions, check_scan, fit_scan
 from .io.meshes.read import read_mesh
 from .io.meshes.sidecars import read_blend_file, read_creases_file
 from .io.patches.formats import load_patch_set
@@ -44,7 +42,7 @@ from .prepare.options import NON_MANIFOLD_RULES, InputOptions
 from .prepare.pipeline import prepare_mesh
 
 __all__ = ["load_surface", "load_patches", "prepared_input", "surface_from_file", "fit_surface", "read_scan",
-           "FitReport", "ScanFitOptions", "tessellate_surface", "check_surface",
+           "FitReport", "tessellate_surface", "check_surface",
            "build_surface", "Surface", "SurfaceOptions", "InputOptions", "LoadReport", "PreparedInput",
            "NON_MANIFOLD_RULES", "repair_notes", "seam_notes", "topology_error"]
 
@@ -191,6 +189,8 @@ def read_scan(path):
 
     Raises MeshInputError for a file without faces or spanning no surface.
     """
+    from .fitting.scan_fit import check_scan  # the fitting (and scipy) only where a scan is fitted
+
     mesh, _ = weld_mesh_file(read_mesh(path), 0.0)
     sizes, corners = np.asarray(mesh.face_sizes, dtype=np.int64), np.asarray(mesh.face_vertices, dtype=np.int64)
     fans = np.maximum(sizes - 2, 0)  # triangles (v0, v_j, v_j+1) of each face, j = 1 .. k - 2
@@ -212,6 +212,8 @@ def read_scan(path):
 def control_mesh_input(path, surface_options: SurfaceOptions, input_options: InputOptions | None = None):
     """A user's control mesh for ``fit_surface``: (ControlMesh, SharpFeatures or None, PreparedInput), read and
     prepared as every mesh file is (``prepared_input``: tags honoured), its unused vertices left out."""
+    from .fitting.control_mesh import ControlMesh
+
     prepared = prepared_input(path, surface_options, input_options)
     mesh, data = prepared.mesh, prepared.data
     used = np.unique(mesh.face_vertices)
@@ -231,14 +233,14 @@ def control_mesh_input(path, surface_options: SurfaceOptions, input_options: Inp
     return control, features, prepared
 
 
-def fit_surface(scan_path, options: ScanFitOptions | None = None, surface_options: SurfaceOptions | None = None, *,
+def fit_surface(scan_path, options=None, surface_options: SurfaceOptions | None = None, *,
                 control_path=None, input_options: InputOptions | None = None, progress=None):
     """Fit a surface of the paper's construction to the dense mesh ``scan_path`` (``c1surf fit``).
 
     Parameters
     ----------
     scan_path : a mesh file (OBJ, PLY, STL, OFF), read by ``read_scan``
-    options : fitting.scan_fit.ScanFitOptions (faces, tolerance, face cap, crease angle, the fit's weights)
+    options : fitting.scan_fit.ScanFitOptions or None (faces, tolerance, face cap, crease angle, the fit's weights)
     surface_options : SurfaceOptions (default: refinements "auto", the fewest Doo-Sabin steps the control mesh allows)
     control_path : the user's control mesh (any polygons, tags honoured, read with ``input_options``), or None:
         a quad remesh of the scan
@@ -250,6 +252,8 @@ def fit_surface(scan_path, options: ScanFitOptions | None = None, surface_option
 
     Raises MeshInputError (one line) for a scan or control mesh that cannot be fitted.
     """
+    from .fitting.scan_fit import ScanFitOptions, fit_scan
+
     options = options or ScanFitOptions()
     surface_options = (input_options or InputOptions()).surface_options(surface_options or
                                                                          SurfaceOptions(refinements="auto"))

@@ -10,11 +10,12 @@ from dataclasses import dataclass
 import click
 import numpy as np
 
-from ..api import FitReport, ScanFitOptions, Surface, check_surface, fit_surface
+from ..api import FitReport, Surface, check_surface, fit_surface
 from ..evaluation.merge import merge_biquadratic
 from ..evaluation.patch_set import surface_patch_set
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..fitting.options import FitOptions
+from ..fitting.scan_fit import ScanFitOptions
 from ..io.atomic import atomic_output
 from ..io.images.png import write_png
 from ..io.meshes.write import write_triangle_mesh
