@@ -168,6 +168,7 @@ def fit_document(surface: Surface, report: FitReport, patch_files) -> dict:
                     "total": surface.n_patches, "refinements": int(surface.refinements)},
         "cad_faces": cad_face_count(surface, patch_files),
         "scan_to_surface": deviation.scan_stats, "surface_to_scan": deviation.surface_stats,
+        "surface_over_holes": deviation.over_holes_fraction,
         "g1": {"max_normal_jump": float(g1.max_normal_jump), "max_gap": float(g1.relative_gap),
                "is_g1": bool(g1.is_g1(1e-9, 1e-9))},
         "fit": {"iterations": result.fit.iterations, "stopped": result.fit.stopped, "solver": result.fit.solver,
@@ -185,7 +186,8 @@ def summary_lines(document: dict) -> list[str]:
              f"scan to surface:  RMS {a['relative_rms']:.3g}, 99% {a['relative_p99']:.3g}, max {a['relative_max']:.3g} "
              "of the diagonal",
              f"surface to scan:  RMS {b['relative_rms']:.3g}, 99% {b['relative_p99']:.3g}, max {b['relative_max']:.3g} "
-             "of the diagonal",
+             "of the diagonal" + (f" (where the scan has data: {document['surface_over_holes']:.1%} of the surface "
+                                  "lies past its rims or over its holes)" if document["surface_over_holes"] else ""),
              f"G1: {'yes' if document['g1']['is_g1'] else 'NO'} (max normal jump {document['g1']['max_normal_jump']:.3e} "
              "rad)"]
     return lines

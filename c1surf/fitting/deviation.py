@@ -18,7 +18,7 @@ from ..evaluation.tessellate import tessellate
 from ..parallel import thread_count
 from .footpoints import patch_set
 
-__all__ = ["Deviation", "distance_stats", "two_sided_deviation", "surface_to_scan",
+__all__ = ["Deviation", "distance_stats", "two_sided_deviation", "surface_to_scan", "beyond_boundary",
            "signed_scan_to_surface", "closest_on_triangles",
            "point_triangle_closest", "bounding_diagonal"]
 
@@ -46,7 +46,10 @@ class Deviation:
     scan_to_surface : (m,) float, per scan vertex (for the deviation PLY and picture)
     surface_to_scan : (n,) float, per tessellation vertex of the surface
     diagonal : float, the scan's bounding-box diagonal
-    scan_stats, surface_stats : dict, ``distance_stats`` of each
+    scan_stats, surface_stats : dict, ``distance_stats`` of each; the surface's only where the scan has data
+        (its vertices over the scan's holes left out: ``over_holes``)
+    over_holes : (n,) bool, the surface's vertices whose nearest scan point is on the scan's boundary and
+        beyond it (an open scan: the surface past its rims or across its holes); all False for a closed scan
     """
 
     scan_to_surface: np.ndarray
@@ -54,6 +57,12 @@ class Deviation:
     diagonal: float
     scan_stats: dict
     surface_stats: dict
+    over_holes: np.ndarray | None = None
+
+    @property
+    def over_holes_fraction(self) -> float:
+        """The share of the surface's (tessellation) vertices over the scan's holes or past its rims."""
+        return float(np.mean(self.over_holes)) if self.over_holes is not None and self.over_holes.size else 0.0
 
 
 def two_sided_deviation(surface, scan_points, scan_triangles, footpoints, resolution: int = 4) -> Deviation:
@@ -66,9 +75,39 @@ def two_sided_deviation(surface, scan_points, scan_triangles, footpoints, resolu
     resolution : int >= 2, tessellation samples per patch side of the surface-to-scan direction
     """
     diagonal = bounding_diagonal(scan_points)
-    back = surface_to_scan(surface, scan_points, scan_triangles, resolution)
+    mesh = tessellate([surface.biquadratic, surface.bicubic], surface.refined, surface.frames, resolution)
+    back, closest = closest_on_triangles(mesh.points[:, :3], scan_points, scan_triangles)
+    holes = beyond_boundary(closest, back, scan_points, scan_triangles, diagonal)
+    kept = back[~holes] if (~holes).any() else back
     return Deviation(footpoints.distance, back, diagonal, distance_stats(footpoints.distance, diagonal),
-                     distance_stats(back, diagonal))
+                     distance_stats(kept, diagonal), holes)
+
+
+def beyond_boundary(closest, distance, scan_points, scan_triangles, diagonal: float) -> np.ndarray:
+    """(n,) bool: the queries whose ``closest`` point (n, 3) on the scan lies on its boundary (an edge of one
+    triangle) while they are off it by more than 1e-6 of the ``diagonal``: past a rim or over a hole, where the
+    scan has no data to measure against. All False for a closed scan."""
+    triangles = np.asarray(scan_triangles, dtype=np.int64)
+    edges = np.sort(triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    rim = unique[counts == 1]
+    n = closest.shape[0]
+    if rim.size == 0 or n == 0:
+        return np.zeros(n, dtype=bool)
+    a, b = scan_points[rim[:, 0]], scan_points[rim[:, 1]]
+    tree = cKDTree(0.5 * (a + b))
+    reach = 0.5 * float(np.linalg.norm(b - a, axis=1).max())
+    candidates = np.minimum(8, rim.shape[0])
+    near = np.full(n, np.inf)
+    _, index = tree.query(closest, k=candidates, workers=thread_count())
+    index = index.reshape(n, -1)
+    for k in range(index.shape[1]):  # a few nearest rim edges each (k <= 8), vectorized over the queries
+        e = index[:, k]
+        ab = b[e] - a[e]
+        t = np.clip(np.einsum("ij,ij->i", closest - a[e], ab) / np.maximum(np.einsum("ij,ij->i", ab, ab), 1e-300), 0, 1)
+        near = np.minimum(near, np.linalg.norm(closest - (a[e] + t[:, None] * ab), axis=1))
+    on_rim = near <= 1e-9 * diagonal + 1e-12 * reach
+    return on_rim & (np.asarray(distance) > 1e-6 * diagonal)
 
 
 def signed_scan_to_surface(surface, scan_points, footpoints) -> np.ndarray:

@@ -60,6 +60,19 @@ def control_edges(surface: Surface) -> np.ndarray:
     return np.stack([t.vertex_source[a[real]], t.vertex_source[b[real]]], axis=1)
 
 
+def sample_point_weights(triangles: np.ndarray, n_samples: int, options: FitOptions):
+    """The point-to-point weight of every sample: ``options.rim`` on the scan's rims (vertices of an edge of one
+    triangle: an open scan's boundary and holes), ``options.point`` elsewhere; a float when the scan is closed."""
+    edges = np.sort(np.asarray(triangles, dtype=np.int64)[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+    unique, counts = np.unique(edges, axis=0, return_counts=True)
+    rim = unique[counts == 1].ravel()
+    if rim.size == 0:
+        return options.point
+    weights = np.full(n_samples, float(options.point))
+    weights[rim] = options.rim
+    return weights
+
+
 def project_scan(surface: Surface, scan_points: np.ndarray, options: FitOptions,
                  start: Footpoints | None = None) -> Footpoints:
     """The footpoints of ``scan_points`` on ``surface``'s exact patches (``footpoints.project_points``;
@@ -103,6 +116,7 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
         raise ValueError("a scan triangle refers to a vertex that does not exist")
     diagonal = float(np.linalg.norm(samples.max(axis=0) - samples.min(axis=0)))
     normals = vertex_normals(samples, triangles)
+    point_weights = sample_point_weights(triangles, samples.shape[0], options)
     n_vertices = surface.n_input_vertices
     laplacian = umbrella_laplacian(control_edges(surface), n_vertices)
     method = available_solver(options.solver)
@@ -121,7 +135,7 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
     for iteration in range(1, options.max_iterations + 1):
         round_start = sum(timings.values())
         A = basis_rows(feet, surface.quad_frames.shape[0], surface.stencil().shape[0]) @ surface.stencil()
-        N, b = normal_equations(A.tocsr(), samples, normals, laplacian, current, options.plane, options.point,
+        N, b = normal_equations(A.tocsr(), samples, normals, laplacian, current, options.plane, point_weights,
                                 options.fairness)
         start = clock("system", start)
         points = solve(N, b, current.ravel(), method).reshape(n_vertices, 3)

@@ -45,6 +45,9 @@ class FitOptions:
         2.6e-4 / 8.2e-4 / 1.7e-3, 2.9e-3; koala 1e-3: 1.8e-4 / 6.3e-4 / 1.8e-3, 4.0e-3; 3e-3: 2.1e-4 /
         7.4e-4 / 1.9e-3, 3.8e-3; wingnut 1e-3 and 3e-3: 1.5e-4 and 1.7e-4 RMS, 2.1e-3 either way; spot
         with its own control mesh: 6.8e-4 at 1e-3, 7.7e-4 at 3e-3
+    rim : float >= 0, the point-to-point weight of an open scan's rim vertices (those on an edge of one
+        triangle), instead of ``point``: the point-to-plane term cannot move the surface's boundary along the
+        surface, so without it the fitted surface stops short of the scan's rims (docs/fit.md, open scans)
     max_iterations : int >= 1, rounds of footpoints + solve
     stop : float >= 0, stop when the scan-to-surface RMS improves by less than this fraction in a round
         (1e-2: spot's rounds 7-10 with its own control mesh gain 0.2-0.9 % each, 1.5 % together)
@@ -58,6 +61,7 @@ class FitOptions:
     plane: float = 1.0
     point: float = 0.01
     fairness: float = 3e-3
+    rim: float = 1.0
     max_iterations: int = 10
     stop: float = 1e-2
     candidates: int = 3
@@ -67,7 +71,7 @@ class FitOptions:
 
     def check(self) -> "FitOptions":
         """Raise ValueError for a value the fit cannot take; else return self."""
-        for name in ("plane", "point", "fairness", "stop"):
+        for name in ("plane", "point", "fairness", "stop", "rim"):
             value = getattr(self, name)
             if not (value >= 0 and value < float("inf")):
                 raise ValueError(f"{name} must be a finite number >= 0, got {value!r}")

@@ -94,7 +94,8 @@ def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray,
     samples : (m, 3) float, the scan points; normals : (m, 3) float, their unit normals
     laplacian : (V, V) csr_matrix, ``umbrella_laplacian``
     current : (V, 3) float, the control points now (the damping's anchor)
-    plane, point, fairness : float, the weights of ``FitOptions``
+    plane, point, fairness : float, the weights of ``FitOptions``; ``point`` may be (m,) float, a weight per
+        sample (the scan's rim vertices pull harder: ``iterate.sample_point_weights``)
     """
     m, n_vertices = A.shape
     # block (c, d) of N's data part: A^T diag(plane n_c n_d + point [c = d]) A / m (six products, A has
@@ -104,7 +105,7 @@ def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray,
     row_of_entry = np.repeat(np.arange(m), np.diff(A.indptr))
     for c in range(3):
         for d in range(c, 3):
-            weight = (plane / m) * normals[:, c] * normals[:, d] + (point / m if c == d else 0.0)
+            weight = (plane / m) * normals[:, c] * normals[:, d] + (np.asarray(point) / m if c == d else 0.0)
             scaled = sp.csr_matrix((A.data * weight[row_of_entry], A.indices, A.indptr), shape=A.shape)
             blocks[c, d] = (AT @ scaled).tocoo()
     fair = ((fairness / n_vertices) * (laplacian.T @ laplacian)).tocoo()
@@ -119,7 +120,8 @@ def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray,
     N = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(3 * n_vertices, 3 * n_vertices))
     offset = np.einsum("ij,ij->i", normals, samples)
-    b = ((plane / m) * (AT @ (normals * offset[:, None])) + (point / m) * (AT @ samples)).ravel()
+    point_weight = np.broadcast_to(np.asarray(point, dtype=np.float64), (m,))
+    b = ((plane / m) * (AT @ (normals * offset[:, None])) + AT @ (samples * (point_weight / m)[:, None])).ravel()
     damping = DAMPING * float(N.diagonal().mean())
     N = (N + damping * sp.identity(3 * n_vertices, format="csr")).tocsr()
     b = b + damping * np.asarray(current, dtype=np.float64).ravel()

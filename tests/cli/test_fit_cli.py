@@ -171,3 +171,35 @@ def test_a_tolerance_the_cap_cannot_reach_is_a_note_and_the_best_result(tmp_path
     assert "not reached within the face cap of 80" in result.stderr
     document = json.loads(report.read_text())
     assert len(document["rounds"]) >= 2 and document["control_mesh"]["faces"] <= 90
+
+
+def test_an_open_scan_is_followed_to_its_rims(tmp_path):
+    """An open scan (twisted's surface with its top cut off): the rim vertices pull the surface's boundary to the
+    rim (``FitOptions.rim``; point-to-plane alone cannot move it along the surface, so it stops short), and the
+    report says how much of the surface lies past the rims, left out of the surface-to-scan distances."""
+    from c1surf.api import fit_surface
+    from c1surf.fitting.options import FitOptions
+    from c1surf.fitting.scan_fit import ScanFitOptions
+
+    whole = tmp_path / "whole.ply"
+    assert run("convert", SAMPLES / "twisted.obj", "-o", whole, "-r", 6, "-q").exit_code == 0
+    mesh = trimesh.load(whole, process=False)
+    keep = mesh.triangles_center[:, 2] < np.percentile(mesh.vertices[:, 2], 80)
+    cut = trimesh.Trimesh(mesh.vertices, mesh.faces[keep], process=False)
+    cut.remove_unreferenced_vertices()
+    scan = tmp_path / "open.ply"
+    cut.export(scan)
+
+    def rim_distance(rim: float):
+        surface, report = fit_surface(scan, ScanFitOptions(faces=150, fit=FitOptions(rim=rim)))
+        edges = np.sort(report.scan_triangles[:, [0, 1, 1, 2, 2, 0]].reshape(-1, 2), axis=1)
+        unique, counts = np.unique(edges, axis=0, return_counts=True)
+        deviation = report.fit.deviation
+        return deviation.scan_to_surface[np.unique(unique[counts == 1])].max() / deviation.diagonal, deviation
+
+    pulled, deviation = rim_distance(FitOptions.rim)
+    loose, _ = rim_distance(FitOptions.point)  # the rim weighted like any other vertex
+    assert pulled < 0.6 * loose and deviation.scan_stats["relative_max"] < 1e-2
+    assert 0 < deviation.over_holes_fraction < 0.2 and deviation.over_holes.size == deviation.surface_to_scan.size
+    kept = deviation.surface_to_scan[~deviation.over_holes]
+    assert deviation.surface_stats["max"] == kept.max() < deviation.surface_to_scan.max()
