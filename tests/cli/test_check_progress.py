@@ -54,3 +54,13 @@ def test_check_and_measure_of_a_mesh_equal_those_of_its_patch_file(tmp_path):
             from_mesh, from_file = run(command, SAMPLES / f"{name}.obj"), run(command, npz)
             assert from_mesh.exit_code == from_file.exit_code == 0
             assert from_mesh.stdout == from_file.stdout
+
+
+def test_diff_shows_its_phases_on_a_terminal_only(tmp_path):
+    patches = tmp_path / "t.json"
+    assert CliRunner().invoke(main, ["convert", str(SAMPLES / "cube.obj"), "-o", str(tmp_path / "t.ply"),
+                                     "--patches", str(patches)]).exit_code == 0
+    shown = on_terminal("diff", patches, patches)
+    for phase in (f"reading {re.escape(str(patches))}", "comparing"):
+        assert re.search(rf"c1surf: {phase}\.\.\. \d+\.\d\ds", shown), phase
+    assert piped("diff", patches, patches) == "" and on_terminal("diff", patches, patches, "-q") == ""

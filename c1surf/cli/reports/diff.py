@@ -9,7 +9,7 @@ from ...evaluation.compare import compare_meshes, compare_patch_sets
 from ...io.meshes.read import read_mesh
 from ...io.patches.formats import load_patch_set
 from ...io.registry import MESH_READERS, PATCH_READERS, suffix_list
-from ..common import Failure, friendly_errors, with_formats
+from ..common import Failure, Progress, friendly_errors, with_formats
 from ..options import FiniteFloat
 
 
@@ -18,9 +18,10 @@ from ..options import FiniteFloat
 @click.argument("second", metavar="B", type=click.Path(dir_okay=False))
 @click.option("--tolerance", type=FiniteFloat(0.0), default=1e-12, show_default=True,
               help="Largest coefficient (or vertex) move accepted as equal, relative to the bounding-box diagonal of A.")
+@click.option("-q", "--quiet", is_flag=True, help="No progress messages (they only appear on a terminal anyway).")
 @friendly_errors
 @with_formats
-def diff(first, second, tolerance):
+def diff(first, second, tolerance, quiet):
     """Compare two patch files ({patch_inputs}) or two meshes ({mesh_inputs}).
 
     Structure first: patch counts and degrees, weights, merged pieces (meshes:
@@ -32,12 +33,19 @@ def diff(first, second, tolerance):
     kinds = [input_kind(path) for path in (first, second)]
     if kinds[0] != kinds[1]:
         raise Failure(f"{first} is a {kinds[0]} file and {second} a {kinds[1]} file: give two of one kind")
+    progress = Progress(quiet)
+    read = load_patch_set if kinds[0] == "patch" else read_mesh
+    progress.phase(f"reading {first}")
+    a = read(first)
+    progress.phase(f"reading {second}")
+    b = read(second)
+    progress.phase("comparing")
     if kinds[0] == "patch":
-        comparison = compare_patch_sets(load_patch_set(first), load_patch_set(second), tolerance)
+        comparison = compare_patch_sets(a, b, tolerance)
     else:
-        a, b = read_mesh(first), read_mesh(second)
         comparison = compare_meshes(a.points, a.face_sizes, a.face_vertices, b.points, b.face_sizes, b.face_vertices,
                                     tolerance)
+    progress.done()
     for line in comparison.lines():
         click.echo(line)
     if not comparison.equal:
