@@ -4,6 +4,7 @@ No timing is asserted here (timings belong to `make bench`, not to tests).
 """
 from __future__ import annotations
 
+import importlib.util
 import json
 import subprocess
 import sys
@@ -83,8 +84,11 @@ def test_bench_fit_smoke(tmp_path):
     assert base["direct"]["patches"] > 10 * row["patches"] and base["direct"]["ok"] and base["direct"]["seconds"] > 0
     assert base["control"]["faces"] == row["control_faces"]
     # fitting moves the surface nearer the scan than the unfitted control mesh's surface and Catmull-Clark's
-    assert row["rms"] < base["control"]["rms"] and row["rms"] < base["catmull_clark"]["rms"]
-    assert base["catmull_clark"]["rho"] > 0 and base["fit_rho"] > 0
+    assert row["rms"] < base["control"]["rms"] and base["fit_rho"] > 0
+    if importlib.util.find_spec("pymeshlab") is not None:  # a bench extra: the Catmull-Clark baseline
+        assert row["rms"] < base["catmull_clark"]["rms"] and base["catmull_clark"]["rho"] > 0
+    else:
+        assert base["catmull_clark"] == {"error": "pymeshlab is not installed"}
     assert any(line.startswith("[") and "goathead RMS" in line for line in results["targets"])
     step = base["step"]
     assert step.get("error") == "OCP (Open CASCADE) is not installed" or (step["solids"] == 1 and step["valid"]), step
