@@ -364,9 +364,9 @@ def table(results: dict) -> str:
         cells = [row["scan"], row["options"] or "defaults", row["control_faces"], row["patches"], row["cad_faces"],
                  f"{row['rms']:.2e} / {row['p99']:.2e} / {row['max']:.2e}", f"{row['surface_max']:.2e}",
                  f"{row['g1_jump']:.1e}", f"{row['seconds']:.1f} ({row['peak_mb']:.0f})",
-                 f"{base.get('fit_rho') or float('nan'):.3g} / {cc['rho']:.3g}" if cc else "-",
+                 f"{base.get('fit_rho') or float('nan'):.3g} / {cc['rho']:.3g}" if "rho" in cc else "-",
                  f"{control['rms']:.2e} / {control['max']:.2e}" if control else "-",
-                 f"{cc['rms']:.2e} / {cc['max']:.2e}" if cc else "-",
+                 f"{cc['rms']:.2e} / {cc['max']:.2e}" if "rms" in cc else "-",
                  (f"{direct['patches']}, {direct['cad_faces']}, "
                   + (f"{direct['seconds']:.1f} s" if "seconds" in direct else "as above")) if "patches" in direct else "-",
                  f"{step['solids']}, {'yes' if step['valid'] else 'no'}, {step['volume_ratio']:.4f}" if "solids" in step
