@@ -25,7 +25,7 @@ from ..render.deviation import deviation_picture
 from ..render.pictures import colormap, rgb8
 from .common import Progress, UsageFailure, echo_notes, friendly_errors, output_suffix, with_formats
 from .convert import check_tessellation_size, write_mesh, write_patch_files
-from .options import grouped, input_options, patch_file_options, surface_options
+from .options import FiniteFloat, grouped, input_options, patch_file_options, surface_options
 
 DEVIATION_SUFFIXES = (".png", ".ply")
 
@@ -68,12 +68,12 @@ def plan_options(command):
     return grouped(command, "plan", [
         click.option("--faces", type=click.IntRange(8, None), default=None, metavar="N",
                      help="Control faces of the quad remesh of the scan [default: 3000, at most one per two scan triangles]."),
-        click.option("--tolerance", type=float, default=None, metavar="T",
+        click.option("--tolerance", type=FiniteFloat(0.0, 1.0, min_open=True, max_open=True), default=None, metavar="T",
                      help="Grow the control mesh until every scan vertex is within T times the bounding-box "
                           "diagonal of the surface (e.g. 0.001), or --face-cap is reached (a note says so)."),
         click.option("--face-cap", type=click.IntRange(8, 60000), default=6000, show_default=True,
                      help="The most control faces --tolerance may ask for."),
-        click.option("--fairness", type=float, default=FitOptions.fairness, show_default=True,
+        click.option("--fairness", type=FiniteFloat(0.0), default=FitOptions.fairness, show_default=True,
                      help="Weight of the umbrella fairness term that keeps the control mesh from folding where "
                           "the scan has few samples (docs/fit.md)."),
         click.option("--iterations", type=click.IntRange(1, 100), default=FitOptions.max_iterations, show_default=True,
