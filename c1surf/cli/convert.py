@@ -264,20 +264,27 @@ TOLERANCE_BYTES_PER_VERTEX = 160
 def tessellate_within(groups, adjacency, tolerance: float, weights, force: bool, progress: Progress, quiet: bool):
     """``--tolerance``: the tessellation to a chordal tolerance (``evaluation.tolerance``), after the memory guard.
 
-    The plan (segment counts, templates, numbering) comes first and is cheap, so the
-    guard refuses with its exact vertex count; unless ``quiet``, a note gives the
+    The plan (segment counts, templates, numbering) comes first, so the guard refuses
+    with its exact vertex count; before the plan's side counts and templates (which
+    take seconds and GBs at a tolerance far too small) it refuses on a lower bound,
+    the cells of each patch's fewest segments. Unless ``quiet``, a note gives the
     triangle count and the measured chordal error (``chordal.measured_chordal_error``).
     """
     from ..evaluation.tolerance import measured_chordal_error, plan_tolerance, tessellate_plan
 
+    n_patches = sum(len(g) for g in groups)
+
+    def guard(n_vertices: int, at_least: str = "") -> None:
+        needed = (n_patches * BYTES_PER_PATCH + TOLERANCE_BYTES_PER_VERTEX * n_vertices) * WRITER_HEADROOM
+        check_memory(needed, "the tessellation", "raise --tolerance", force,
+                     f" ({at_least}{n_vertices} vertices at --tolerance {tolerance:g})")
+
     progress.phase(f"choosing resolutions for a chordal error within {tolerance:g} of the diagonal")
-    try:
-        plan = plan_tolerance(groups, adjacency, tolerance, weights)
+    try:  # the guard first on a lower bound of the vertices, before the plan's costly steps, then on its count
+        plan = plan_tolerance(groups, adjacency, tolerance, weights, budget=lambda n: guard(n, "at least "))
     except ValueError as e:  # more than MAX_SEGMENTS a side
         raise Failure(f"--tolerance {tolerance:g}: {e}") from None
-    needed = (plan.n_patches * BYTES_PER_PATCH + TOLERANCE_BYTES_PER_VERTEX * plan.n_vertices) * WRITER_HEADROOM
-    check_memory(needed, "the tessellation", "raise --tolerance", force,
-                 f" ({plan.n_vertices} vertices at --tolerance {tolerance:g})")
+    guard(plan.n_vertices)
     progress.phase(f"tessellating {plan.n_patches} patches at 1 to {int(plan.segments.max(initial=1))} segments a side")
     tess = tessellate_plan(groups, plan, weights)
     if not quiet:

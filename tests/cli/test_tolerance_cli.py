@@ -107,3 +107,22 @@ def test_a_tolerance_beyond_the_segment_limit_is_refused(tmp_path):
     assert result.exit_code == 1 and not out.exists()
     [line] = result.stderr.strip().splitlines()
     assert line.startswith("c1surf: error: --tolerance 1e-12: a chordal error of 1e-12 of the diagonal needs more than")
+
+
+def test_the_memory_guard_refuses_a_tiny_tolerance_before_planning_it(tmp_path, monkeypatch):
+    """At 1e-8 the plan's side counts and templates would take seconds and GBs: the guard refuses first, on the
+    cells of each patch's fewest segments (a lower bound of the vertices), and never reaches them."""
+    from c1surf import resources
+    from c1surf.evaluation.tolerance import tessellation
+
+    def never(*args, **kwargs):
+        raise AssertionError("the plan went on past the guard")
+
+    monkeypatch.setattr(resources, "available_memory", lambda: 1 << 30)
+    monkeypatch.setattr(tessellation, "least_triangles", never)
+    out = tmp_path / "x.ply"
+    result = invoke("convert", SAMPLES / "twisted.obj", "-o", out, "--tolerance", "1e-8", "-q")
+    assert result.exit_code == 1 and not out.exists()
+    [line] = result.stderr.strip().splitlines()
+    assert line.startswith("c1surf: error: the tessellation would need about") and "(at least " in line
+    assert "vertices at --tolerance 1e-08" in line and "raise --tolerance, or pass --force" in line

@@ -100,7 +100,7 @@ def corner_diagonal(groups) -> float:
     return float(np.linalg.norm(points.max(axis=0) - points.min(axis=0)))
 
 
-def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=None) -> TolerancePlan:
+def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=None, budget=None) -> TolerancePlan:
     """Segments, side counts, templates and vertex numbering for a relative ``tolerance``.
 
     Parameters
@@ -109,6 +109,8 @@ def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=
     adjacency : PatchAdjacency of the sum p_k patches
     tolerance : float > 0, chordal error relative to the bounding-box diagonal
     weights : None or a list parallel to ``groups`` of (p_k, d_k+1, d_k+1) float (rational, A2a)
+    budget : None or a callable given a lower bound of the vertex count (the cells of the fewest segments each
+        patch needs) before the costly steps (side counts, templates), which may raise to refuse: a memory guard
 
     Returns
     -------
@@ -123,7 +125,10 @@ def plan_tolerance(groups, adjacency: PatchAdjacency, tolerance: float, weights=
     tau = tolerance * diagonal if diagonal > 0 else tolerance
     corners, edges = _compact(adjacency.corners), _compact(adjacency.edges)
     with np.errstate(over="ignore", divide="ignore"):  # a tau near 0 asks for more segments than exist: refused below
-        segments, sides, per_edge = least_triangles(patch_segments(bounds, tau), bounds, tau, edges)
+        fewest = patch_segments(bounds, tau)
+        if budget is not None:  # least_triangles only raises counts: at least one vertex per cell of these
+            budget(int(np.prod(fewest, axis=1).sum()))
+        segments, sides, per_edge = least_triangles(fewest, bounds, tau, edges)
     if np.any(bound(bounds, segments) > tau * (1 + 1e-12)):
         raise ValueError(f"a chordal error of {tolerance:g} of the diagonal needs more than {MAX_SEGMENTS} segments on "
                          "a patch side: give a larger tolerance")
