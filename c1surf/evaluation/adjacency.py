@@ -35,14 +35,13 @@ from functools import cached_property, partial
 
 import numpy as np
 
-from ..mesh.points.clusters import cluster_points as clustered_points, row_ranks
+from ..mesh.points.clusters import cluster_points as clustered_points
 from ..mesh.halfedges import component_roots
 from ..parallel import run_tasks
 from .bezier import bernstein_basis
 from .rational import dehomogenize, homogeneous
+from .sides.matching import SIDE_CORNERS, SideMatching, match_sides
 
-# Corner (start, end) of each side, in increasing parameter.
-SIDE_CORNERS = np.array([[0, 1], [1, 2], [3, 2], [0, 3]])
 
 
 @dataclass(frozen=True)
@@ -429,96 +428,13 @@ def _side_points(patch_groups, weights=None):
     return np.concatenate(corners), np.concatenate(samples)
 
 
-@dataclass(frozen=True)
-class SideMatching:
-    """Patch sides matched by geometry; side s of patch p is the flat side ``4 p + s``.
-
-    corners : (P, 4) int64, a label per corner point (equal labels: the same point)
-    edges : (P, 4) int64, a label per side (equal labels: the same edge)
-    forward : (P, 4) int64, the label of each side's quarter point: two sides of one
-        edge run the same way iff these are equal
-    degenerate : (P, 4) bool, the side's two end corners are one point
-    """
-
-    corners: np.ndarray
-    edges: np.ndarray
-    forward: np.ndarray
-    degenerate: np.ndarray
-
-    @cached_property
-    def _counts(self):
-        """(flat edge label, how many sides have it, usable: not degenerate) per flat side."""
-        flat = self.edges.ravel()
-        return flat, np.bincount(flat)[flat], ~self.degenerate.ravel()
-
-    @cached_property
-    def _shared(self) -> np.ndarray:
-        """Sides of the edges found in exactly two sides, the two of each edge one after the other."""
-        flat, count, usable = self._counts
-        shared = np.flatnonzero((count == 2) & usable)
-        return shared[np.argsort(flat[shared], kind="stable")]
-
-    @property
-    def first(self) -> np.ndarray:
-        """(k,) int, one side of each edge found in exactly two sides (in order of edge label)."""
-        return self._shared[0::2]
-
-    @property
-    def second(self) -> np.ndarray:
-        """(k,) int, the other side of each edge of ``first``."""
-        return self._shared[1::2]
-
-    @property
-    def reversed(self) -> np.ndarray:
-        """(k,) bool, the two sides of an edge run in opposite directions."""
-        forward = self.forward.ravel()
-        return forward[self.first] != forward[self.second]
-
-    @property
-    def lone(self) -> np.ndarray:
-        """(m,) int, sides found in one patch only (the surface's boundary)."""
-        _, count, usable = self._counts
-        return np.flatnonzero((count == 1) & usable)
-
-    @property
-    def overshared(self) -> int:
-        """Edges found in more than two sides (not a surface there)."""
-        flat, count, usable = self._counts
-        return int(np.unique(flat[(count > 2) & usable]).size)
-
-    @property
-    def overshared_sides(self) -> np.ndarray:
-        """(m,) int, the sides (``4 * patch + side``) of the edges found in more than two sides."""
-        flat, count, usable = self._counts
-        return np.flatnonzero((count > 2) & usable)
-
-
-def _match(corners: np.ndarray, samples: np.ndarray, tolerance: float) -> SideMatching:
-    """SideMatching of corners (P, 4, 3) and side points (P, 4, 3, 3), absolute ``tolerance``."""
-    p = corners.shape[0]
-    corner_label = cluster_points(corners.reshape(-1, 3), tolerance).reshape(p, 4)
-    # one cluster over quarter, mid and three-quarter points, so a side's
-    # quarter point can be compared with another side's three-quarter point
-    return _matching(corner_label, cluster_points(samples.reshape(-1, 3), tolerance).reshape(p, 4, 3))
-
-
-def _matching(corner_label: np.ndarray, side_label: np.ndarray) -> SideMatching:
-    """SideMatching of the corners' labels (P, 4) and the side points' (P, 4, 3) (``_match``'s clusters)."""
-    p = corner_label.shape[0]
-    ends = np.sort(corner_label[:, SIDE_CORNERS], axis=-1)  # (P, 4, 2)
-    mid = side_label[..., 1]
-    quarter = np.minimum(side_label[..., 0], side_label[..., 2])
-    key = np.stack([ends[..., 0], ends[..., 1], mid, quarter], axis=-1).reshape(-1, 4)
-    edge_label = row_ranks(key)
-    return SideMatching(corner_label, edge_label.reshape(p, 4), side_label[..., 0], ends[..., 0] == ends[..., 1])
-
-
 def match_patch_sides(patch_groups, tolerance: float, weights=None) -> SideMatching:
     """Find which patch sides are one edge, from the geometry alone.
 
-    Two sides are one edge when their end corners and their mid points
-    coincide (within ``tolerance``) and their quarter points do (in one order
-    or the other); they run the same way when their quarter points coincide.
+    Two sides are one edge when their end corners coincide (within ``tolerance``)
+    and so do their quarter, mid and three-quarter points (in one order or the
+    other); they run the same way when they start at the same corner
+    (``sides.matching``).
 
     Parameters
     ----------
@@ -533,7 +449,7 @@ def match_patch_sides(patch_groups, tolerance: float, weights=None) -> SideMatch
     if not any(len(g) for g in patch_groups):
         empty = np.zeros((0, 4), dtype=np.int64)
         return SideMatching(empty, empty, empty, np.zeros((0, 4), dtype=bool))
-    return _match(*_side_points(patch_groups, weights), tolerance)
+    return match_sides(*_side_points(patch_groups, weights), tolerance)
 
 
 def adjacency_from_geometry(patch_groups, tolerance: float = 1e-9, weights=None) -> PatchAdjacency:
@@ -561,7 +477,7 @@ def adjacency_from_geometry(patch_groups, tolerance: float = 1e-9, weights=None)
     corners, samples = _side_points(patch_groups, weights)
     everything = np.concatenate([corners.reshape(-1, 3), samples.reshape(-1, 3)])
     diagonal = float(np.linalg.norm(everything.max(axis=0) - everything.min(axis=0)))
-    matching = _match(corners, samples, tolerance * diagonal if diagonal > 0 else tolerance)
+    matching = match_sides(corners, samples, tolerance * diagonal if diagonal > 0 else tolerance)
     return _canonical(matching.corners, matching.edges, matching.forward)
 
 

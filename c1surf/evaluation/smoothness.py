@@ -1,8 +1,8 @@
 """Independent smoothness check: find shared patch edges from geometry, measure G1.
 
 Nothing here uses the construction's bookkeeping. Patch sides are matched by
-their end, quarter and mid points (``adjacency.match_patch_sides``, clustered
-with a k-d tree), so a construction bug that puts the wrong coefficients on an
+their end, quarter and mid points (``sides.matching``: the corners clustered,
+the sides of two end points compared), so a construction bug that puts the wrong coefficients on an
 edge shows up as a gap or as an unmatched edge instead of being trusted.
 """
 from __future__ import annotations
@@ -10,10 +10,12 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from .adjacency import SIDE_SAMPLES, _matching, _side_points, cluster_points, side_offsets
+from .adjacency import SIDE_SAMPLES, _side_points, side_offsets
+from .sides.matching import matching_tolerance, sides_of_corners
+from ..mesh.points.clusters import cluster_points
 from .bezier import bernstein_basis, unit_normals
-from .rational import euclidean_derivatives
-from .stream.patches import BLOCK, ArrayPatches, cubic_patches, patch_blocks
+from .rational import euclidean_derivatives, homogeneous
+from .stream.patches import BLOCK, ArrayPatches, patch_blocks
 from .stream.welded import in_order_on_threads
 
 
@@ -67,7 +69,7 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
 
     Parameters
     ----------
-    patches : (p, 4, 4, 3) bicubic coefficients, or with ``rational`` (p, 4, 4, 4)
+    patches : (p, d+1, d+1, 3) coefficients of degree (d, d), or with ``rational`` (p, d+1, d+1, 4)
         homogeneous ones (w x, w): points are then x = H / w and derivatives
         follow the quotient rule (``rational.euclidean_derivatives``)
     curves : (k,) int, ``4 * patch + side`` (sides numbered as ``adjacency.SIDE_CORNERS``)
@@ -78,18 +80,19 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
     -------
     points, normals : (k * m, 3)
     """
+    d = patches.shape[1] - 1
     patch, side = np.divmod(curves, 4)
-    flat = patches.reshape(patches.shape[0] * 16, patches.shape[-1])
-    rows = flat[patch[:, None, None] * 16 + side_offsets(3)[side]]  # (k, 2, 4, d): boundary row, next row inwards
+    flat = patches.reshape(patches.shape[0] * (d + 1) ** 2, patches.shape[-1])
+    rows = flat[patch[:, None, None] * (d + 1) ** 2 + side_offsets(d)[side]]  # (k, 2, d+1, dim): boundary, next row
     if reverse is not None:
         # Running a side backwards reverses its control points; the derivative
         # along the side is taken in the patch's own direction, hence the sign.
         rows = np.where(reverse[:, None, None, None], rows[:, :, ::-1], rows)
-    b, db = bernstein_basis(3, t), bernstein_basis(3, t, 1)
+    b, db = bernstein_basis(d, t), bernstein_basis(d, t, 1)
     # the next row lies at +v on side 0, -u on side 1, -v on side 2, +u on side 3
-    sign_across = np.array([3.0, -3.0, -3.0, 3.0])[side]
+    sign_across = np.array([d, -d, -d, d], dtype=np.float64)[side]
     sign_along = np.where(reverse, -1.0, 1.0)[:, None, None] if reverse is not None else 1.0
-    boundary = np.matmul(b, rows[:, 0])  # (k, m, d)
+    boundary = np.matmul(b, rows[:, 0])  # (k, m, dim)
     along = np.matmul(db, rows[:, 0] * sign_along)
     across = np.matmul(b, (rows[:, 1] - rows[:, 0]) * sign_across[:, None, None])
     if rational:
@@ -149,13 +152,11 @@ def measure_smoothness(patch_groups, weights=None, crease_sides=None, progress=N
     corners, points, diagonal = _side_keys(patches, block, progress)
     if progress is not None:
         progress("matching the patch sides", 0, 1)
-    n, absolute = corners.shape[0], tolerance * max(diagonal, 1e-300)
+    n, absolute = corners.shape[0], matching_tolerance(corners, tolerance * max(diagonal, 1e-300))
     corner_label = cluster_points(corners.reshape(-1, 3), absolute).reshape(n, 4)
-    del corners  # as ``adjacency._match``, each array let go once clustered
-    side_label = cluster_points(points.reshape(-1, 3), absolute).reshape(n, 4, len(SIDE_SAMPLES))
-    del points
-    sides = _matching(corner_label, side_label)
-    del corner_label, side_label
+    del corners  # as ``sides.matching.match_sides``, each array let go as soon as it is used
+    sides = sides_of_corners(corner_label, points, absolute)
+    del corner_label, points
     if progress is not None:
         progress("matching the patch sides", 1, 1)
     first, second = sides.first, sides.second
@@ -243,11 +244,26 @@ class _EdgeMaxima:
 
 def _edge_samples(patches, first, second, reversed_, t, unoriented: bool):
     """(gap, angle) (k * m,) float at the m parameters ``t`` along the k shared edges of sides ``first``, ``second``."""
-    cubic = cubic_patches(patches, np.concatenate([first // 4, second // 4]))
-    local = 4 * np.arange(2 * first.size) + np.concatenate([first % 4, second % 4])
-    xa, na = side_frames(cubic, local[: first.size], t, rational=patches.rational)
-    xb, nb = side_frames(cubic, local[first.size :], t, reversed_, rational=patches.rational)
+    xa, na = _patch_side_frames(patches, first, t, None)
+    xb, nb = _patch_side_frames(patches, second, t, reversed_)
     return np.linalg.norm(xa - xb, axis=1), normal_angles(na, nb, unoriented)
+
+
+def _patch_side_frames(patches, curves: np.ndarray, t: np.ndarray, reverse):
+    """``side_frames`` of sides ``curves`` (k,) (global ``4 * patch + side``) of a patch reader, each at its own
+    patch's degree (biquadratic sides are not raised): points, normals (k * m, 3)."""
+    m = t.size
+    points, normals = np.empty((curves.size * m, 3)), np.empty((curves.size * m, 3))
+    starts = np.concatenate([[0], np.cumsum(patches.counts)])
+    group = np.searchsorted(starts, curves // 4, side="right") - 1
+    for k in np.unique(group):
+        mine = np.flatnonzero(group == k)
+        part, weights = patches.take(int(k), curves[mine] // 4 - starts[k])
+        coefficients = part if weights is None else homogeneous(part, weights)
+        rows = (mine[:, None] * m + np.arange(m)).reshape(-1)
+        points[rows], normals[rows] = side_frames(coefficients, 4 * np.arange(mine.size) + curves[mine] % 4, t,
+                                                  None if reverse is None else reverse[mine], patches.rational)
+    return points, normals
 
 
 def normal_angles(na: np.ndarray, nb: np.ndarray, unoriented: bool = False) -> np.ndarray:

@@ -25,6 +25,7 @@ from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.construction.topology import build_topology
 from c1surf.evaluation.adjacency import patch_adjacency
 from c1surf.evaluation.bezier import raise_degree
+from c1surf.evaluation.sides.matching import matching_tolerance
 from c1surf.evaluation.smoothness import measure_smoothness, normal_angles, side_frames
 from conftest import ROOT
 
@@ -188,6 +189,41 @@ def test_a_cell_of_10000_sides_builds_and_is_g1(make):
     # measured 1.6e-11 (10,000-gon) and 9e-11 rad (valence): the paper's a = c / (1 - c) grows as n^2, so the
     # hole's patches bulge to 1e5 units while its sides are 1e-4 long (a dynamic range of 1e9)
     assert jump < 1e-9
+
+
+@pytest.mark.parametrize("make", [prism, bipyramid])
+def test_a_cell_of_10000_sides_passes_the_geometric_check_at_its_default_tolerance(make):
+    """``check``'s matcher at 1e-9 of the diagonal: the bulging cell spans 1e5 units while its patches near the
+    centre are 1e-4 long, so the matching tolerance is lowered to a thousandth of the shortest side
+    (``sides.matching.matching_tolerance``); every side is then found with its one partner, as the bookkeeping
+    says, and the surface is G1."""
+    sizes, vertices, points = make(10_000)
+    surface = Surface(sizes, vertices, points)
+    report = measure_smoothness([surface.biquadratic, surface.bicubic])
+    assert report.overshared_edges == 0 and report.boundary_edges == 0
+    assert report.shared_edges == 2 * surface.n_patches
+    assert report.is_g1(1e-9, 1e-14)  # measured 1.6e-11 rad (prism), 9e-11 (valence), as side_jumps above
+    corners = np.concatenate([g[:, [0, -1, -1, 0], [0, 0, -1, -1]] for g in (surface.biquadratic, surface.bicubic)])
+    diagonal = report.bbox_diagonal  # of the control points: the inner ones of the hole's patches reach about 1e5
+    assert diagonal > 1e4 and matching_tolerance(corners, 1e-9 * diagonal) < 1e-3 * 1e-9 * diagonal
+
+
+def test_a_10000_gon_converts_and_passes_check_from_the_command_line(tmp_path):
+    """Issue 30's acceptance: ``convert -r 2`` of a 10,000-gon, then ``check`` of its patch file and of the mesh,
+    at the default tolerance."""
+    from click.testing import CliRunner
+
+    from c1surf.cli.main import main
+
+    mesh, patches = tmp_path / "gon.obj", tmp_path / "gon.npz"
+    write_obj(mesh, *prism(10_000))
+    converted = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "gon.ply"), "-r", "2", "-q",
+                                          "--patches", str(patches)])
+    assert converted.exit_code == 0, converted.output
+    for path in (patches, mesh):
+        checked = CliRunner().invoke(main, ["check", str(path), "-q"])
+        assert checked.exit_code == 0 and "G1: yes (tolerance 1e-09)" in checked.stdout, checked.output
+        assert "boundary edges:   0" in checked.stdout and "edges in > 2 patches" not in checked.stdout
 
 
 @pytest.mark.parametrize("make", [prism, bipyramid])

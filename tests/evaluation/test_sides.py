@@ -63,3 +63,25 @@ def test_matcher_without_patches():
     sides = match_patch_sides([np.zeros((0, 3, 3, 3))], 1e-9)
     assert sides.first.size == sides.second.size == sides.lone.size == sides.overshared == 0
     assert adjacency_from_geometry([np.zeros((0, 4, 4, 3))]).n_patches == 0
+
+
+@pytest.mark.parametrize("name", ["cube.obj", "twisted.obj", "high_valence.obj", "torus.obj", "double_torus.obj"])
+def test_the_matching_tolerance_is_the_relative_one_on_ordinary_surfaces(name):
+    """``sides.matching.matching_tolerance`` lowers the tolerance only where patches are small beside it (a cell
+    of thousands of sides): on the sample meshes it is 1e-9 of the diagonal, unchanged; patches 1e-4 wide beside
+    one 1e5 wide get a thousandth of their side, never less than 2^-40 of the largest coordinate."""
+    from c1surf.evaluation.sides.matching import matching_tolerance
+
+    surface = surface_of(SAMPLES / name)
+    corners = np.concatenate([corner_points(g) for g in (surface.biquadratic, surface.bicubic) if len(g)])
+    tolerance = 1e-9 * float(np.linalg.norm(np.ptp(corners.reshape(-1, 3), axis=0)))
+    assert matching_tolerance(corners, tolerance) == tolerance
+    # 10 x 10 patches 1e-4 wide, and one 1e5 wide: a thousandth of 1e-4, above the floor 2^-40 * 1e5 = 9.1e-8
+    x, y = np.meshgrid(np.arange(10) * 1e-4, np.arange(10) * 1e-4, indexing="ij")
+    small = np.stack([np.stack([x, y, 0 * x], -1) + np.array(offset) * 1e-4
+                      for offset in ((0, 0, 0), (1, 0, 0), (1, 1, 0), (0, 1, 0))], axis=2).reshape(-1, 4, 3)
+    big = np.array([[[0.0, 0, 0], [1e5, 0, 0], [1e5, 1e5, 0], [0, 1e5, 0]]])
+    corners = np.concatenate([small, big])
+    assert matching_tolerance(corners, 1e-9 * 1e5 * np.sqrt(2)) == pytest.approx(1e-7, rel=1e-9)
+    halved = np.concatenate([small * 0.5, big])  # a thousandth of 5e-5 is below the floor: the floor
+    assert matching_tolerance(halved, 1e-9 * 1e5 * np.sqrt(2)) == pytest.approx(2.0**-40 * 1e5, rel=1e-9)

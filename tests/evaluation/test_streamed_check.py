@@ -173,6 +173,27 @@ def test_cell_clustering_equals_the_k_d_trees_components(seed):
     assert len(np.unique(expected)) < len(points)  # clusters were found at all
 
 
+@pytest.mark.parametrize("seed", range(3))
+def test_cell_clustering_of_a_crowded_cell_equals_the_k_d_trees_components(seed):
+    """A cell holding thousands of points (a corner where thousands of patches meet): its exact duplicates are
+    linked to their first equal before the pairwise checks, whose count is quadratic in the cell's points; the
+    labels stay those of the k-d tree, also for near (not equal) points and for a crowded cell on a cell face."""
+    rng = np.random.default_rng(seed)
+    tolerance = 1e-6
+    cell = tolerance * CELL_TOLERANCES
+    centre, on_face = np.array([0.3, 0.2, 0.1]) * cell, np.array([1.0, 0.5, 0.5]) * cell
+    crowd = np.repeat(centre[None], 3000, axis=0)
+    crowd[::7] += rng.normal(0.0, 0.2 * tolerance, (len(crowd[::7]), 3))  # near, not equal
+    face = np.repeat(on_face[None], 500, axis=0)
+    face[1::2] -= [0.5 * tolerance, 0.0, 0.0]  # half just across the face: another cell, one cluster
+    apart = centre + np.arange(1, 4)[:, None] * np.array([0.0, 0.0, 3 * tolerance])
+    points = np.concatenate([crowd, face, apart, rng.uniform(-2, 2, (200, 3)) * cell])
+    points = points[rng.permutation(len(points))]
+    expected = _tree_labels(points, tolerance)
+    assert np.array_equal(cluster_points(points, tolerance), expected)
+    assert len(np.unique(expected)) < len(points) - 3000
+
+
 def test_cell_clustering_of_exact_duplicates_and_no_tolerance():
     points = np.array([[0.0, 0.0, 0.0], [-0.0, 0.0, 0.0], [1.0, 2.0, 3.0], [1.0, 2.0, 3.0], [1.0, 2.0, 3.0 + 1e-15]])
     assert cluster_points(points, 0.0).tolist() == [0, 0, 1, 1, 2]

@@ -7,6 +7,10 @@ are hashed by grid cells of ``CELL_TOLERANCES`` tolerances and sorted by hash; t
 points of one hash (their distance checked) and, for the few points within a tolerance of a cell's face
 (whose partner may lie in the next cell), the pairs a k-d tree finds among those points only.
 
+A cell crowded with points equal bit for bit (a corner where thousands of patches meet) has them linked to
+their first equal before the pairwise checks, which grow with the square of a cell's points (the 10,000-gon's
+check: 28.7 s and 6.9 GB before, 2.7 s and 0.4 GB after).
+
 Measured on the sides of a 147,840-patch surface (2.4 M corner and side points), the whole side matching
 (``adjacency._match``): 7.8 s with the k-d tree over all points, 3.4 s this way (the labels identical, as on
 every sample mesh's patch file).
@@ -20,6 +24,7 @@ import numpy as np
 from ...parallel import run_tasks
 
 _CHUNK = 1 << 20  # points (or pairs) of a block of the hashing and of the distance checks
+_LONG_RUN = 64  # points of one cell hash beyond which exact duplicates are taken out first
 CELL_TOLERANCES = 1024.0  # a cell's side in tolerances: a point is near a face with a chance of ~6 / 1024
 _HASH = np.array([0x9E3779B97F4A7C15 - (1 << 64), 0xC2B2AE3D27D4EB4F - (1 << 64), 0x165667B19E3779F9],
                  dtype=np.int64)  # odd multipliers: cells of one hash are rare (and checked by distance anyway)
@@ -39,7 +44,8 @@ def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
     index = np.int32 if n < 2**31 else np.int64  # point ids: half the bytes while they fit
     order = np.argsort(key).astype(index)  # the order within a hash does not matter: every pair of it is tried
     key = key[order]
-    pairs = np.concatenate([_same_cell_pairs(points, key, order, tolerance),
+    duplicates, key, order, near = _without_exact_duplicates(points, key, order, near)
+    pairs = np.concatenate([duplicates, _same_cell_pairs(points, key, order, tolerance),
                             _near_face_pairs(points, near, tolerance).astype(index)])
     del key, near, order
     graph = coo_matrix((np.ones(len(pairs), dtype=np.int8), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
@@ -64,6 +70,37 @@ def _hashes(points: np.ndarray, tolerance: float):
         key[a : a + _CHUNK] = cell.view(np.int64) @ _HASH  # wraps around: a hash
         near.append(np.flatnonzero(((scaled < margin) | (scaled > 1.0 - margin)).any(axis=1)) + a)
     return key, np.concatenate(near)
+
+
+def _without_exact_duplicates(points: np.ndarray, key: np.ndarray, order: np.ndarray, near: np.ndarray):
+    """In runs of one hash longer than ``_LONG_RUN`` (many points in one cell: a corner where thousands of
+    patches meet), the points equal to an earlier one of their run, bit for bit, linked to it and taken out of
+    the pairwise checks, which are quadratic in a run's length (a 10,000-valent corner: 5e7 pairs, 6.8 GB).
+
+    Returns (pairs (m, 2) linking each such point to the first of its equals, key, order and near without them).
+    """
+    first = np.ones(key.size, dtype=bool)
+    np.not_equal(key[1:], key[:-1], out=first[1:])
+    starts = np.flatnonzero(first)
+    lengths = np.diff(np.r_[starts, key.size])
+    long = lengths > _LONG_RUN
+    if not long.any():
+        return np.zeros((0, 2), dtype=order.dtype), key, order, near
+    position = np.flatnonzero(np.repeat(long, lengths))  # sorted positions in long runs
+    run = np.repeat(np.arange(long.sum()), lengths[long])
+    members = order[position]
+    xyz = points[members]
+    by = np.lexsort((xyz[:, 2], xyz[:, 1], xyz[:, 0], run))  # equal points of one run next to each other
+    same = np.zeros(by.size, dtype=bool)
+    same[1:] = (run[by][1:] == run[by][:-1]) & (xyz[by][1:] == xyz[by][:-1]).all(axis=1)
+    representative = by[np.maximum.accumulate(np.where(same, 0, np.arange(by.size)))]  # first of each equal block
+    duplicate = by[same]
+    pairs = np.stack([members[duplicate], members[representative[same]]], axis=1)
+    drop = np.zeros(key.size, dtype=bool)
+    drop[position[duplicate]] = True
+    gone = np.zeros(points.shape[0], dtype=bool)
+    gone[members[duplicate]] = True
+    return pairs, key[~drop], order[~drop], near[~gone[near]]
 
 
 def _same_cell_pairs(points: np.ndarray, key: np.ndarray, order: np.ndarray, tolerance: float) -> np.ndarray:
