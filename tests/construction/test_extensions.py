@@ -999,7 +999,8 @@ def test_merged_bsplines_are_the_biquadratic_patches(case):
 
 def test_merge_writes_bsplines_to_json_and_iges(tmp_path):
     json_path, iges_path = tmp_path / "m.json", tmp_path / "m.igs"
-    result = run("convert", SAMPLES / "twisted.obj", "-o", tmp_path / "m.ply", "--patches", json_path, "--patches", iges_path, "--merge")
+    result = run("convert", SAMPLES / "twisted.obj", "-o", tmp_path / "m.ply", "--patches", json_path, "--patches", iges_path,
+                 "--merge", "--cad-pieces")  # IGES: the pieces whole (by default cut into strips one span wide)
     assert result.exit_code == 0, result.output
     doc = json.loads(json_path.read_text())
     merged = doc["merged"]

@@ -3,9 +3,10 @@
 ``BRepGProp.VolumeProperties_s(shape, props)`` and ``SurfaceProperties_s`` without an accuracy (what
 FreeCAD's ``Shape.Volume`` and gmsh's ``occ.getMass`` call) integrate each face by one Gauss rule along
 each edge's pcurve and one across the face in u, over the whole parameter range, not cut at knots
-(``BRepGProp_Gauss``). ``convert --cad-strips`` makes such rules exact: every packed face is a strip one span
-wide in u, with one edge per span along v (``io.patches.merged.cad_patch_set``, ``brep.edge_chains``). Without it
-(the default: whole merged pieces, 13x fewer faces on spot) spot's default volume is off by 4.8e-4, cube's by 4.4e-3.
+(``BRepGProp_Gauss``). c1surf's default packing makes such rules exact: every packed face is a strip one span
+wide in u, with one edge per span along v on its side u = 1 (``io.patches.merged.cad_patch_set``,
+``brep.edge_chains``). With ``--cad-pieces`` (whole merged pieces, 2.1x fewer faces on spot) spot's default volume
+is off by 4.8e-4, cube's by 4.4e-3.
 
 Every closed sample mesh and spot: volume and area of the packed STEP and IGES solids within 1e-8
 relative of ``c1surf measure`` (measured: 4e-15 for volume, 8e-14 for spot's area, 4e-11 for cube's),
@@ -50,8 +51,8 @@ def default_volume_and_area(shape) -> tuple:
     return volume.Mass(), area.Mass()
 
 
-# spot's STEP in strips has 12,517 faces: writing it and reading it back twice takes minutes (11 on a loaded 2-core
-# machine), more than the whole suite's budget; it runs with C1SURF_SLOW_TESTS=1 (issue 30's note has its numbers)
+# spot's STEP and IGES in strips: Open CASCADE reads each in about 15 s and takes 60-70 s for each default volume and
+# area (more than the whole suite's budget on 2 cores); it runs with C1SURF_SLOW_TESTS=1 (docs/patch-format.md)
 SLOW = pytest.mark.skipif(not os.environ.get("C1SURF_SLOW_TESTS"), reason="minutes: set C1SURF_SLOW_TESTS=1")
 
 
@@ -59,7 +60,7 @@ SLOW = pytest.mark.skipif(not os.environ.get("C1SURF_SLOW_TESTS"), reason="minut
 def test_default_mass_properties_of_packed_files_agree_with_measure(tmp_path, name):
     mesh = shared_mesh(name) if name == SPOT else SAMPLES / name
     step, iges, js = tmp_path / "s.step", tmp_path / "s.igs", tmp_path / "s.json"
-    result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "s.ply"), "-r", "2", "-q", "--cad-strips",
+    result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "s.ply"), "-r", "2", "-q",
                                        "--patches", str(step), "--patches", str(iges), "--patches", str(js)],
                                 catch_exceptions=False)
     assert result.exit_code == 0, result.output

@@ -206,20 +206,25 @@ def test_report_worst_disagreement():
         assert max(WORST.values()) <= 1e-9
 
 
+@pytest.mark.parametrize("pieces", [False, True], ids=["strips", "pieces"])
 @pytest.mark.parametrize("suffix", [".igs", ".step"])
-def test_cad_files_are_packed_by_default(tmp_path, suffix):
-    """Without --merge/--no-merge, IGES and STEP get the merged B-spline faces (few, large), JSON keeps every patch."""
+def test_cad_files_are_packed_by_default(tmp_path, suffix, pieces):
+    """Without --merge/--no-merge, IGES and STEP get the merged B-spline faces, cut into strips one span wide
+    (min(m, n) for an m x n piece) or, with --cad-pieces, one face each; JSON keeps every patch."""
     mesh = SAMPLES / "twisted.obj"
     packed = tmp_path / f"packed{suffix}"
     js = tmp_path / "patches.json"
     result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "m.ply"), "-r", "2", "-q",
-                                       "--patches", str(packed), "--patches", str(js)], catch_exceptions=False)
+                                       "--patches", str(packed), "--patches", str(js)] + ["--cad-pieces"] * pieces,
+                                catch_exceptions=False)
     assert result.exit_code == 0, result.output
     surface = surface_from_file(mesh)[0]
-    pieces = merge_biquadratic(surface)
-    covered = sum(p.patches.size for p in pieces)
-    expected_faces = len(pieces) + len(surface.biquadratic) - covered + len(surface.bicubic)
-    assert expected_faces < surface.n_patches / 2
+    pieces_list = merge_biquadratic(surface)
+    covered = sum(p.patches.size for p in pieces_list if pieces or p.patches.size > 1)
+    faces_of_pieces = (len(pieces_list) if pieces
+                       else sum(min(p.patches.shape) for p in pieces_list if p.patches.size > 1))
+    expected_faces = faces_of_pieces + len(surface.biquadratic) - covered + len(surface.bicubic)
+    assert expected_faces < surface.n_patches / (2 if pieces else 1.9)  # twisted: 165 strips, 320 patches
     if suffix == ".igs":
         face_list = faces(read_iges(packed)[1])
     else:

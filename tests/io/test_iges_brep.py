@@ -1,6 +1,6 @@
 """IGES as a B-rep from c1surf's own topology (io/patches/brep/iges_brep.py), read back by Open CASCADE.
 
-Every closed sample mesh, packed (the default) and with ``--no-merge``, is one
+Every closed sample mesh, in strips (the default), whole pieces and with ``--no-merge``, is one
 valid solid that Open CASCADE's IGES reader builds without any sewing: its
 faces, edges and vertices are those of ``topology.brep_topology``, every edge
 lies in exactly two faces, and every face evaluates to its patches to 1e-12 of
@@ -25,6 +25,7 @@ from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.bezier import evaluate_patches
 from c1surf.evaluation.measure import solid_moments
 from c1surf.evaluation.merge import merge_biquadratic
+from c1surf.io.patches.merged import cad_patch_set
 from c1surf.evaluation.patch_set import surface_patch_set
 from c1surf.evaluation.rational import evaluate_rational
 from c1surf.io.errors import MeshInputError
@@ -75,11 +76,22 @@ def convert(tmp_path, mesh, *options, name="surface.igs"):
     return out
 
 
-def expected_patch_set(mesh, merge: bool):
-    """The patch set convert writes: the surface's patches, with its merged pieces unless --no-merge."""
-    surface = surface_from_file(mesh)[0]
+PACKINGS = ["strips", "pieces", "no-merge"]  # the default, --cad-pieces, --no-merge
+FLAGS = {"strips": [], "pieces": ["--cad-pieces"], "no-merge": ["--no-merge"]}
+
+
+def packed(surface, packing: str):
+    """The surface's patch set as the IGES writer lays it out for ``packing`` (one of PACKINGS)."""
     patch_set = surface_patch_set(surface)
-    return dataclasses.replace(patch_set, merged=merge_biquadratic(surface)) if merge else patch_set
+    if packing == "no-merge":
+        return patch_set
+    patch_set = dataclasses.replace(patch_set, merged=merge_biquadratic(surface))
+    return cad_patch_set(patch_set) if packing == "strips" else patch_set
+
+
+def expected_patch_set(mesh, packing: str):
+    """The patch set convert writes with ``packing``'s flags."""
+    return packed(surface_from_file(mesh)[0], packing)
 
 
 def read_iges(path):
@@ -158,12 +170,12 @@ def occ_volume(shape) -> float:
 # closed meshes: one valid solid
 
 
-@pytest.mark.parametrize("merge", [True, False], ids=["packed", "no-merge"])
+@pytest.mark.parametrize("packing", PACKINGS)
 @pytest.mark.parametrize("name", CLOSED_SAMPLES)
-def test_closed_sample_mesh_is_one_valid_solid_sewn_by_c1surf(tmp_path, name, merge):
+def test_closed_sample_mesh_is_one_valid_solid_sewn_by_c1surf(tmp_path, name, packing):
     mesh = SAMPLES / name
-    path = convert(tmp_path, mesh, *([] if merge else ["--no-merge"]))
-    patch_set = expected_patch_set(mesh, merge)
+    path = convert(tmp_path, mesh, *FLAGS[packing])
+    patch_set = expected_patch_set(mesh, packing)
     topology = iges_brep(patch_set, brep_topology(patch_set).n_faces).topology  # maximal edges
     reader, shape = read_iges(path)
     assert reader.NbRootsForTransfer() == 1  # the solid
@@ -183,10 +195,10 @@ def test_closed_sample_mesh_is_one_valid_solid_sewn_by_c1surf(tmp_path, name, me
 
 
 def test_a_piece_closing_on_itself_has_seams(tmp_path):
-    """The torus packs into one face whose loop uses its two seam edges (closed runs, one vertex) twice each,
-    as Open CASCADE's own tori do; still one valid solid."""
-    path = convert(tmp_path, SAMPLES / "torus.obj")
-    patch_set = expected_patch_set(SAMPLES / "torus.obj", True)
+    """The torus in whole pieces packs into one face whose loop uses its two seam edges (closed runs, one vertex)
+    twice each, as Open CASCADE's own tori do; still one valid solid."""
+    path = convert(tmp_path, SAMPLES / "torus.obj", "--cad-pieces")
+    patch_set = expected_patch_set(SAMPLES / "torus.obj", "pieces")
     topology = iges_brep(patch_set, 1).topology
     assert (topology.n_faces, topology.n_edges, len(topology.vertex_points)) == (1, 2, 1)
     assert np.array_equal(np.bincount(topology.loop_edge), [2, 2]) and np.all(topology.edge_vertices == 0)
@@ -199,15 +211,13 @@ def test_a_piece_closing_on_itself_has_seams(tmp_path):
 # open, rational, several components, inward normals
 
 
-@pytest.mark.parametrize("merge", [True, False], ids=["packed", "no-merge"])
-def test_open_grid_is_one_valid_open_shell(tmp_path, merge):
+@pytest.mark.parametrize("packing", PACKINGS)
+def test_open_grid_is_one_valid_open_shell(tmp_path, packing):
     surface = Surface(*grid(4, lambda x, y: 0.1 * x * y), SurfaceOptions())
-    patch_set = surface_patch_set(surface)
-    if merge:
-        patch_set = dataclasses.replace(patch_set, merged=merge_biquadratic(surface))
+    patch_set = packed(surface, packing)
     topology = iges_brep(patch_set, brep_topology(patch_set).n_faces).topology
     path = tmp_path / "grid.igs"
-    write_patch_set_iges(path, patch_set)
+    write_patch_set_iges(path, patch_set, strips=packing == "strips")  # cutting strips again changes nothing
     entities = _parse_iges(path.read_bytes())["entities"]
     shells = [e for e in entities if e["type"] == 514]
     assert [(e["form"], e["status"]) for e in shells] == [(2, "00000000")]  # open shell (form 2), the root
@@ -223,11 +233,11 @@ def test_open_grid_is_one_valid_open_shell(tmp_path, merge):
     assert_faces_are_the_patches(shape, patch_set, topology)
 
 
-@pytest.mark.parametrize("merge", [True, False], ids=["packed", "no-merge"])
-def test_rational_surface_round_trips(tmp_path, merge):
+@pytest.mark.parametrize("packing", PACKINGS)
+def test_rational_surface_round_trips(tmp_path, packing):
     mesh = weighted_cube(tmp_path, True)
-    path = convert(tmp_path, mesh, *([] if merge else ["--no-merge"]))
-    patch_set = expected_patch_set(mesh, merge)
+    path = convert(tmp_path, mesh, *FLAGS[packing])
+    patch_set = expected_patch_set(mesh, packing)
     assert patch_set.weights is not None
     topology = iges_brep(patch_set, brep_topology(patch_set).n_faces).topology
     _, shape = read_iges(path)
@@ -239,7 +249,7 @@ def test_rational_surface_round_trips(tmp_path, merge):
     assert occ_volume(shape) == pytest.approx(signed_volume(patch_set), rel=1e-8)
     # and c1surf reads its patches and weights back exactly
     back = read_patch_set_iges(path)
-    if not merge:
+    if packing == "no-merge":
         assert all(np.array_equal(a, b) for a, b in zip(back.groups, patch_set.groups))
         assert all(np.array_equal(a, b) for a, b in zip(back.weights, patch_set.weights))
 
@@ -291,8 +301,10 @@ def test_inward_normals_still_give_an_outward_solid(tmp_path):
 def test_entities_reference_each_other_as_iges_5_3_says(tmp_path):
     """Independent of Open CASCADE: every pointer names an entity of the right type, loops close in model
     and parameter space, and edge curves end exactly at their vertices."""
-    for name, options in (("cube", []), ("cube", ["--no-merge"]), ("torus", [])):
-        patch_set = expected_patch_set(SAMPLES / f"{name}.obj", not options)
+    for name, packing in (("cube", "strips"), ("cube", "pieces"), ("cube", "no-merge"), ("torus", "strips"),
+                          ("torus", "pieces")):
+        options = FLAGS[packing]
+        patch_set = expected_patch_set(SAMPLES / f"{name}.obj", packing)
         topology = iges_brep(patch_set, brep_topology(patch_set).n_faces).topology
         entities = _parse_iges(convert(tmp_path, SAMPLES / f"{name}.obj", *options).read_bytes())["entities"]
         by_seq = {e["seq"]: e for e in entities}
@@ -342,7 +354,7 @@ def test_entities_reference_each_other_as_iges_5_3_says(tmp_path):
             for (_, end), (start, _) in zip(uv, uv[1:] + uv[:1]):
                 assert end == start  # ... and in the face's parameter space
         assert len(pcurves) == len(kinds[126]) - topology.n_edges  # every pcurve used, shared where equal
-        if options:
+        if packing == "no-merge":
             assert len(pcurves) == 4  # one per side of the unit square
 
 
@@ -353,7 +365,7 @@ def test_other_layouts_and_the_reader(tmp_path):
     brep = convert(tmp_path, mesh, "--no-merge", name="brep.igs")
     loose = convert(tmp_path, mesh, "--no-merge", "--no-group", name="loose.igs")
     grouped = tmp_path / "grouped.igs"
-    patch_set = expected_patch_set(mesh, False)
+    patch_set = expected_patch_set(mesh, "no-merge")
     write_patch_set_iges(grouped, patch_set, brep=False)
     types = {p.name: [e["type"] for e in _parse_iges(p.read_bytes())["entities"]] for p in (brep, loose, grouped)}
     assert set(types["loose.igs"]) == {128} and set(types["grouped.igs"]) == {128, 402}
@@ -387,8 +399,8 @@ def test_check_and_diff_take_the_brep_files(tmp_path):
 @pytest.mark.parametrize("rational", [False, True])
 def test_edge_polygons_are_the_topology_edge_curves(tmp_path, rational):
     """The writer's gathered polygons equal topology.edge_curves exactly, edge by edge."""
-    for merge in (False, True):
-        patch_set = expected_patch_set(weighted_cube(tmp_path, rational), merge)
+    for packing in PACKINGS:
+        patch_set = expected_patch_set(weighted_cube(tmp_path, rational), packing)
         topology = brep_topology(patch_set)
         points, weights = edge_curves(patch_set, topology)
         seen = np.zeros(topology.n_edges, int)

@@ -20,7 +20,7 @@ from c1surf.evaluation.merge import merge_biquadratic
 from c1surf.evaluation.patch_set import surface_patch_set
 from c1surf.io.meshes.obj import read_obj
 from c1surf.io.patches.formats import load_patch_set, write_patch_set
-from c1surf.io.patches.merged import piece_patches, uncovered_groups
+from c1surf.io.patches.merged import cad_patch_set, piece_patches, uncovered_groups
 
 from conftest import SAMPLES, weighted_cube
 
@@ -81,7 +81,7 @@ def test_iges_gives_back_weights_exactly(tmp_path, rational):
 def test_iges_gives_back_merged_pieces_and_their_patches(tmp_path, rational):
     surface = weighted_surface(rational)
     original = merged_patch_set(surface)
-    write_patch_set(tmp_path / "s.igs", original)
+    write_patch_set(tmp_path / "s.igs", original, strips=False)  # whole pieces (--cad-pieces)
     back = load_patch_set(tmp_path / "s.igs")
     assert_same_pieces(back.merged, original.merged, bookkeeping=False)
     # IGES holds the pieces instead of their patches: the reader cuts them out again, piece by piece
@@ -108,10 +108,11 @@ def test_iges_gives_back_merged_pieces_and_their_patches(tmp_path, rational):
 
 @pytest.mark.parametrize("rational", [False, True])
 def test_convert_merge_writes_pieces_to_every_patch_format(tmp_path, rational):
-    """convert --merge: JSON and NPZ hold every patch and the pieces; IGES the pieces and the rest; all keep weights."""
+    """convert --merge --cad-pieces: JSON and NPZ hold every patch and the pieces; IGES the pieces and the rest;
+    all keep weights."""
     source = weighted_cube(tmp_path, rational)
     paths = [tmp_path / f"s{suffix}" for suffix in (".json", ".npz", ".igs")]
-    args = ["convert", str(source), "-o", str(tmp_path / "s.ply"), "--merge", "-q"]
+    args = ["convert", str(source), "-o", str(tmp_path / "s.ply"), "--merge", "--cad-pieces", "-q"]
     for path in paths:
         args += ["--patches", str(path)]
     assert CliRunner().invoke(main, args, catch_exceptions=False).exit_code == 0
@@ -161,10 +162,12 @@ def step_spans(path) -> tuple[list, np.ndarray]:
     return surfaces, np.array(values)
 
 
-def test_step_writes_rational_faces_and_merged_pieces(tmp_path):
+@pytest.mark.parametrize("strips", [True, False], ids=["strips", "pieces"])
+def test_step_writes_rational_faces_and_merged_pieces(tmp_path, strips):
     surface = weighted_surface(True)
     patch_set = merged_patch_set(surface)
-    write_patch_set(tmp_path / "s.step", patch_set)
+    write_patch_set(tmp_path / "s.step", patch_set, strips=strips)
+    patch_set = cad_patch_set(patch_set) if strips else patch_set  # what the file holds
     surfaces, got = step_spans(tmp_path / "s.step")
     kept, kept_weights = uncovered_groups(patch_set)
     assert len(surfaces) == len(patch_set.merged) + sum(len(g) for g in kept)

@@ -1,6 +1,6 @@
 """STEP built from c1surf's own topology (io/patches/brep/step_brep.py, edge_chains.py), read back by Open CASCADE.
 
-- every closed sample mesh, packed (the default) and with --no-merge, is one valid solid: one
+- every closed sample mesh, in strips (the default), in whole pieces (--cad-pieces) and with --no-merge, is one valid solid: one
   MANIFOLD_SOLID_BREP in the file, ``BRepCheck_Analyzer`` valid, as many faces as the topology
   has, every edge in exactly two faces (a seam: twice in one face, closed on it), every face
   equal to its patches to 1e-12 of the bounding-box diagonal, the volume positive;
@@ -40,6 +40,7 @@ from c1surf.cli.main import main  # noqa: E402
 from c1surf.construction.surface import Surface, SurfaceOptions  # noqa: E402
 from c1surf.evaluation.bezier import evaluate_patches  # noqa: E402
 from c1surf.evaluation.merge import merge_biquadratic  # noqa: E402
+from c1surf.io.patches.merged import cad_patch_set  # noqa: E402
 from c1surf.evaluation.patch_set import PatchSet, surface_patch_set  # noqa: E402
 from c1surf.io.patches.brep.edge_chains import chain_curve, edge_chains, inner_vertices  # noqa: E402
 from c1surf.io.patches.brep.solids import face_components, signed_volumes  # noqa: E402
@@ -59,16 +60,29 @@ UV = np.array([0.0, 0.3, 0.5, 0.77, 1.0])  # parameters per span, span ends incl
 WORST = {}  # what -> largest relative disagreement, for the summary at the end
 
 
-def patch_set_of(surface, merge: bool) -> PatchSet:
+PACKINGS = ["strips", "pieces", "no-merge"]  # the default, --cad-pieces, --no-merge
+FLAGS = {"strips": [], "pieces": ["--cad-pieces"], "no-merge": ["--no-merge"]}
+
+
+def patch_set_of(surface, packing: str) -> PatchSet:
+    """The patch set as the STEP writer lays it out for ``packing`` (one of PACKINGS)."""
     patch_set = surface_patch_set(surface)
-    return dataclasses.replace(patch_set, merged=merge_biquadratic(surface)) if merge else patch_set
+    if packing == "no-merge":
+        return patch_set
+    patch_set = dataclasses.replace(patch_set, merged=merge_biquadratic(surface))
+    return cad_patch_set(patch_set) if packing == "strips" else patch_set
 
 
-def convert_step(tmp_path, mesh, merge: bool):
-    """``convert MESH --patches s.step --patches s.json`` (packed unless ``merge`` is False): the two paths."""
+def write_step(path, patch_set: PatchSet, packing: str) -> None:
+    """``patch_set_of``'s patch set written as it is (strips are not cut again: cutting strips is idempotent)."""
+    write_patch_set_step(path, patch_set, strips=packing == "strips")
+
+
+def convert_step(tmp_path, mesh, packing: str):
+    """``convert MESH --patches s.step --patches s.json`` with ``packing``'s flags: the two paths."""
     step, js = tmp_path / "s.step", tmp_path / "s.json"
     result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "s.ply"), "-r", "2", "-q",
-                                       "--patches", str(step), "--patches", str(js)] + ([] if merge else ["--no-merge"]),
+                                       "--patches", str(step), "--patches", str(js)] + FLAGS[packing],
                                 catch_exceptions=False)
     assert result.exit_code == 0, result.output
     return step, js
@@ -157,13 +171,13 @@ def face_disagreement(shape, patch_set: PatchSet, topology) -> float:
     return worst
 
 
-@pytest.mark.parametrize("merge", [True, False], ids=["packed", "no-merge"])
+@pytest.mark.parametrize("packing", PACKINGS)
 @pytest.mark.parametrize("name", CLOSED_SAMPLES)
-def test_closed_sample_mesh_is_one_valid_solid(tmp_path, name, merge):
+def test_closed_sample_mesh_is_one_valid_solid(tmp_path, name, packing):
     surface = surface_from_file(SAMPLES / name)[0]  # what convert builds
-    patch_set = patch_set_of(surface, merge)
+    patch_set = patch_set_of(surface, packing)
     topology = brep_topology(patch_set)
-    step, _ = convert_step(tmp_path, SAMPLES / name, merge)
+    step, _ = convert_step(tmp_path, SAMPLES / name, packing)
     assert step.read_text().count("MANIFOLD_SOLID_BREP") == 1
     shape = read_step(step)
     assert len(ocp_shapes(shape, TopAbs_SOLID)) == 1 and len(ocp_shapes(shape, TopAbs_SHELL)) == 1
@@ -173,14 +187,14 @@ def test_closed_sample_mesh_is_one_valid_solid(tmp_path, name, merge):
     props = GProp_GProps()
     BRepGProp.VolumeProperties_s(shape, props)
     assert props.Mass() > 0  # the normals point out of the solid
-    WORST[f"faces {name} {'packed' if merge else 'no-merge'}"] = worst = face_disagreement(shape, patch_set, topology)
+    WORST[f"faces {name} {packing}"] = worst = face_disagreement(shape, patch_set, topology)
     assert worst <= 1e-12, worst
 
 
 def test_torus_piece_closes_on_itself_with_two_seams(tmp_path):
-    """The packed torus is one B-spline face that closes in u and in v: two seam edges, each used twice by it."""
+    """The torus in whole pieces is one B-spline face that closes in u and in v: two seam edges, each used twice."""
     surface = surface_from_file(SAMPLES / "torus.obj")[0]
-    patch_set = patch_set_of(surface, True)
+    patch_set = patch_set_of(surface, "pieces")
     topology = brep_topology(patch_set)
     assert topology.n_faces == 1
     shape = brep_shape(patch_set, topology).shape
@@ -188,17 +202,17 @@ def test_torus_piece_closes_on_itself_with_two_seams(tmp_path):
     lists = edge_face_lists(shape)
     assert len(lists) == 2 and all(len(faces) == 2 and faces[0].IsSame(faces[1]) for _, faces in lists)
     assert all(BRep_Tool.IsClosed_s(edge, faces[0]) for edge, faces in lists)
-    write_patch_set_step(tmp_path / "torus.step", patch_set)
+    write_step(tmp_path / "torus.step", patch_set, "pieces")
     back = read_step(tmp_path / "torus.step")
     assert BRepCheck_Analyzer(back).IsValid() and len(ocp_shapes(back, TopAbs_SOLID)) == 1
     assert face_disagreement(back, patch_set, topology) <= 1e-12
 
 
-def open_shell_checks(tmp_path, patch_set: PatchSet) -> None:
+def open_shell_checks(tmp_path, patch_set: PatchSet, packing: str) -> None:
     """The STEP of an open, connected patch set: one valid shell, no solid, boundary edges in one face."""
     topology = brep_topology(patch_set)
     assert not topology.closed
-    write_patch_set_step(tmp_path / "open.step", patch_set)
+    write_step(tmp_path / "open.step", patch_set, packing)
     text = (tmp_path / "open.step").read_text()
     assert "MANIFOLD_SOLID_BREP" not in text and "OPEN_SHELL" in text
     shape = read_step(tmp_path / "open.step")
@@ -212,20 +226,20 @@ def open_shell_checks(tmp_path, patch_set: PatchSet) -> None:
     assert worst <= 1e-12, worst
 
 
-@pytest.mark.parametrize("merge", [True, False], ids=["packed", "no-merge"])
-def test_open_grid_is_one_valid_open_shell(tmp_path, merge):
+@pytest.mark.parametrize("packing", PACKINGS)
+def test_open_grid_is_one_valid_open_shell(tmp_path, packing):
     surface = Surface(*grid(4, lambda x, y: 0.1 * x * y), SurfaceOptions())
-    open_shell_checks(tmp_path, patch_set_of(surface, merge))
+    open_shell_checks(tmp_path, patch_set_of(surface, packing), packing)
 
 
 @pytest.mark.parametrize("name", ["opensubdiv/catmark_chaikin2.obj", "opensubdiv/catmark_hole_test1.obj"])
 def test_open_shared_meshes_are_valid_open_shells(tmp_path, name):
-    """chaikin2: an open tube (packed: one face closing on itself, a seam and two boundary circles); hole_test1:
-    a cube whose hole tags open it."""
+    """chaikin2: an open tube (whole pieces: one face closing on itself, a seam and two boundary circles);
+    hole_test1: a cube whose hole tags open it."""
     surface = surface_from_file(shared_mesh(name))[0]
-    for merge in (True, False):
-        (tmp_path / str(merge)).mkdir()
-        open_shell_checks(tmp_path / str(merge), patch_set_of(surface, merge))
+    for packing in PACKINGS:
+        (tmp_path / packing).mkdir()
+        open_shell_checks(tmp_path / packing, patch_set_of(surface, packing), packing)
 
 
 def two_components_obj(tmp_path, second: str) -> str:
@@ -249,7 +263,7 @@ def two_components_obj(tmp_path, second: str) -> str:
 
 @pytest.mark.parametrize("second", ["tetrahedron.obj", "grid"])
 def test_several_components_are_a_compound_of_solids_and_shells(tmp_path, second):
-    step, _ = convert_step(tmp_path, two_components_obj(tmp_path, second), merge=True)
+    step, _ = convert_step(tmp_path, two_components_obj(tmp_path, second), "strips")
     text = step.read_text()
     shape = read_step(step)
     assert BRepCheck_Analyzer(shape).IsValid()
@@ -272,11 +286,11 @@ def test_inward_normals_give_an_outward_solid(tmp_path):
     flipped = [("f " + " ".join(line.split()[1:][::-1])) if line.startswith("f ") else line for line in lines]
     (tmp_path / "inward.obj").write_text("\n".join(flipped) + "\n")
     surface = surface_from_file(tmp_path / "inward.obj")[0]
-    patch_set = patch_set_of(surface, True)
+    patch_set = patch_set_of(surface, "pieces")
     topology = brep_topology(patch_set)
     volume = signed_volumes(patch_set, topology, face_components(topology))
     assert volume.shape == (1,) and volume[0] < 0
-    write_patch_set_step(tmp_path / "inward.step", patch_set)
+    write_step(tmp_path / "inward.step", patch_set, "pieces")
     shape = read_step(tmp_path / "inward.step")
     assert BRepCheck_Analyzer(shape).IsValid() and len(ocp_shapes(shape, TopAbs_SOLID)) == 1
     props = GProp_GProps()
@@ -284,13 +298,13 @@ def test_inward_normals_give_an_outward_solid(tmp_path):
     assert props.Mass() == pytest.approx(-volume[0], rel=1e-9)
 
 
-@pytest.mark.parametrize("merge", [True, False], ids=["packed", "no-merge"])
-def test_rational_cube_is_one_valid_solid_with_rational_edges(tmp_path, merge):
+@pytest.mark.parametrize("packing", PACKINGS)
+def test_rational_cube_is_one_valid_solid_with_rational_edges(tmp_path, packing):
     surface = surface_from_file(weighted_cube(tmp_path, True))[0]
-    patch_set = patch_set_of(surface, merge)
+    patch_set = patch_set_of(surface, packing)
     assert patch_set.weights is not None
     topology = brep_topology(patch_set)
-    write_patch_set_step(tmp_path / "w.step", patch_set)
+    write_step(tmp_path / "w.step", patch_set, packing)
     assert (tmp_path / "w.step").read_text().count("MANIFOLD_SOLID_BREP") == 1
     shape = read_step(tmp_path / "w.step")
     assert BRepCheck_Analyzer(shape).IsValid()
@@ -343,7 +357,7 @@ def occ_measures(shape):
 
 @pytest.mark.parametrize("name", CLOSED_SAMPLES)
 def test_measure_agrees_with_open_cascade(tmp_path, name):
-    step, js = convert_step(tmp_path, SAMPLES / name, merge=True)
+    step, js = convert_step(tmp_path, SAMPLES / name, "strips")
     ours = json.loads(CliRunner().invoke(main, ["measure", str(js), "--json"], catch_exceptions=False).output)
     area, volume = occ_measures(read_step(step))
     c = volume.CentreOfMass()

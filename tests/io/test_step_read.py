@@ -31,6 +31,7 @@ from c1surf.evaluation.smoothness import measure_smoothness  # noqa: E402
 from c1surf.io.errors import MeshInputError  # noqa: E402
 from c1surf.io.patches.formats import load_patch_set, write_patch_set  # noqa: E402
 from c1surf.io.patches.brep.step_brep import bezier_surface, bspline_surface, occ_classes  # noqa: E402
+from c1surf.io.patches.merged import cad_patch_set  # noqa: E402
 from c1surf.io.patches.step import read_patch_set_step, write_step_shape  # noqa: E402
 
 from conftest import CLOSED_SAMPLES, SAMPLES, weighted_cube  # noqa: E402
@@ -143,10 +144,12 @@ def assert_same_measure(a: dict, b: dict, name: str) -> None:
     assert worst <= 1e-12, (worst, a, b)
 
 
-@pytest.mark.parametrize("merge", [False, True])
+@pytest.mark.parametrize("merge", [False, "pieces", "strips"])
 @pytest.mark.parametrize("rational", [False, True])
 def test_merged_pieces_and_weights_round_trip(tmp_path, rational, merge):
-    step, js = convert(tmp_path, weighted_cube(tmp_path, rational), *(["--merge"] if merge else []))
+    """--no-merge, --merge --cad-pieces and --merge (JSON: the pieces; STEP: the pieces cut into strips)."""
+    flags = {False: [], "pieces": ["--merge", "--cad-pieces"], "strips": ["--merge"]}[merge]
+    step, js = convert(tmp_path, weighted_cube(tmp_path, rational), *flags)
     want, back = load_patch_set(js), load_patch_set(step)
     assert (back.weights is None) == (want.weights is None) == (not rational)
     assert [g.shape for g in back.groups] == [g.shape for g in want.groups]
@@ -164,8 +167,10 @@ def test_merged_pieces_and_weights_round_trip(tmp_path, rational, merge):
             assert turned_distance(h, hg).max() <= 1e-12 * max(diagonal, float(ww.max()))
     WORST[f"cube rational={rational} merge={merge}"] = worst
     assert worst <= 1e-12, worst
-    assert len(back.merged) == len(want.merged) and (len(want.merged) > 0) == merge
-    for piece in want.merged:  # the same B-spline surfaces: pair the pieces by their spans and control nets
+    assert (len(want.merged) > 0) == bool(merge)
+    written = cad_patch_set(want).merged if merge == "strips" else want.merged  # what the STEP file holds
+    assert len(back.merged) == len(written)
+    for piece in written:  # the same B-spline surfaces: pair the pieces by their spans and control nets
         got = min(back.merged, key=lambda p: (p.points.shape != piece.points.shape,
                                               np.abs(p.points.mean(axis=(0, 1)) - piece.points.mean(axis=(0, 1))).max()))
         assert got.points.shape == piece.points.shape and np.abs(got.points - piece.points).max() <= 1e-12 * diagonal

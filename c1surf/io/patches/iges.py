@@ -42,7 +42,7 @@ from .merged import cad_patch_set, is_piece_knots, piece_patches, uncovered_grou
 
 
 def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNITS, group: bool = True,
-                         file_name: str | None = None, brep: bool | None = None, strips: bool = False,
+                         file_name: str | None = None, brep: bool | None = None, strips: bool = True,
                          **_options) -> None:
     """Write ``patch_set`` as IGES 5.3: its merged pieces, then the patches they do not stand for, as a B-rep.
 

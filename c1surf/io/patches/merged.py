@@ -78,17 +78,23 @@ def _turned(piece: MergedPiece) -> MergedPiece:
                        (np.rot90(piece.rotation) + 1) % 4)
 
 
-def strip_pieces(piece: MergedPiece, max_spans: int) -> list:
-    """``piece`` cut into strips one span wide in u and at most ``max_spans`` long in v, turned first where that
-    gives fewer strips: the faces of the CAD B-reps (``io.patches.brep``), see ``cad_patch_set``.
+def strip_pieces(piece: MergedPiece, max_spans: int | None = None) -> list:
+    """``piece`` cut into strips one span wide in u (at most ``max_spans`` long in v; None: the whole length), turned
+    first where that gives fewer strips, every second strip a half turn: the faces of the CAD B-reps
+    (``io.patches.brep``), see ``cad_patch_set``.
+
+    The half turns make neighbouring strips meet u = 1 to u = 1, then u = 0 to u = 0, and so on: a side at u = 0 adds
+    nothing to Open CASCADE's default mass properties, so there the B-rep keeps one edge for the whole line
+    (``brep.edge_chains``), and only every second line needs one edge per span.
 
     Returns
     -------
-    list of MergedPiece, each (3, k + 2) control points, knots 0 0 0 1 1 1 in u and 0 0 0 1 .. k k k in v
-    (k <= max_spans), its patches and rotations those of the spans it covers
+    list of MergedPiece, each (3, k + 2) control points, knots 0 0 0 1 1 1 in u and 0 0 0 1 .. k k k in v,
+    its patches and rotations those of the spans it covers
     """
     m, n = piece.patches.shape
-    if m * -(-n // max_spans) > n * -(-m // max_spans):
+    cap = max(m, n) if max_spans is None else max_spans
+    if m * -(-n // cap) > n * -(-m // cap):
         piece = _turned(piece)
         m, n = n, m
     net = piece.points if piece.weights is None else np.concatenate(
@@ -96,27 +102,27 @@ def strip_pieces(piece: MergedPiece, max_spans: int) -> list:
     out = []
     for i in range(m):
         column = _sub_net(net, i, i + 1)  # (3, n + 2, d)
-        for j0 in range(0, n, max_spans):
-            j1 = min(n, j0 + max_spans)
+        for j0 in range(0, n, cap):
+            j1 = min(n, j0 + cap)
             strip = np.swapaxes(_sub_net(np.swapaxes(column, 0, 1), j0, j1), 0, 1)
             points, weights = strip, None
             if piece.weights is not None:
                 weights = np.ascontiguousarray(strip[..., -1])
                 points = strip[..., :-1] / weights[..., None]
-            out.append(MergedPiece(np.ascontiguousarray(points), weights, clamped_knots(1), clamped_knots(j1 - j0),
-                                   piece.patches[i : i + 1, j0:j1].copy(), piece.rotation[i : i + 1, j0:j1].copy()))
+            strip = MergedPiece(np.ascontiguousarray(points), weights, clamped_knots(1), clamped_knots(j1 - j0),
+                                piece.patches[i : i + 1, j0:j1].copy(), piece.rotation[i : i + 1, j0:j1].copy())
+            out.append(_turned(_turned(strip)) if i % 2 else strip)
     return out
 
 
-CAD_SPANS = 4  # longest strip: Open CASCADE's default integration takes max(8, 6 k) points per edge of a k-span strip
-
-
-def cad_patch_set(patch_set, max_spans: int = CAD_SPANS):
+def cad_patch_set(patch_set, max_spans: int | None = None):
     """``patch_set`` as the IGES and STEP B-reps write it: its merged pieces cut into strips (:func:`strip_pieces`),
     strips of a single span left out (their patch is written as a Bezier face like any uncovered patch).
 
     Why strips: Open CASCADE's default mass properties integrate a face with one Gauss rule across it in u and
     one along each edge, over the whole range (not cut at knots), exact over one span only (docs/patch-format.md).
+    ``max_spans`` caps the strips' length (None: the pieces' whole length; a longer strip makes Open CASCADE take
+    more Gauss points per edge, max(8, 6 k) up to 61, which costs its time, not its accuracy).
     """
     if not patch_set.merged:
         return patch_set

@@ -37,7 +37,7 @@ _FACE_ENTITY = re.compile(rb"=\s*(?:ADVANCED_FACE|FACE_SURFACE)\s*\(")
 _READ_HINT = "reading STEP needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
 
 
-def write_patch_set_step(path, patch_set, *, file_name: str | None = None, strips: bool = False,
+def write_patch_set_step(path, patch_set, *, file_name: str | None = None, strips: bool = True,
                          **_options) -> None:
     """Write ``patch_set`` as STEP AP214: one solid per closed component, one shell per open one.
 

@@ -9,11 +9,12 @@ one edge there: Open CASCADE's STEP reader spends its time per edge (spot:
 A vertex is *inner* to a chain when exactly two distinct edges end there and
 every face loop that passes it goes straight on (the same unit step of its
 domain before and after: not a corner of the face), and, on a strip one span
-wide in u (``convert --cad-strips``), along u: there the sides across v stay
-one edge each, since Open CASCADE's default mass properties integrate along
-each edge with one Gauss rule over its whole parameter range, exact over one
-span only (docs/patch-format.md, *CAD faces as strips*); along u the pcurves
-have dv = 0 and add nothing. Around such a vertex the
+wide in u (the CAD faces, ``merged.cad_patch_set``), along u or on the side
+u = 0: the sides across v at u = 1 stay one edge each, since Open CASCADE's
+default mass properties integrate along each edge with one Gauss rule over
+its whole parameter range, exact over one span only (docs/patch-format.md,
+*CAD faces as strips*); along u the pcurves have dv = 0, and at u = 0 the
+rule across u has length 0, so they add nothing. Around such a vertex the
 two edges split the surface into the two faces on their sides (or one, on a
 boundary), so joining the edges keeps the topology: every chain is used by
 the same faces as each of its edges. Face corners and vertices where three or
@@ -67,7 +68,7 @@ class EdgeChains:
 
 def inner_vertices(topology: BRepTopology) -> np.ndarray:
     """(V,) bool: the vertices inside chains (two distinct edges end there, every loop through it goes straight on,
-    along u on a strip face)."""
+    along u or at u = 0 on a strip face)."""
     n = len(topology.vertex_points)
     ev = topology.edge_vertices
     ends = np.bincount(ev.ravel(), minlength=n)
@@ -77,8 +78,9 @@ def inner_vertices(topology: BRepTopology) -> np.ndarray:
     following = np.arange(len(step)) + 1  # the next entry of the same loop, cyclically
     following[topology.loop_start[1:] - 1] = topology.loop_start[:-1]
     face = np.repeat(np.arange(topology.n_faces), np.diff(topology.loop_start))
-    strip = (topology.face_kind == FACE_PIECE) & (topology.face_size[:, 0] == 1)  # one span wide (--cad-strips)
-    turning = np.any(step != step[following], axis=1) | (strip[face] & (step[:, 1] != 0))  # a corner, a strip's side
+    strip = (topology.face_kind == FACE_PIECE) & (topology.face_size[:, 0] == 1)  # one span wide (CAD strips)
+    right_side = (step[:, 1] != 0) & (topology.loop_uv[:, 0, 0] != 0)  # across v, not at u = 0 (that adds nothing)
+    turning = np.any(step != step[following], axis=1) | (strip[face] & right_side)  # a corner, a strip's u = 1 side
     end = np.where(topology.loop_forward, ev[topology.loop_edge, 1], ev[topology.loop_edge, 0])
     turned = np.zeros(n, dtype=bool)
     turned[end[turning]] = True
