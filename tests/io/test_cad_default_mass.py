@@ -6,7 +6,7 @@ each edge's pcurve and one across the face in u, over the whole parameter range,
 (``BRepGProp_Gauss``). c1surf's default packing makes such rules exact: every packed face is a strip one span
 wide in u, with one edge per span along v on its side u = 1 (``io.patches.merged.cad_patch_set``,
 ``brep.edge_chains``). With ``--cad-pieces`` (whole merged pieces, 2.1x fewer faces on spot) spot's default volume
-is off by 4.8e-4, cube's by 4.4e-3.
+is off by 2.8e-4, cube's by 4.4e-3.
 
 Every closed sample mesh and spot: volume and area of the packed STEP and IGES solids within 1e-8
 relative of ``c1surf measure`` (measured: 4e-15 for volume, 8e-14 for spot's area, 4e-11 for cube's),
