@@ -27,7 +27,9 @@ process for the largest outputs):
 6. fidelity: distances from the input's vertices to each tool's surface and the
    enclosed volume (spot, sword, small tori);
 7. ``--tolerance`` (when this c1surf has it): triangles against the uniform
-   resolution of the same measured chordal error, on the sample meshes and spot.
+   resolution of the same measured chordal error, on the sample meshes and spot;
+   ``check`` of the 100,000-triangle torus's patch file (1.2 M patches) against the
+   ``convert`` that wrote it, the two processes in turn (issue 30's targets).
 8. then (not with --quick or --no-fit) ``bench/fit.py``: ``c1surf fit`` on every scan of ../shared/scans
    against its baselines (issue 29), into bench/fit_results.json; docs/fit.md shows its table.
 
@@ -208,6 +210,29 @@ def measure_default_resolution(inputs, args, repeats: int) -> dict | None:
     return result
 
 
+def measure_check(inputs, args, repeats: int) -> dict | None:
+    """Issue 30: ``convert IN -r 2 --patches x.npz`` then ``check x.npz``, the two processes taken in turn
+    ``repeats`` times (medians), on the 100,000-triangle torus (quick: the largest triangle torus)."""
+    tri = [i for i in inputs if i["kind"] == "triangle torus"]
+    item = next((i for i in tri if i["name"] == DEFAULT_RESOLUTION_INPUT), tri[0] if args.quick and tri else None)
+    if item is None:
+        return None
+    log(f"bench: check of {item['name']}'s patch file against the convert that wrote it ...")
+    npz, ply = Path(args.scratch) / f"check-{os.getpid()}.npz", Path(args.scratch) / f"check-{os.getpid()}.ply"
+    converts, checks = [], []
+    for _ in range(repeats):
+        converts.append(run_c1surf(["convert", item["path"], "-o", ply, "-r", "2", "-q", "--patches", npz], args.timeout))
+        if not converts[-1]["ok"]:
+            break
+        checks.append(run_c1surf(["check", npz, "-q"], args.timeout))
+        if not checks[-1]["ok"]:
+            break
+    npz.unlink(missing_ok=True)
+    ply.unlink(missing_ok=True)
+    return {"input": item["name"], "faces": item["faces"], "convert": median_of(converts),
+            "check": median_of(checks) if checks else {"ok": False, "error": "convert failed", "peak_mb": 0}}
+
+
 def measure_limits(args, repeats: int) -> dict:
     grid = (50, 20) if args.quick else (250, 250)  # 16,000 / 1,000,000 patches
     log("bench: tessellation throughput at N=8, and the numpy limit ...")
@@ -312,6 +337,7 @@ def run(args) -> dict:
     results["runs"] = measure_speed(inputs, tools, args, repeats)
     if "c1surf" in tools:
         results["default_resolution"] = guarded(measure_default_resolution, inputs, args, repeats)
+        results["check"] = guarded(measure_check, inputs, args, repeats)
         limits = guarded(measure_limits, args, repeats)
         results.update(limits if "limit" in limits else {"throughput": limits, "limit": limits})
         results["tolerance"] = guarded(measure_tolerance, inputs, args)

@@ -61,6 +61,7 @@ class Targets:
         self.peak_below("a 4,000,000-quad torus at -r 2: whole-process peak below 8 GB", largest and largest["process"], 8000,
                         why=f"{LARGEST} was not run (--quick or --max-faces)")
         self.flat_per_face()
+        self.check_at_scale()
         self.update_points()
         self.throughput()
         self.measured_only()
@@ -134,6 +135,25 @@ class Targets:
         if not largest["process"]["ok"]:
             note += f"; {LARGEST} did not convert: {largest['process']['error']}"
         self.add(name, round(spread, 2), "<= 1.5", spread <= 1.5 and largest["process"]["ok"], note)
+
+    def check_at_scale(self):
+        """Issue 30: ``check`` of a patch file within 2x the time of the ``convert`` that wrote it, and below its
+        peak + 0.5 GB."""
+        measured = self.results.get("check") or {}
+        convert, check = measured.get("convert", {}), measured.get("check", {})
+        time_name = f"check of the patch file within 2x the convert that wrote it ({measured.get('input', DEFAULT_RESOLUTION_INPUT)}, -r 2, NPZ)"
+        peak_name = "check of the patch file below the convert's peak + 500 MB"
+        if not (convert.get("ok") and check.get("ok")):
+            why = (convert if not convert.get("ok") else check).get("error") or measured.get("error") or "not run"
+            self.missing(time_name, "<= 2", why)
+            self.missing(peak_name, "<= 500 MB more", why)
+            return
+        ratio = check["seconds"] / convert["seconds"]
+        self.add(time_name, round(ratio, 2), "<= 2", ratio <= 2,
+                 f"convert {convert['seconds']:.2f} s, check {check['seconds']:.2f} s (medians of {check['repeats']})")
+        extra = check["peak_mb"] - convert["peak_mb"]
+        self.add(peak_name, round(extra), "<= 500 MB more", extra <= 500,
+                 f"convert {convert['peak_mb']:.0f} MB, check {check['peak_mb']:.0f} MB")
 
     def update_points(self):
         mine = memory_of(self.results, TARGET_QUAD, "c1surf")
