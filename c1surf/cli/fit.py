@@ -144,8 +144,8 @@ def check_outputs(outputs: FitOutputs) -> dict:
 
 
 def cad_face_count(surface: Surface, patch_files) -> int:
-    """The faces of the STEP/IGES file: merged biquadratic rectangles (cut into strips one span wide with
-    --cad-strips, ``io.patches.merged.cad_patch_set``), then every other patch."""
+    """The faces of the STEP/IGES file: merged biquadratic rectangles (cut into strips one span wide unless
+    --cad-pieces, ``io.patches.merged.cad_patch_set``), then every other patch."""
     if patch_files.merge is False:
         return surface.n_patches
     packed = dataclasses.replace(surface_patch_set(surface, ""), merged=merge_biquadratic(surface))

@@ -57,7 +57,7 @@ def write_patch_set_iges(path, patch_set: PatchSet, *, units: str = DEFAULT_UNIT
     brep : the surfaces as the faces of a B-rep built from the patch adjacency
         (``brep.iges_brep``: 186 solids of the closed components, 514 shells, 510 faces, ...);
         None: when ``group``. ``brep=False, group=True``: the surfaces in one 402 group (no B-rep)
-    strips : the merged pieces cut into strips one span wide (``merged.cad_patch_set``, ``convert --cad-strips``)
+    strips : the merged pieces cut into strips one span wide (``merged.cad_patch_set``; False: ``--cad-pieces``)
     """
     refuse_non_finite_patch_set(patch_set, path)
     if strips:  # Open CASCADE's default mass properties exact (io.patches.merged.cad_patch_set)

@@ -45,7 +45,7 @@ def write_patch_set_step(path, patch_set, *, file_name: str | None = None, strip
     shared patch sides are shared edges, nothing is sewn. Weights make rational
     faces; merged pieces are written as B-spline faces in place of their
     patches; ``strips``: cut into strips one span wide first (``merged.cad_patch_set``, ``convert
-    --cad-strips``). Other formats' options (IGES units, ...) do not apply.
+    --cad-pieces`` turns it off). Other formats' options (IGES units, ...) do not apply.
     """
     points = np.concatenate([np.asarray(g, dtype=np.float64)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)]
                             + [np.zeros((0, 3))])
