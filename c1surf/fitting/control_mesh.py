@@ -27,14 +27,12 @@ joined in pairs by short paths near the line (``_bridges``), so a rim becomes a 
 """
 from __future__ import annotations
 
-import os
-import sys
 import time
-from contextlib import contextmanager
 from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..console import quiet_stdout
 from ..construction.features import INFINITELY_SHARP, SharpFeatures
 from ..mesh.feature_edges import feature_edges
 from ..mesh.weld import weld_vertices
@@ -88,24 +86,6 @@ class ControlMesh:
                            self.crease_edges, list(self.notes), dict(self.report))
 
 
-@contextmanager
-def _quiet_stdout():
-    """Silence what C++ code prints on the process's standard output (Instant Meshes' progress)."""
-    sys.stdout.flush()
-    try:
-        saved = os.dup(1)
-    except OSError:  # no file descriptor 1: nothing to silence
-        yield
-        return
-    try:
-        with open(os.devnull, "wb") as null:
-            os.dup2(null.fileno(), 1)
-            yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
-
-
 def _welded_scan(points: np.ndarray, triangles: np.ndarray):
     """The scan with coincident vertices welded (split texture seams would make the remesher see pieces)."""
     sizes, vertices, _, _ = weld_vertices(points, np.full(triangles.shape[0], 3), triangles.ravel())
@@ -141,7 +121,7 @@ def quad_remesh(points: np.ndarray, triangles: np.ndarray, faces: int, crease_an
     options = dict(creaseAngle=float(crease_angle or 0.0), deterministic=True)
     remeshes = 0
     for _ in range(2):
-        with _quiet_stdout():
+        with quiet_stdout():
             quad_points, quads = remesh(verts, tris, target, **options)
         remeshes += 1
         got = quads.shape[0]

@@ -19,13 +19,13 @@ swapped; other surfaces and trimmed faces are refused with one line.
 """
 from __future__ import annotations
 
-import contextlib
 import mmap
 import os
 import re
 
 import numpy as np
 
+from ...console import quiet_stdout
 from ...evaluation.merge import MergedPiece
 from ...evaluation.patch_set import PatchSet
 from ..errors import MeshInputError
@@ -69,7 +69,7 @@ def write_step_shape(path, shape, name: str) -> None:
 
     Interface_Static.SetCVal_s("write.step.schema", "AP214IS")
     Interface_Static.SetCVal_s("write.step.unit", "MM")
-    with _quiet_stdout():  # Open CASCADE prints transfer statistics on stdout
+    with quiet_stdout():  # Open CASCADE prints transfer statistics on stdout
         writer = STEPControl_Writer()
         if writer.Transfer(shape, STEPControl_AsIs) != IFSelect_RetDone:
             raise OutputError(path, "Open CASCADE could not translate the surface to STEP")
@@ -228,7 +228,7 @@ def _read_shape(path):
         raise MeshInputError(str(path), "no such file")
     if os.path.isdir(path):
         raise MeshInputError(str(path), "is a directory, not a patch file")
-    with _quiet_stdout():  # Open CASCADE prints its load statistics on stdout
+    with quiet_stdout():  # Open CASCADE prints its load statistics on stdout
         reader = STEPControl_Reader()
         if reader.ReadFile(os.fspath(path)) != IFSelect_RetDone:
             raise MeshInputError(str(path), "not a STEP file Open CASCADE can read")
@@ -304,26 +304,6 @@ def _check_untrimmed(path, number: int, face, knots_u: np.ndarray, knots_v: np.n
         shown = ", ".join(f"{x:.6g}" for x in bounds)
         raise MeshInputError(str(path), f"face {number} is trimmed (parameter bounds {shown}, {wires} wire(s)): c1surf "
                              "reads only untrimmed faces, each on the whole of its surface")
-
-
-@contextlib.contextmanager
-def _quiet_stdout():
-    """Send file descriptor 1 to /dev/null for the block (C++ output included)."""
-    import sys
-
-    try:
-        sys.stdout.flush()
-        saved = os.dup(1)
-    except (OSError, ValueError, AttributeError):
-        yield
-        return
-    try:
-        with open(os.devnull, "w") as null:
-            os.dup2(null.fileno(), 1)
-        yield
-    finally:
-        os.dup2(saved, 1)
-        os.close(saved)
 
 
 _HEAD_BYTES = 1 << 16  # the header and the first entities (the PRODUCT) of a STEP file
