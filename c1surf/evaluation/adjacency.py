@@ -31,17 +31,15 @@ patch file carries no adjacency, all use it).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import cached_property, partial
+from functools import partial
 
 import numpy as np
 
-from ..mesh.points.clusters import cluster_points as clustered_points
 from ..mesh.halfedges import component_roots
 from ..parallel import run_tasks
 from .bezier import bernstein_basis
 from .rational import dehomogenize, homogeneous
 from .sides.matching import SIDE_CORNERS, SideMatching, match_sides
-
 
 
 @dataclass(frozen=True)
@@ -399,14 +397,8 @@ def side_offsets(d: int) -> np.ndarray:
 # -- the geometric side matcher ---------------------------------------------------------
 
 # Parameters of the points that tell sides apart: a side is one edge with another when their end
-# corners and mid points match, and runs the same way when their quarter points do.
+# corners and these points match, in one order or the other (``sides.matching``).
 SIDE_SAMPLES = np.array([0.25, 0.5, 0.75])
-
-
-def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
-    """(k,) int64 label per point of (k, 3) ``points``; points closer than ``tolerance`` share one
-    (``mesh.points.clusters.cluster_points``: labels in order of each cluster's first point)."""
-    return clustered_points(points, tolerance)
 
 
 def _side_points(patch_groups, weights=None):
@@ -511,4 +503,4 @@ def with_seams(adjacency: PatchAdjacency, seams: np.ndarray, same_direction: np.
 
 
 __all__ = ["PatchAdjacency", "with_seams", "neighbour_rows", "patch_adjacency", "corner_labels", "side_labels", "adjacency_from_labels", "adjacency_from_geometry", "match_patch_sides", "SideMatching",
-           "SIDE_CORNERS", "side_offsets", "side_polygons", "corner_points", "cluster_points"]
+           "SIDE_CORNERS", "side_offsets", "side_polygons", "corner_points"]

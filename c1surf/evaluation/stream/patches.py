@@ -9,10 +9,8 @@ import mmap
 
 import numpy as np
 
-from ..bezier import raise_degree
-from ..rational import homogeneous
 
-__all__ = ["ArrayPatches", "SourcePatches", "StreamedPatchSet", "patch_blocks", "cubic_patches"]
+__all__ = ["ArrayPatches", "SourcePatches", "StreamedPatchSet", "patch_blocks"]
 
 # Patches per block of the checks (bicubic: 12 MB of coefficients, and the side points and frames of a block).
 BLOCK = 1 << 15
@@ -101,20 +99,6 @@ def patch_blocks(patches, size: int):
             yield start + a, k, a, min(a + size, count)
             patches.release()
         start += count
-
-
-def cubic_patches(patches, ids: np.ndarray) -> np.ndarray:
-    """(c, 4, 4, 3) float (or (c, 4, 4, 4) homogeneous (w x, w) for rational patches): patches ``ids`` (c,) int
-    (global ids) raised to bicubic, each computed as the in-memory check computes it (elementwise per patch)."""
-    ids = np.asarray(ids, dtype=np.int64)
-    out = np.empty((ids.size, 4, 4, 4 if patches.rational else 3))
-    starts = np.concatenate([[0], np.cumsum(patches.counts)])
-    group = np.searchsorted(starts, ids, side="right") - 1
-    for k in np.unique(group):
-        mine = np.flatnonzero(group == k)
-        points, weights = patches.take(int(k), ids[mine] - starts[k])
-        out[mine] = raise_degree(points if weights is None else homogeneous(points, weights), 3, 3)
-    return out
 
 
 class StreamedPatchSet:

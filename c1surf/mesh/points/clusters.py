@@ -143,21 +143,4 @@ def _within(points: np.ndarray, a: np.ndarray, b: np.ndarray, tolerance: float) 
     return out
 
 
-def row_ranks(key: np.ndarray) -> np.ndarray:
-    """(k,) int64: the rank of each row of ``key`` (k, 4) non-negative int among its distinct rows, in
-    lexicographic order (``np.unique(key, axis=0, return_inverse=True)[1]``), by ranking the pairs of
-    columns (two int64 sorts instead of one of rows)."""
-    key = np.asarray(key, dtype=np.int64)
-    if key.shape[0] == 0:
-        return np.zeros(0, dtype=np.int64)
-    left, right = _pair_ranks(key[:, 0], key[:, 1]), _pair_ranks(key[:, 2], key[:, 3])
-    return _pair_ranks(left, right)
-
-
-def _pair_ranks(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    """(k,) int64: ranks of the pairs (a, b) of non-negative ints among the distinct pairs, lexicographic."""
-    width = int(b.max()) + 1
-    if int(a.max()) < (1 << 62) // width:  # the pair as one int64, in the same order
-        return np.unique(a * width + b, return_inverse=True)[1].reshape(-1)
-    return np.unique(np.stack([a, b], axis=1), axis=0, return_inverse=True)[1].reshape(-1)
-__all__ = ["cluster_points", "row_ranks", "CELL_TOLERANCES"]
+__all__ = ["cluster_points", "CELL_TOLERANCES"]
