@@ -264,27 +264,65 @@ def _declared_faces(path) -> int:
 
 
 def _surface_net(path, number: int, surface):
-    """Full knot sequences, weights (nu, nv) and control points (nu, nv, 3) of a Bezier or B-spline surface."""
+    """Full knot sequences, weights (nu, nv) and control points (nu, nv, 3) of a Bezier or B-spline surface.
+
+    A periodic B-spline surface comes in its clamped form (:func:`_clamped_seam`).
+    """
     from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 
     if isinstance(surface, Geom_BezierSurface):
         du, dv = surface.UDegree(), surface.VDegree()
         knots_u, knots_v = np.repeat([0.0, 1.0], du + 1), np.repeat([0.0, 1.0], dv + 1)
-    elif isinstance(surface, Geom_BSplineSurface) and not (surface.IsUPeriodic() or surface.IsVPeriodic()):
-        knots_u = np.repeat([surface.UKnot(i) for i in range(1, surface.NbUKnots() + 1)],
-                            [surface.UMultiplicity(i) for i in range(1, surface.NbUKnots() + 1)])
-        knots_v = np.repeat([surface.VKnot(j) for j in range(1, surface.NbVKnots() + 1)],
-                            [surface.VMultiplicity(j) for j in range(1, surface.NbVKnots() + 1)])
-    else:
-        kind = "a periodic B-spline" if isinstance(surface, Geom_BSplineSurface) else f"a {type(surface).__name__}"
-        raise MeshInputError(str(path), f"face {number} is on {kind} surface: c1surf reads only Bezier and B-spline faces "
-                             "(a single Bezier span or a merged c1surf piece)")
+    elif not isinstance(surface, Geom_BSplineSurface):
+        raise MeshInputError(str(path), f"face {number} is on a {type(surface).__name__} surface: c1surf reads only "
+                             "Bezier and B-spline faces (a single Bezier span or a merged c1surf piece)")
     nu, nv = surface.NbUPoles(), surface.NbVPoles()
     poles = [[surface.Pole(i, j) for j in range(1, nv + 1)] for i in range(1, nu + 1)]
     points = np.array([[(p.X(), p.Y(), p.Z()) for p in row] for row in poles], dtype=np.float64).reshape(nu, nv, 3)
     rational = surface.IsURational() or surface.IsVRational()
     weights = np.array([[surface.Weight(i, j) if rational else 1.0 for j in range(1, nv + 1)] for i in range(1, nu + 1)])
+    if isinstance(surface, Geom_BSplineSurface):
+        sides = []
+        for axis, (name, periodic, degree, count, knot, mult) in enumerate((
+                ("u", surface.IsUPeriodic(), surface.UDegree(), surface.NbUKnots(), surface.UKnot, surface.UMultiplicity),
+                ("v", surface.IsVPeriodic(), surface.VDegree(), surface.NbVKnots(), surface.VKnot, surface.VMultiplicity))):
+            values = np.array([knot(i) for i in range(1, count + 1)], dtype=np.float64)
+            mults = np.array([mult(i) for i in range(1, count + 1)], dtype=np.int64)
+            if periodic:
+                mults, points, weights = _clamped_seam(path, number, name, degree, mults, points, weights, axis)
+            sides.append(np.repeat(values, mults))
+        knots_u, knots_v = sides
     return np.asarray(knots_u, np.float64), np.asarray(knots_v, np.float64), weights, points
+
+
+def _clamped_seam(path, number: int, name: str, degree: int, mults: np.ndarray, points: np.ndarray,
+                  weights: np.ndarray, axis: int):
+    """The clamped form along ``axis`` of a B-spline surface periodic along it, whose seam is a knot of
+    multiplicity = degree: the end multiplicities raised to degree + 1 and the first row of the net
+    (``points`` (nu, nv, 3), ``weights`` (nu, nv)) copied after the last; the same surface over the period.
+
+    Open CASCADE's STEP reader makes every B-spline surface that closes on
+    itself within its precision periodic, whatever the file's ``u_closed`` /
+    ``v_closed`` flags say (``ShapeCustom_Surface::ConvertToPeriodic``: "Surface
+    forced to be periodic"): a clamped net whose first and last rows coincide
+    loses its last row and its end knots drop to multiplicity = degree. Each
+    basis function over the period is then the clamped one, so this gives back
+    the net the file holds. A knot vector periodic through the seam
+    (multiplicity below the degree: the surface smooth across it) is refused
+    with its own line: no c1surf surface is one.
+
+    Returns
+    -------
+    mults : (k,) int, points : (nu', nv', 3) float, weights : (nu', nv') float
+    """
+    if mults[0] != degree or mults[-1] != degree:
+        raise MeshInputError(str(path), f"face {number} is on a B-spline surface periodic in {name} through its seam "
+                             f"(seam knot multiplicity {int(mults[0])}, degree {degree}): c1surf reads clamped B-spline "
+                             "faces (a single Bezier span or a merged c1surf piece), closed ones too, not periodic ones")
+    mults = mults.copy()
+    mults[[0, -1]] += 1
+    first = (slice(None),) * axis + (slice(0, 1),)
+    return mults, np.concatenate([points, points[first]], axis=axis), np.concatenate([weights, weights[first]], axis=axis)
 
 
 def _check_untrimmed(path, number: int, face, knots_u: np.ndarray, knots_v: np.ndarray) -> None:
