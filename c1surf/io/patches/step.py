@@ -191,7 +191,8 @@ def _face_nets(path):
     Knots are the full sequences (each value repeated by its multiplicity);
     a reversed face comes with u and v swapped.
     """
-    shape = _read_shape(path)
+    shape, reader = _read_shape(path)
+    transfer = reader.WS().TransferReader()
     from OCP.BRep import BRep_Tool
     from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
     from OCP.TopExp import TopExp_Explorer
@@ -203,7 +204,8 @@ def _face_nets(path):
     while explorer.More():
         number += 1
         face = to_face(explorer.Current())
-        knots_u, knots_v, weights, points = _surface_net(path, number, BRep_Tool.Surface_s(face))
+        knots_u, knots_v, weights, points = _surface_net(path, number, BRep_Tool.Surface_s(face),
+                                                         lambda: _file_net(transfer, face))
         _check_untrimmed(path, number, face, knots_u, knots_v)
         if face.Orientation() == TopAbs_REVERSED:
             knots_u, knots_v, weights, points = knots_v, knots_u, weights.T, points.transpose(1, 0, 2)
@@ -216,7 +218,8 @@ def _face_nets(path):
 
 
 def _read_shape(path):
-    """The shape of a STEP file (Open CASCADE's ``STEPControl_Reader``, every root transferred)."""
+    """The shape of a STEP file (Open CASCADE's ``STEPControl_Reader``, every root transferred) and the
+    reader (its transfer reader knows which entity each face came from)."""
     try:
         import OCP  # noqa: F401
     except ImportError:
@@ -234,7 +237,7 @@ def _read_shape(path):
             raise MeshInputError(str(path), "not a STEP file Open CASCADE can read")
         reader.TransferRoots()
         _refuse_failed_faces(path, reader)
-        return reader.OneShape()
+        return reader.OneShape(), reader
 
 
 def _refuse_failed_faces(path, reader) -> None:
@@ -263,10 +266,11 @@ def _declared_faces(path) -> int:
             return sum(1 for _ in _FACE_ENTITY.finditer(text))
 
 
-def _surface_net(path, number: int, surface):
+def _surface_net(path, number: int, surface, file_net=lambda: None):
     """Full knot sequences, weights (nu, nv) and control points (nu, nv, 3) of a Bezier or B-spline surface.
 
-    A periodic B-spline surface comes in its clamped form (:func:`_clamped_seam`).
+    A periodic B-spline surface comes in its clamped form (:func:`_clamped_seam`), with the file's own net
+    where ``file_net()`` (the face's entity's (points, weights), or None) agrees with it (:func:`_closing_rows`).
     """
     from OCP.Geom import Geom_BezierSurface, Geom_BSplineSurface
 
@@ -292,6 +296,8 @@ def _surface_net(path, number: int, surface):
                 mults, points, weights = _clamped_seam(path, number, name, degree, mults, points, weights, axis)
             sides.append(np.repeat(values, mults))
         knots_u, knots_v = sides
+        if surface.IsUPeriodic() or surface.IsVPeriodic():
+            points, weights = _closing_rows(points, weights, (nu, nv), file_net())
     return np.asarray(knots_u, np.float64), np.asarray(knots_v, np.float64), weights, points
 
 
@@ -306,8 +312,9 @@ def _clamped_seam(path, number: int, name: str, degree: int, mults: np.ndarray, 
     ``v_closed`` flags say (``ShapeCustom_Surface::ConvertToPeriodic``: "Surface
     forced to be periodic"): a clamped net whose first and last rows coincide
     loses its last row and its end knots drop to multiplicity = degree. Each
-    basis function over the period is then the clamped one, so this gives back
-    the net the file holds. A knot vector periodic through the seam
+    basis function over the period is then the clamped one; the copied row is the
+    surface Open CASCADE reads, and :func:`_closing_rows` puts the file's own in
+    its place where it can. A knot vector periodic through the seam
     (multiplicity below the degree: the surface smooth across it) is refused
     with its own line: no c1surf surface is one.
 
@@ -323,6 +330,41 @@ def _clamped_seam(path, number: int, name: str, degree: int, mults: np.ndarray, 
     mults[[0, -1]] += 1
     first = (slice(None),) * axis + (slice(0, 1),)
     return mults, np.concatenate([points, points[first]], axis=axis), np.concatenate([weights, weights[first]], axis=axis)
+
+
+def _closing_rows(points: np.ndarray, weights: np.ndarray, kept: tuple, file_net):
+    """The file's own net in place of ``points`` (nu', nv', 3) and ``weights`` (nu', nv'), the clamped form of a
+    periodic surface whose first ``kept`` (nu, nv) rows and columns Open CASCADE kept, when the file's net
+    ``file_net`` ((nu', nv', 3), (nu', nv')) holds them bit for bit: the rows Open CASCADE dropped (equal to the
+    first within its 1e-7: round-off in c1surf's own files) then come back as written. Otherwise (another length
+    unit, no such entity) the copies of the first rows stand, the surface Open CASCADE reads."""
+    if file_net is None:
+        return points, weights
+    file_points, file_weights = file_net
+    nu, nv = kept
+    if (file_points.shape == points.shape and np.array_equal(file_points[:nu, :nv], points[:nu, :nv])
+            and np.array_equal(file_weights[:nu, :nv], weights[:nu, :nv])):
+        return file_points, file_weights
+    return points, weights
+
+
+def _file_net(transfer, face):
+    """(points (ni, nj, 3), weights (ni, nj)) of the B-spline surface entity ``face`` was read from, as the file
+    writes them, or None (no such entity). Only for the few faces that close on themselves: Python calls per point."""
+    from OCP.StepGeom import StepGeom_BSplineSurface, StepGeom_BSplineSurfaceWithKnotsAndRationalBSplineSurface
+
+    entity = transfer.EntityFromShapeResult(face, 1)
+    geometry = entity.FaceGeometry() if entity is not None and hasattr(entity, "FaceGeometry") else None
+    if not isinstance(geometry, StepGeom_BSplineSurface):
+        return None
+    ni, nj = geometry.NbControlPointsListI(), geometry.NbControlPointsListJ()
+    points = np.array([[[geometry.ControlPointsListValue(i, j).CoordinatesValue(k) for k in (1, 2, 3)]
+                        for j in range(1, nj + 1)] for i in range(1, ni + 1)], dtype=np.float64).reshape(ni, nj, 3)
+    weights = np.ones((ni, nj))
+    if isinstance(geometry, StepGeom_BSplineSurfaceWithKnotsAndRationalBSplineSurface):
+        weights = np.array([[geometry.WeightsDataValue(i, j) for j in range(1, nj + 1)] for i in range(1, ni + 1)],
+                           dtype=np.float64).reshape(ni, nj)
+    return points, weights
 
 
 def _check_untrimmed(path, number: int, face, knots_u: np.ndarray, knots_v: np.ndarray) -> None:
