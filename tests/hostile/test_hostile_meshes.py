@@ -101,11 +101,17 @@ HUGE_COUNTS = [
 ]
 
 
+# the line each PLY case names (ASCII: the header's element line or the face's line; binary: the header's)
+PLY_LINES = {0: 3, 1: 7, 2: 3, 3: 4, 11: 18}
+
+
 @pytest.mark.parametrize("case", range(len(HUGE_COUNTS)))
 def test_huge_declared_counts_and_indices(tmp_path, case):
     suffix, data = HUGE_COUNTS[case]
     result = convert_bytes(tmp_path, data, suffix)
     assert result.exit_code == 1
+    if case in PLY_LINES:
+        assert f"input.ply:{PLY_LINES[case]}: " in result.stderr, result.stderr
 
 
 @pytest.mark.parametrize("value", ["nan", "inf", "-inf", "1e308", "1e309", "-1e400", "1e-320"])

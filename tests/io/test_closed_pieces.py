@@ -89,10 +89,10 @@ def measured(path) -> dict:
     return json.loads(run("measure", path, "--json", "-q"))
 
 
-def assert_reads_back(paths: dict, closed: bool) -> None:
+def assert_reads_back(paths: dict) -> dict:
     """Every file of ``paths`` (suffix -> path, one surface): diff against the NPZ exits 0, check certifies G1,
     measure equals the NPZ's (JSON: bit for bit; IGES and STEP, which hold the pieces and cut the patches out
-    again: to 1e-13, and the same numbers as each other)."""
+    again: to 1e-13, and the same numbers as each other). Returns the NPZ's measure."""
     npz = paths[".npz"]
     want = measured(npz)
     got = {}
@@ -100,12 +100,13 @@ def assert_reads_back(paths: dict, closed: bool) -> None:
         run("diff", npz, path)
         assert "G1: yes" in run("check", path)
         got[suffix] = measured(path)
-        keys = ["area"] + (["volume"] if closed else [])
-        assert got[suffix]["closed"] == closed
+        keys = ["area"] + (["volume"] if want["closed"] else [])
+        assert got[suffix]["closed"] == want["closed"]
         for key in keys:
             assert got[suffix][key] == pytest.approx(want[key], rel=1e-13, abs=0), (suffix, key)
     assert got[".json"] == want
     assert got[".step"] == got[".igs"]  # the same pieces, read back exactly from either CAD format
+    return want
 
 
 def convert_all(tmp_path, mesh, packing: str) -> dict:
@@ -122,7 +123,7 @@ def test_closed_pieces_read_back_in_every_format(tmp_path, name, packing):
     paths = convert_all(tmp_path, mesh, packing)
     closing = periodic_faces(paths[".step"])
     assert closing > 0  # the case this is about: Open CASCADE reads the closing faces periodic
-    assert_reads_back(paths, closed=name == "torus")
+    assert assert_reads_back(paths)["closed"] == (name == "torus")
     # the pieces come back from STEP as the IGES reader gives them (the clamped nets the writer wrote), bit for bit
     iges, step = load_patch_set(paths[".igs"]), load_patch_set(paths[".step"])
     assert len(step.merged) == len(iges.merged) > 0
@@ -181,4 +182,4 @@ def test_fitted_scans_read_back_in_every_format(tmp_path, scan, faces, packing):
     paths = {suffix: tmp_path / f"s{suffix}" for suffix in SUFFIXES}
     patches = [a for p in paths.values() for a in ("--patches", p)]
     run("fit", SCANS / scan, "--faces", faces, "-q", *patches, *PACKINGS[packing])
-    assert_reads_back(paths, closed=True)
+    assert_reads_back(paths)

@@ -444,6 +444,19 @@ PLY_ERRORS = [
      "vertex_indices\nend_header\n3 0 1 2\n", None, ["no 'vertex' element"]),
     ("v 0 0 0\nf 1 2 3\n", None, ["not a PLY file"]),
     ("", None, ["empty"]),
+    # impossible header counts name their element line (3: vertex, 7: face), before anything is allocated
+    (ascii_ply(V3, ["3 0 1 2"], nv=99999999999), 3, ["99,999,999,999 'vertex' elements", "count is wrong"]),
+    (ascii_ply(V3, ["3 0 1 2"], nf=10**23), 7, ["'face' elements", "count is wrong"]),
+    (ascii_ply(V3, ["3 0 1 2"], nv=-3), 3, ["negative element count"]),
+    # a value outside its declared integer type names its line
+    (ascii_ply(V3, ["3 0 1 2", "300 0 1 2"]), 15,
+     ["face 1: the list length 300 of property 'vertex_indices'", "0..255", "'uchar'"]),
+    (ascii_ply(V3, ["-1 0 1 2"]), 14, ["face 0: the list length -1", "0..255"]),
+    (ascii_ply(V3, ["3 0 1 2"], face_prop="property list ushort int vertex_indices").replace("3 0 1 2", "70000 0"),
+     14, ["list length 70000", "0..65535", "'ushort'"]),
+    (ascii_ply(["0 0 0 1", "1 0 0 256", "0 1 0 3"], ["3 0 1 2"], vertex_props=["x", "y", "z"]).replace(
+        "property float z\n", "property float z\nproperty uchar red\n"), 12,
+     ["vertex 1: the value 256 of property 'red'", "0..255"]),
 ]
 
 

@@ -106,6 +106,7 @@ def _open(path: str):
     if negative is not None:
         raise MeshInputError(path, "the header declares a negative element count: fix the header or re-export the "
                                    "file", head[:negative.start()].count(b"\n") + 1)
+    _refuse_impossible_counts(path, head, skip)
     with warnings.catch_warnings():  # numpy's loadtxt on a truncated row: the error that follows says it
         warnings.simplefilter("ignore")
         ply = _load(path, binary, header_lines, sniffed, skip)
@@ -398,11 +399,118 @@ def _load(path: str, binary: bool, header_lines: int, elements, skip: int = 0) -
         raise MeshInputError(
             path, f"cannot read the file ({exc.strerror or exc})") from None
     except (ValueError, TypeError, OverflowError, IndexError) as exc:
+        found = None if binary else _misfit_value(path)  # the line of a list length of 300 as a 'uchar', or -1
+        if found is not None:
+            raise MeshInputError(path, found[1], found[0]) from None
         if "out of bounds" in str(exc) or isinstance(exc, OverflowError):  # numpy: 300 as a uchar list length
             raise MeshInputError(path, "a value does not fit the type the header declares for it (such as a face "
                                        "of 300 corners with a 'uchar' count): fix the value or the header") from None
         raise MeshInputError(path, f"cannot read the PLY data ({exc}): "
                              "re-export the file") from None
+
+
+_PLY_TYPES = {"char", "uchar", "short", "ushort", "int", "uint", "float", "double", "int8", "uint8", "int16", "uint16",
+              "int32", "uint32", "float32", "float64"}
+_INTEGER_RANGES = {name: (int(np.iinfo(t).min), int(np.iinfo(t).max)) for names, t in (
+    (("char", "int8"), np.int8), (("uchar", "uint8"), np.uint8), (("short", "int16"), np.int16),
+    (("ushort", "uint16"), np.uint16), (("int", "int32"), np.int32), (("uint", "uint32"), np.uint32)) for name in names}
+
+
+def _header_elements(head: bytes) -> tuple[list, int]:
+    """The elements a PLY header declares, and the bytes up to the end of its ``end_header`` line.
+
+    Returns
+    -------
+    elements : list of (name, count, line, properties); count an int (any size, any sign), line 1-based,
+        properties a list of (name, count type or None for a scalar, value type)
+    header_bytes : int (0 when there is no end_header line in ``head``, or a line plyfile would refuse:
+        its own error says more)
+    """
+    elements, end = [], re.search(rb"end_header[ \t]*(\r\n|\r|\n|$)", head)
+    if end is None:
+        return [], 0
+    lines = head[:end.start()].replace(b"\r\n", b"\n").replace(b"\r", b"\n").split(b"\n")
+    for number, words in enumerate((line.split() for line in lines), 1):
+        if len(words) == 3 and words[0] == b"element" and re.fullmatch(rb"[+-]?\d+", words[2]):
+            elements.append((words[1].decode("ascii", "replace"), int(words[2]), number, []))
+        elif elements and words[:1] == [b"property"]:
+            typed = [w.decode("ascii", "replace") for w in words[1:]]
+            listed = typed[:1] == ["list"]
+            if len(typed) != (4 if listed else 2) or not set(typed[1:3] if listed else typed[:1]) <= _PLY_TYPES:
+                return [], 0
+            elements[-1][3].append((typed[-1], typed[1] if listed else None, typed[2] if listed else typed[0]))
+        elif words[:1] not in ([], [b"ply"], [b"format"], [b"comment"], [b"obj_info"]):
+            return [], 0
+    return elements, end.end()
+
+
+def _refuse_impossible_counts(path: str, head: bytes, skip: int) -> None:
+    """Refuse, naming its header line, an element count the file cannot hold: every row of an element with a
+    property takes at least one byte after the header, so rows beyond the bytes there are impossible (a count of
+    99999999999 over a 3-line body; also counts beyond 64 bits)."""
+    elements, header_bytes = _header_elements(head[skip:])
+    if not header_bytes:
+        return
+    body = max(os.path.getsize(path) - skip - header_bytes, 0)
+    rows = 0
+    for name, count, line, properties in elements:
+        rows += max(count, 0) if properties else 0
+        if rows > body:
+            raise MeshInputError(path, f"the header declares {count:,} '{name}' elements, more than the {body:,} "
+                                       "bytes after the header can hold (a row takes at least one): the count is "
+                                       "wrong; fix the header or re-export the file", line)
+
+
+def _misfit_value(path: str):
+    """(line, message) of the first value of an ASCII PLY body outside the integer type the header declares for
+    it (a list length of 300 with a 'uchar' count, -1 as a 'uint', a negative list length), or None. Python over the lines: it runs only
+    after the read failed on such a value, to name the line (as the OBJ reader does)."""
+    with open(path, "rb") as fh:
+        head = fh.read(_HEAD_BYTES)
+        skip = 3 if head.startswith(b"\xef\xbb\xbf") else 0
+        elements, header_bytes = _header_elements(head[skip:])
+        fh.seek(skip + header_bytes)
+        body = fh.read().replace(b"\r\n", b"\n").replace(b"\r", b"\n").split(b"\n")
+    first = head[skip:skip + header_bytes].replace(b"\r\n", b"\n").replace(b"\r", b"\n").rstrip(b"\n").count(b"\n") + 2
+    if not header_bytes:
+        return None
+    at = 0  # body line of the element's first row
+    for name, count, _, properties in elements:
+        for row in range(at, min(at + max(count, 0), len(body))):
+            words, k, found = body[row].split(), 0, None
+            for prop, count_type, value_type in properties:
+                if count_type is not None:
+                    wider = f"'property list int {value_type} {prop}'"
+                    found = _misfit(words, k, count_type, f"the list length {{}} of property '{prop}'", wider, 0)
+                    if found is not None or k >= len(words) or not re.fullmatch(rb"[+-]?\d+", words[k]):
+                        break
+                    n = int(words[k])
+                    checks, k = range(k + 1, k + 1 + n), k + 1 + n
+                else:
+                    checks, k = range(k, k + 1), k + 1
+                what, wider = f"the value {{}} of property '{prop}'", f"'property int {prop}'"
+                found = next((f for f in (_misfit(words, j, value_type, what, wider) for j in checks)
+                              if f is not None), None)
+                if found is not None:
+                    break
+            if found is not None:
+                return first + row, f"{name} {row - at}: {found}"
+        at += max(count, 0)
+    return None
+
+
+def _misfit(words: list, k: int, type_name: str, what: str, wider: str, least: int | None = None):
+    """The complaint about token ``k`` of ``words`` when it is a whole number outside ``type_name``'s range (or
+    below ``least``: a list length), naming ``what`` it is and a ``wider`` declaration; else None."""
+    if type_name not in _INTEGER_RANGES or k >= len(words) or not re.fullmatch(rb"[+-]?\d+", words[k]):
+        return None
+    low, high = _INTEGER_RANGES[type_name]
+    low = low if least is None else max(low, least)
+    value = int(words[k])
+    if low <= value <= high:
+        return None
+    return (what.format(value) + f" is outside {low}..{high}, what the header's '{type_name}' allows: fix the "
+            f"line, or declare a wider type in the header (such as {wider})")
 
 
 # plyfile's element error messages -> what to tell the user
