@@ -183,6 +183,7 @@ def fit_document(surface: Surface, report: FitReport, patch_files) -> dict:
                "is_g1": bool(g1.is_g1(1e-9, 1e-9))},
         "fit": {"iterations": result.fit.iterations, "stopped": result.fit.stopped, "solver": result.fit.solver,
                 "history": result.fit.history},
+        "topology": result.topology,
         "rounds": result.rounds, "timings": {**result.timings, **result.fit.timings}, "notes": report.notes,
     }
 
@@ -200,7 +201,17 @@ def summary_lines(document: dict) -> list[str]:
                                   "lies past its rims or over its holes)" if document["surface_over_holes"] else ""),
              f"G1: {'yes' if document['g1']['is_g1'] else 'NO'} (max normal jump {document['g1']['max_normal_jump']:.3e} "
              "rad)"]
+    topology = document.get("topology")
+    if topology:
+        scan, surface = (topology[k] for k in ("scan", "surface"))
+        lines.append(f"topology:         {_counts_text(surface)}" + (" (the scan's)" if not topology["differences"] else
+                                                                      f"; the scan: {_counts_text(scan)}"))
     return lines
+
+
+def _counts_text(counts: dict) -> str:
+    return (f"{counts['components']} component{'s' * (counts['components'] != 1)}, Euler characteristic "
+            f"{counts['euler_characteristic']}, {counts['rims']} rim{'s' * (counts['rims'] != 1)}")
 
 
 def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, fitted: tuple, resolution: int, patch_files,

@@ -10,7 +10,13 @@
 4. with ``tolerance``: while the largest scan-to-surface distance exceeds it, a larger remesh
    (``local_refine.next_face_count``: cheaper than splitting faces, which makes pentagons that need the
    second Doo-Sabin step everywhere), up to ``face_cap`` faces; a note says when the cap stops it;
-5. the two-sided deviation of the final surface (``deviation.two_sided_deviation``).
+5. the two-sided deviation of the final surface (``deviation.two_sided_deviation``);
+6. the topology of the scan and of the surface side by side (``mesh.topology_counts``; the surface's is its
+   control mesh's, less the faces tagged as holes: the construction covers every other face once), with a
+   note on what differs. A component of the scan that no control point lies near (its nearest scan vertex on
+   another component: the remesher made nothing there, or the cleanup dropped it) is named in a note and
+   left out of the fit, whose samples would otherwise pull the rest of the surface towards it; its distances
+   stay in the deviation (``unfitted_components``).
 """
 from __future__ import annotations
 
@@ -20,6 +26,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..construction.surface import Surface, SurfaceOptions
+from ..mesh.halfedges import component_roots
+from ..mesh.topology_counts import compare_topology, topology_counts
 from .control_mesh import ControlMesh, control_mesh_from_scan
 from .deviation import bounding_diagonal, distance_stats, two_sided_deviation
 from .iterate import fit_surface_points, project_scan
@@ -28,7 +36,7 @@ from .options import FitOptions
 from .system import vertex_normals
 
 __all__ = ["ScanFitOptions", "ScanFit", "fit_scan", "default_face_count", "check_scan", "fitting_samples",
-           "curved_midpoints"]
+           "curved_midpoints", "unfitted_components", "fit_topology"]
 
 # control faces when neither --faces nor a control mesh is given. Measured (bench/fit.py, docs/fit.md; RMS / max of
 # the diagonal, scan to surface): 1,000 faces leave the small faceted scans short (goathead 6.4e-4 / 7.0e-3 with
@@ -84,6 +92,7 @@ class ScanFit:
     fit : iterate.FitResult of the last fit; deviation : deviation.Deviation of the final surface
     rounds : list of dict, one per control mesh tried (faces, patches, scan-to-surface max, seconds)
     notes : list of str, ``c1surf: note:`` lines; timings : dict, seconds per stage
+    topology : dict, ``fit_topology``: the scan's and the surface's counts and what differs
     """
 
     surface: Surface
@@ -93,6 +102,7 @@ class ScanFit:
     rounds: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
+    topology: dict = field(default_factory=dict)
 
 
 def default_face_count(n_triangles: int) -> int:
@@ -192,8 +202,10 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
             mesh = control
             _check_encloses(mesh.points, points, diagonal)
         _clock(timings, "control mesh", start)
+        keep, left_out = unfitted_components(points, triangles, mesh.points, diagonal, mesh.n_faces)
+        notes += [n for n in left_out if n not in notes]
         surface, result = _fit_round(points, triangles, (mesh, features if mesh is control else None),
-                                     (surface_options, options.fit), timings, tell)
+                                     (surface_options, options.fit), timings, tell, keep)
         worst = result.history[-1]["relative_max"]
         rounds.append({"faces": mesh.n_faces, "patches": surface.n_patches, "refinements": surface.refinements,
                        "relative_max": worst, "relative_rms": result.history[-1]["relative_rms"],
@@ -207,31 +219,107 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
     tell("measuring the deviation", 0, 1)
     deviation = two_sided_deviation(surface, points, triangles, result.footpoints)
     _clock(timings, "deviation", start)
-    return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings)
+    topology = fit_topology(triangles, points.shape[0], mesh, surface.features)
+    if topology["differences"]:
+        notes.append("the surface's topology differs from the scan's: " + "; ".join(topology["differences"]))
+    return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings, topology)
+
+
+def fit_topology(triangles: np.ndarray, n_points: int, control: ControlMesh, features=None) -> dict:
+    """The ``topology`` of the fit report: ``{"scan": counts, "surface": counts, "differences": [phrases]}``
+    (``mesh.topology_counts``), the surface's from its control mesh less the faces ``features`` tags as holes
+    (the construction makes a surface homeomorphic to the mesh it covers).
+
+    triangles : (t, 3) int, the scan's; n_points : its vertices; control : ControlMesh; features : SharpFeatures
+    """
+    scan = topology_counts(np.full(triangles.shape[0], 3), triangles.ravel(), n_points)
+    sizes, vertices = control.face_sizes, control.face_vertices
+    if features is not None and features.hole_faces.size:
+        kept = np.ones(sizes.size, dtype=bool)
+        kept[features.hole_faces] = False
+        sizes, vertices = sizes[kept], vertices[np.repeat(kept, sizes)]
+    surface = topology_counts(sizes, vertices, control.points.shape[0])
+    return {"scan": scan.as_dict(), "surface": surface.as_dict(), "differences": compare_topology(scan, surface)}
+
+
+def unfitted_components(points: np.ndarray, triangles: np.ndarray, control_points: np.ndarray, diagonal: float,
+                        faces: int, shown: int = 4):
+    """The scan's components that no control point lies near, to leave out of the fit (module docstring, 6).
+
+    A component (vertex-connected triangles) is near the control mesh when it holds the nearest scan vertex of
+    some control point.
+
+    Parameters
+    ----------
+    points : (m, 3) float; triangles : (t, 3) int, the scan
+    control_points : (V, 3) float; diagonal : the scan's bounding-box diagonal; faces : the control faces (notes)
+    shown : how many components a note names (the largest first)
+
+    Returns
+    -------
+    keep : (t,) bool, the triangles to fit, or None when every component is near the control mesh
+    notes : list of str, one line naming the components left out (vertices, triangles, bounding-box centre, size)
+    """
+    from scipy.spatial import cKDTree
+
+    root = component_roots(points.shape[0], triangles[:, [0, 1, 2]].ravel(), triangles[:, [1, 2, 0]].ravel())
+    labels, label = np.unique(root[triangles[:, 0]], return_inverse=True)
+    if labels.size == 1 or control_points.shape[0] == 0:
+        return None, []
+    vertex_label = np.full(points.shape[0], -1, dtype=np.int64)
+    vertex_label[triangles.ravel()] = np.repeat(label.ravel(), 3)
+    near = np.zeros(labels.size, dtype=bool)
+    near[vertex_label[cKDTree(points).query(control_points)[1]]] = True
+    if near.all():
+        return None, []
+    used = vertex_label >= 0
+    low = np.full((labels.size, 3), np.inf)
+    high = np.full((labels.size, 3), -np.inf)
+    np.minimum.at(low, vertex_label[used], points[used])
+    np.maximum.at(high, vertex_label[used], points[used])
+    n_vertices = np.bincount(vertex_label[used], minlength=labels.size)
+    n_triangles = np.bincount(label.ravel(), minlength=labels.size)
+    missing = np.flatnonzero(~near)
+    missing = missing[np.argsort(-n_triangles[missing], kind="stable")]
+    parts = [f"{n_vertices[k]} vertices and {n_triangles[k]} triangles around ({', '.join(f'{c:.4g}' for c in 0.5 * (low[k] + high[k]))}), "
+             f"{np.linalg.norm(high[k] - low[k]) / diagonal:.2g} of the diagonal across" for k in missing[:shown]]
+    more = f" and {missing.size - shown} more" if missing.size > shown else ""
+    note = (f"{missing.size} of the scan's {labels.size} components got no control mesh at {faces} control faces and "
+            f"are left out of the fit (their distances stay in the deviation): {'; '.join(parts)}{more}; fit such a "
+            "part on its own, or ask for more --faces")
+    return ~np.isin(label.ravel(), missing), [note]
 
 
 def _clock(timings: dict, name: str, start: float) -> None:
     timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
 
 
-def _fit_round(points, triangles, control: tuple, options: tuple, timings: dict, tell):
+def _fit_round(points, triangles, control: tuple, options: tuple, timings: dict, tell, keep=None):
     """(Surface, FitResult) of one control mesh: the construction over (ControlMesh, SharpFeatures or None) with
-    (SurfaceOptions, FitOptions), fitted to samples of the scan; the result's deviation is the scan vertices'."""
+    (SurfaceOptions, FitOptions), fitted to samples of the scan (of its triangles ``keep`` ((t,) bool) when not
+    None); the result's deviation is the scan vertices', all of them."""
     (mesh, features), (surface_options, fit_options) = control, options
     start = time.perf_counter()
     surface = _surface(mesh, surface_options, features)
     _clock(timings, "construction", start)
     start = time.perf_counter()
-    samples, sample_triangles = fitting_samples(points, triangles, mesh.n_faces)
+    part = (points, triangles) if keep is None else _compact_scan(points, triangles[keep])
+    samples, sample_triangles = fitting_samples(*part, mesh.n_faces)
     result = fit_surface_points(surface, samples, sample_triangles, fit_options,
                                 progress=lambda label, amount, total: tell(f"fitting {mesh.n_faces} faces", amount,
                                                                            total))
-    if samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
+    if keep is not None or samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
         result.footpoints = project_scan(surface, points, fit_options, None)
         diagonal = bounding_diagonal(points)
         result.history[-1] = {**result.history[-1], **distance_stats(result.footpoints.distance, diagonal)}
     _clock(timings, "fit", start)
     return surface, result
+
+
+def _compact_scan(points: np.ndarray, triangles: np.ndarray):
+    """(points, triangles) of the vertices ``triangles`` use, renumbered."""
+    used, triangles = np.unique(triangles, return_inverse=True)
+    return points[used], triangles.reshape(-1, 3)
 
 
 def _tolerance_stop(options: ScanFitOptions, worst: float, faces: int, given_control: bool):

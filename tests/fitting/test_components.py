@@ -1,0 +1,84 @@
+"""A scan of several components (issue 34): every component fitted, or the ones left out named in a note; the
+fit report's topology side by side with the scan's; the cleanup names the stray components it drops."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from c1surf.fitting.cleanup import clean_control_mesh, cleanup_notes
+from c1surf.fitting.options import FitOptions
+from c1surf.fitting.scan_fit import ScanFitOptions, fit_scan, unfitted_components
+
+from test_control_mesh import quad_sphere
+
+FAR = np.array([3.0, 0.5, 0.0])  # the small sphere's centre
+
+
+def two_spheres(radius: float):
+    """(points, triangles): a unit icosphere (1,280 triangles) and one of ``radius`` (320) centred at ``FAR``."""
+    big = trimesh.creation.icosphere(subdivisions=3)
+    small = trimesh.creation.icosphere(subdivisions=2, radius=radius)
+    small.apply_translation(FAR)
+    both = trimesh.util.concatenate([big, small])
+    return np.asarray(both.vertices), np.asarray(both.faces)
+
+
+def fitted(radius: float, faces: int = 120):
+    points, triangles = two_spheres(radius)
+    options = ScanFitOptions(faces=faces, fit=FitOptions(max_iterations=3))
+    return points, triangles, fit_scan(points, triangles, options)
+
+
+@pytest.mark.parametrize("radius", [0.05, 0.6])
+def test_a_small_component_is_fitted_or_named(radius):
+    """Either outcome is allowed; a silent drop is not. At radius 0.05 (3 % of the diagonal) Instant Meshes makes
+    nothing there at 120 faces: the note names it and the big sphere's fit is not pulled towards it (before, its
+    samples dragged flaps of 0.23 of the diagonal out of the big sphere); at 0.6 both are fitted (at 0.4 the
+    small one is named at 120 faces, fitted at 200)."""
+    points, triangles, fit = fitted(radius)
+    topology = fit.topology
+    assert topology["scan"]["components"] == 2 and topology["scan"]["euler_characteristic"] == 4
+    small = np.arange(len(points)) >= 642  # the big icosphere's 642 vertices come first
+    named = [n for n in fit.notes if "got no control mesh" in n]
+    if topology["surface"]["components"] == 2:  # both fitted
+        assert not named and not topology["differences"]
+        assert fit.deviation.scan_to_surface[small].max() < 0.05 * radius
+    else:
+        (note,) = named
+        assert "642 vertices" not in note and "162 vertices and 320 triangles around (3, 0.5, 0)" in note
+        assert any(n.startswith("the surface's topology differs from the scan's: components: scan 2, surface 1")
+                   for n in fit.notes)
+        big = fit.deviation.scan_to_surface[~small]
+        assert big.max() < 2e-3 * fit.deviation.diagonal  # the big sphere fitted as if alone
+        assert fit.deviation.surface_stats["relative_max"] < 2e-3  # no flap towards the small one
+        # its distances stay in the deviation: each point's distance to the big sphere
+        expected = np.linalg.norm(points[small], axis=1) - 1.0
+        assert np.allclose(fit.deviation.scan_to_surface[small], expected, atol=2e-3 * fit.deviation.diagonal)
+    assert radius != 0.05 or named  # measured: the remesh has nothing at the small one (update when it has)
+    assert radius != 0.6 or not named
+
+
+def test_unfitted_components_are_the_ones_no_control_point_is_near():
+    points, triangles = two_spheres(0.05)
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    keep, notes = unfitted_components(points, triangles, 1.1 * points[:642:7], diagonal, 99)
+    assert keep is not None and np.array_equal(keep, np.arange(len(triangles)) < 1280)
+    assert len(notes) == 1 and "1 of the scan's 2 components got no control mesh at 99 control faces" in notes[0]
+    keep, notes = unfitted_components(points, triangles, np.r_[points[:5], points[-5:]], diagonal, 99)
+    assert keep is None and notes == []
+
+
+def test_the_cleanup_names_the_stray_components_it_drops():
+    """A remesh with a stray 6-quad cube far from a sphere the scan has alone: dropped, and named."""
+    sizes, vertices, points = quad_sphere(4)
+    cube_sizes, cube_vertices, cube_points = quad_sphere(1)
+    all_sizes = np.r_[sizes, cube_sizes]
+    all_vertices = np.r_[vertices, cube_vertices + len(points)]
+    all_points = np.r_[points, 0.1 * cube_points + [5.0, 0.0, 0.0]]
+    scan = trimesh.creation.icosphere(subdivisions=3)
+    out_sizes, _, _, report = clean_control_mesh(all_sizes, all_vertices, all_points,
+                                                 scan=(np.asarray(scan.vertices), np.asarray(scan.faces)))
+    assert report["stray_components"] == 1 and report["stray_faces"] == 6 and out_sizes.size == sizes.size
+    (note,) = cleanup_notes(report)
+    assert "dropped 1 stray components the scan does not have (6 faces, 8 vertices around (5, 0, 0))" in note
