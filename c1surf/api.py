@@ -301,7 +301,8 @@ def write_fit_cage(path, surface: Surface, report: "FitReport", comments=(), nam
     hole tags (``io.meshes.obj_out.write_cage``), read it back as ``convert`` does with ``cage_options`` and
     compare the patches with ``surface``'s, array by array. ``name``: the file the notes name (default ``path``).
 
-    Returns a list of notes: empty when the cage gives the very same bits, else one line saying what differs.
+    Returns a list of notes: empty when the cage gives the very same bits, else one line saying what differs (and
+    the cage is written again with a first line that says so instead of ``comments``' first).
     """
     from .io.meshes.obj_out import write_cage
 
@@ -312,9 +313,13 @@ def write_fit_cage(path, surface: Surface, report: "FitReport", comments=(), nam
             ((surface.biquadratic, again.biquadratic), (surface.bicubic, again.bicubic))]
     if all(same):
         return []
-    return [f"--cage: {name or path} builds a different surface than the fit's ({again.n_patches} patches, "
+    note = (f"--cage: {name or path} builds a different surface than the fit's ({again.n_patches} patches, "
             f"{again.refinements} Doo-Sabin steps against {surface.n_patches} and {surface.refinements}): the "
-            "preparation of a mesh file changed the cage (creases merged, welded or dissolved vertices)"]
+            "preparation of a mesh file changed the cage (creases merged, welded or dissolved vertices)")
+    write_cage(path, control.points, control.face_sizes, control.face_vertices, surface.features,
+               [f"c1surf fit cage: the fitted control mesh; convert does NOT rebuild the fitted surface from it bit "
+                f"for bit ({note[8:]})", *list(comments)[1:]])
+    return [note]
 
 
 def tessellate_surface(surface: Surface, resolution: int = 8, tolerance: float | None = None):

@@ -132,8 +132,10 @@ def test_a_cage_that_does_not_rebuild_the_fit_is_named_in_a_note(ellipsoid_scan,
 
     monkeypatch.setattr(api, "cage_options", wrong)
     surface, report = api.fit_surface(ellipsoid_scan, api_options(), api.SurfaceOptions(refinements="auto"))
-    notes = api.write_fit_cage(tmp_path / "c.obj", surface, report)
+    notes = api.write_fit_cage(tmp_path / "c.obj", surface, report, ["c1surf fit cage: ... bit for bit", "tags"])
     assert len(notes) == 1 and "builds a different surface" in notes[0]
+    first, second = (tmp_path / "c.obj").read_text().splitlines()[:2]
+    assert first.startswith("# c1surf fit cage: the fitted control mesh; convert does NOT rebuild") and second == "# tags"
 
 
 def api_options():
