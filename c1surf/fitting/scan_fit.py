@@ -281,7 +281,9 @@ def unfitted_components(points: np.ndarray, triangles: np.ndarray, control_point
     n_triangles = np.bincount(label.ravel(), minlength=labels.size)
     missing = np.flatnonzero(~near)
     missing = missing[np.argsort(-n_triangles[missing], kind="stable")]
-    parts = [f"{n_vertices[k]} vertices and {n_triangles[k]} triangles around ({', '.join(f'{c:.4g}' for c in 0.5 * (low[k] + high[k]))}), "
+    centre = 0.5 * (low + high)
+    parts = [f"{n_vertices[k]} vertices and {n_triangles[k]} triangles around "
+             f"({', '.join(f'{c:.4g}' for c in centre[k])}), "
              f"{np.linalg.norm(high[k] - low[k]) / diagonal:.2g} of the diagonal across" for k in missing[:shown]]
     more = f" and {missing.size - shown} more" if missing.size > shown else ""
     note = (f"{missing.size} of the scan's {labels.size} components got no control mesh at {faces} control faces and "
