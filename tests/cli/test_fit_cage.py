@@ -2,6 +2,7 @@
 surface bit for bit (issue 34): every array of the patch file equal with ==, the tessellation byte for byte."""
 from __future__ import annotations
 
+import json
 import shlex
 from pathlib import Path
 
@@ -36,9 +37,14 @@ def fit_and_convert(scan, folder: Path, *fit_options, flags=None):
     NPZ archives (fit, convert), the two PLY files' bytes and the convert flags used."""
     cage = folder / "cage.obj"
     result = run("fit", scan, "--iterations", 3, "-r", 4, "--cage", cage, "--patches", folder / "fit.npz",
-                 "-o", folder / "fit.ply", "-q", *fit_options)
+                 "-o", folder / "fit.ply", "--report", folder / "fit.json", "-q", *fit_options)
     assert result.exit_code == 0, result.output
     assert "--cage" not in result.stderr  # no note: the fit checked the cage rebuilds it
+    # a closed scan of one piece, kept: the summary's line and the report's counts side by side
+    assert "topology:         1 component, Euler characteristic 2, 0 rims (the scan's)" in result.stdout
+    topology = json.loads((folder / "fit.json").read_text())["topology"]
+    assert topology["scan"]["euler_characteristic"] == topology["surface"]["euler_characteristic"] == 2
+    assert topology["differences"] == []
     flags = convert_command(cage) if flags is None else flags
     result = run("convert", cage, "-r", 4, "-o", folder / "convert.ply", "--patches", folder / "convert.npz", *flags)
     assert result.exit_code == 0, result.output
