@@ -464,7 +464,8 @@ CLEANUP_WORDS = {
 def _stray_parts_text(report: dict) -> str:
     """The dropped components as the note names them (faces, vertices, bounding-box centre), or ""."""
     parts = report.get("stray_parts") or []
-    return f" ({'; '.join(parts)})" if parts else ""
+    more = f"; and {len(parts) - 4} more" if len(parts) > 4 else ""
+    return f" ({'; '.join(parts[:4])}{more})" if parts else ""
 
 
 def cleanup_notes(report: dict) -> list[str]:
