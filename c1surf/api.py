@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .construction.features import INFINITELY_SHARP
 from .construction.surface import Surface, SurfaceOptions, build_surface
 from .errors import MeshInputError
 from .evaluation.adjacency import patch_adjacency
@@ -291,7 +292,7 @@ def cage_options(surface: Surface) -> tuple:
     file does not merge crease sectors the fit's mesh kept (``prepare.pipeline.prepare_surface_input``)."""
     options = replace(surface.options, refinements=int(surface.refinements))
     features = surface.features
-    sharp = features is not None and bool(np.any(features.crease_sharpness >= 10.0))
+    sharp = features is not None and bool(np.any(features.crease_sharpness >= INFINITELY_SHARP))
     exact = options.exact_creases and not (sharp and surface.topology.crease_sheets is None)
     return replace(options, exact_creases=exact), InputOptions(exact_creases=exact)
 

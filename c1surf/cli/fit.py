@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import click
 import numpy as np
 
-from ..api import FitReport, Surface, cage_options, check_surface, fit_surface, write_fit_cage
+from ..api import FitReport, Surface, SurfaceOptions, cage_options, check_surface, fit_surface, write_fit_cage
 from ..evaluation.merge import merge_biquadratic
 from ..evaluation.patch_set import surface_patch_set
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
@@ -257,10 +257,11 @@ def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, fitted: tuple,
 def convert_flags(surface: Surface) -> str:
     """The ``convert`` options that build ``surface`` again from its cage (``api.cage_options``), as text."""
     options, inputs = cage_options(surface)
-    defaults = {"blend": 0.5, "alpha": 1.0, "beta": 0.0, "tangent_rule": "symmetric", "triangles": "g1"}
+    default = SurfaceOptions()
     flags = [f"--refinements {options.refinements}"]
     flags += [f"--{name.replace('_', '-')} {getattr(options, name)!r}".replace("'", "")
-              for name, value in defaults.items() if getattr(options, name) != value]
+              for name in ("blend", "alpha", "beta", "tangent_rule", "triangles")
+              if getattr(options, name) != getattr(default, name)]
     flags += ["--interpolate-vertices"] if options.interpolate_vertices else []
     flags += ["--g1-creases"] if not inputs.exact_creases and not options.interpolate_vertices else []
     return " ".join(flags)
