@@ -202,8 +202,7 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
             mesh = control
             _check_encloses(mesh.points, points, diagonal)
         _clock(timings, "control mesh", start)
-        keep, left_out = unfitted_components(points, triangles, mesh.points, diagonal, mesh.n_faces)
-        notes += [n for n in left_out if n not in notes]
+        keep, left_out = unfitted_components(points, triangles, mesh.points, diagonal, mesh.n_faces)  # noted below
         surface, result = _fit_round(points, triangles, (mesh, features if mesh is control else None),
                                      (surface_options, options.fit), timings, tell, keep)
         worst = result.history[-1]["relative_max"]
@@ -215,6 +214,7 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
             notes += [stop] if stop else []
             break
         faces = next_face_count(faces, worst / options.tolerance, options.face_cap)
+    notes += left_out  # the last control mesh's
     # a fresh construction at the fitted points: the bits ``convert`` makes of the cage (``update_points``'s
     # reused stages, the Doo-Sabin step's matrix form, round differently in the last bit: 4e-16 on a cylinder)
     start = time.perf_counter()
