@@ -129,7 +129,8 @@ def fit(scan_path, outputs, resolution, plan, control_path, patch_files, surface
     document = fit_document(fitted, report, patch_files)
     for line in summary_lines(document):
         click.echo(line)
-    notes = write_outputs(scan_path, outputs, suffixes, (fitted, report, document), resolution, patch_files, progress)
+    notes = write_outputs(scan_path, outputs, suffixes, (fitted, report, document), resolution, patch_files, progress,
+                          control_path)
     progress.done()
     echo_notes(notes, quiet)
 
@@ -215,15 +216,16 @@ def _counts_text(counts: dict) -> str:
 
 
 def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, fitted: tuple, resolution: int, patch_files,
-                  progress: Progress) -> list:
+                  progress: Progress, control_path=None) -> list:
     """Every output asked for; ``fitted``: (Surface, FitReport, the report's document). All appear together, or none.
-    Returns the notes of the writing (a cage that does not rebuild the fit bit for bit)."""
+    Returns the notes of the writing (a cage that does not rebuild the fit bit for bit). No output may overwrite
+    the scan or ``control_path`` (``--control-mesh``: a cage fitted again is written under another name)."""
     surface, report, document = fitted
     notes = []
     with contextlib.ExitStack() as files:
         def target(path):
             progress.phase(f"writing {path}")
-            return files.enter_context(atomic_output(path, inputs=[scan_path]))
+            return files.enter_context(atomic_output(path, inputs=[p for p in (scan_path, control_path) if p]))
 
         if outputs.cage:
             notes = write_fit_cage(target(outputs.cage), surface, report, cage_comments(surface, outputs.cage),

@@ -191,3 +191,16 @@ def test_a_cage_that_is_not_obj_is_one_line(ellipsoid_scan, tmp_path):
     lines = result.stderr.strip().splitlines()
     assert result.exit_code != 0 and len(lines) == 1 and lines[0].startswith("c1surf: error: ") and "--cage" in lines[0]
     assert not (tmp_path / "cage.ply").exists()
+
+
+def test_the_cage_never_overwrites_the_control_mesh_it_was_fitted_with(ellipsoid_scan, tmp_path):
+    first = tmp_path / "first.obj"
+    assert run("fit", ellipsoid_scan, "--faces", 60, "--iterations", 1, "--cage", first).exit_code == 0
+    before = first.read_bytes()
+    result = run("fit", ellipsoid_scan, "--control-mesh", first, "--iterations", 1, "--cage", first)
+    lines = result.stderr.strip().splitlines()
+    assert result.exit_code != 0 and lines[-1].startswith("c1surf: error: ") and first.read_bytes() == before
+    second = tmp_path / "second.obj"  # fitted again from its own cage: the same connectivity
+    assert run("fit", ellipsoid_scan, "--control-mesh", first, "--iterations", 1, "--cage", second).exit_code == 0
+    assert [line for line in second.read_text().splitlines() if line.startswith("f ")] == \
+        [line for line in before.decode().splitlines() if line.startswith("f ")]
