@@ -86,6 +86,8 @@ def run_fit(scan: Path, work: Path, name: str, extra: list, timeout: float) -> d
                surface_rms=b["relative_rms"], surface_max=b["relative_max"],
                g1_jump=document["g1"]["max_normal_jump"], is_g1=document["g1"]["is_g1"],
                iterations=document["fit"]["iterations"], notes=document["notes"],
+               topology={k: [document["topology"][k][c] for c in ("components", "euler_characteristic", "rims")]
+                         for k in ("scan", "surface")} if "topology" in document else None,
                step_bytes=files["step"].stat().st_size if files["step"].exists() else 0,
                files={"npz": str(files["npz"]), "step": str(files["step"]), "deviation": str(picture),
                       "report": str(report)})
@@ -403,6 +405,10 @@ def check_targets(results: dict) -> list[str]:
                       ("seconds", row["seconds"], TARGETS["seconds"]), ("peak MB", row["peak_mb"], TARGETS["peak_mb"])]
         for what, value, goal in checks:
             lines.append(f"[{'met' if value <= goal else 'not met'}] {row['label']} {what}: {value:.3g} (goal <= {goal:g})")
+        if row.get("topology"):  # issue 34: components, Euler characteristic, rims kept
+            scan, surface = row["topology"]["scan"], row["topology"]["surface"]
+            lines.append(f"[{'met' if scan == surface else 'not met'}] {row['label']} topology (components, Euler "
+                         f"characteristic, rims): scan {scan}, surface {surface}")
         step = row.get("baselines", {}).get("step", {})
         if "solids" in step:
             lines.append(f"[{'met' if step['solids'] == 1 and step['valid'] else 'not met'}] {row['label']} STEP: "

@@ -20,6 +20,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .construction.features import INFINITELY_SHARP
 from .construction.surface import Surface, SurfaceOptions, build_surface
 from .errors import MeshInputError
 from .evaluation.adjacency import patch_adjacency
@@ -42,7 +43,7 @@ from .prepare.options import NON_MANIFOLD_RULES, InputOptions
 from .prepare.pipeline import prepare_mesh
 
 __all__ = ["load_surface", "load_patches", "prepared_input", "surface_from_file", "fit_surface", "read_scan",
-           "FitReport", "tessellate_surface", "check_surface",
+           "FitReport", "cage_options", "write_fit_cage", "tessellate_surface", "check_surface",
            "build_surface", "Surface", "SurfaceOptions", "InputOptions", "LoadReport", "PreparedInput",
            "NON_MANIFOLD_RULES", "repair_notes", "seam_notes", "topology_error"]
 
@@ -281,6 +282,45 @@ class FitReport:
     scan_triangles: np.ndarray
     fit: object
     notes: list = field(default_factory=list)
+
+
+def cage_options(surface: Surface) -> tuple:
+    """(SurfaceOptions, InputOptions) with which ``load_surface`` builds a fitted ``surface`` again from its cage
+    (``write_fit_cage``): the Doo-Sabin steps it took (``refinements="auto"`` chooses them from the same mesh,
+    the number says it without the choice), and ``exact_creases=False`` where its infinitely sharp creases
+    made no C0 seam (no crease sheet: every one is the sharpest G1 crease), so that the preparation of a mesh
+    file does not merge crease sectors the fit's mesh kept (``prepare.pipeline.prepare_surface_input``)."""
+    options = replace(surface.options, refinements=int(surface.refinements))
+    features = surface.features
+    sharp = features is not None and bool(np.any(features.crease_sharpness >= INFINITELY_SHARP))
+    exact = options.exact_creases and not (sharp and surface.topology.crease_sheets is None)
+    return replace(options, exact_creases=exact), InputOptions(exact_creases=exact)
+
+
+def write_fit_cage(path, surface: Surface, report: "FitReport", comments=(), name=None) -> list:
+    """Write the fitted control mesh of ``report`` (``fit_surface``) as an OBJ cage with its crease, corner and
+    hole tags (``io.meshes.obj_out.write_cage``), read it back as ``convert`` does with ``cage_options`` and
+    compare the patches with ``surface``'s, array by array. ``name``: the file the notes name (default ``path``).
+
+    Returns a list of notes: empty when the cage gives the very same bits, else one line saying what differs (and
+    the cage is written again with a first line that says so instead of ``comments``' first).
+    """
+    from .io.meshes.obj_out import write_cage
+
+    control = report.fit.control
+    write_cage(path, control.points, control.face_sizes, control.face_vertices, surface.features, comments)
+    again, _ = load_surface(path, *cage_options(surface))
+    same = [a.shape == b.shape and np.array_equal(a, b) for a, b in
+            ((surface.biquadratic, again.biquadratic), (surface.bicubic, again.bicubic))]
+    if all(same):
+        return []
+    note = (f"--cage: {name or path} builds a different surface than the fit's ({again.n_patches} patches, "
+            f"{again.refinements} Doo-Sabin steps against {surface.n_patches} and {surface.refinements}): the "
+            "preparation of a mesh file changed the cage (creases merged, welded or dissolved vertices)")
+    write_cage(path, control.points, control.face_sizes, control.face_vertices, surface.features,
+               [f"c1surf fit cage: the fitted control mesh; convert does NOT rebuild the fitted surface from it bit "
+                f"for bit ({note[8:]})", *list(comments)[1:]])
+    return [note]
 
 
 def tessellate_surface(surface: Surface, resolution: int = 8, tolerance: float | None = None):

@@ -10,7 +10,7 @@ from dataclasses import dataclass
 import click
 import numpy as np
 
-from ..api import FitReport, Surface, check_surface, fit_surface
+from ..api import FitReport, Surface, SurfaceOptions, cage_options, check_surface, fit_surface, write_fit_cage
 from ..evaluation.merge import merge_biquadratic
 from ..evaluation.patch_set import surface_patch_set
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
@@ -33,19 +33,21 @@ DEVIATION_SUFFIXES = (".png", ".ply")
 @dataclass(frozen=True)
 class FitOutputs:
     """The files ``fit`` writes: the tessellated surface, patch files, the JSON report, deviation maps (PNG picture
-    or PLY of the scan with per-vertex ``quality`` and colours); None or () where not asked."""
+    or PLY of the scan with per-vertex ``quality`` and colours), the fitted control mesh (an OBJ cage with its
+    tags); None or () where not asked."""
 
     mesh: str | None = None
     patches: tuple = ()
     report: str | None = None
     deviation: tuple = ()
+    cage: str | None = None
 
     def paths(self) -> list:
-        return [p for p in (self.mesh, *self.patches, self.report, *self.deviation) if p]
+        return [p for p in (self.mesh, *self.patches, self.report, *self.deviation, self.cage) if p]
 
 
 def output_options(command):
-    """-o, --patches, --report, --deviation: one ``outputs`` argument (``FitOutputs``)."""
+    """-o, --patches, --report, --deviation, --cage: one ``outputs`` argument (``FitOutputs``)."""
     return grouped(command, "outputs", [
         click.option("-o", "--output", type=click.Path(dir_okay=False), default=None,
                      help=f"Tessellated fitted surface; the suffix picks the format ({suffix_list(MESH_WRITERS)})."),
@@ -58,8 +60,13 @@ def output_options(command):
         click.option("--deviation", "deviation_paths", type=click.Path(dir_okay=False), multiple=True,
                      help="The scan coloured by its distance to the surface: a .png picture with a colour bar, or a "
                           ".ply of the scan with per-vertex 'quality' (the distance) and colours; repeat for both."),
-    ], lambda output, patches_paths, report_path, deviation_paths: FitOutputs(output, tuple(patches_paths),
-                                                                             report_path, tuple(deviation_paths)))
+        click.option("--cage", "cage_path", type=click.Path(dir_okay=False), default=None,
+                     help="The fitted control mesh as an OBJ SubD cage (moved control points, faces, crease tags as "
+                          "OpenSubdiv 't crease' lines) to edit in Blender or Rhino; 'c1surf convert CAGE.obj' with "
+                          "the options its first line names gives the fitted surface bit for bit (checked: a note "
+                          "says when not)."),
+    ], lambda output, patches_paths, report_path, deviation_paths, cage_path: FitOutputs(
+        output, tuple(patches_paths), report_path, tuple(deviation_paths), cage_path))
 
 
 def plan_options(command):
@@ -109,8 +116,8 @@ def fit(scan_path, outputs, resolution, plan, control_path, patch_files, surface
     deviation both ways and writes the outputs asked for.
     """
     if not outputs.paths():
-        raise UsageFailure("nothing to write: give -o MESH, --patches FILE, --report FIT.json and/or --deviation "
-                           "DEV.png")
+        raise UsageFailure("nothing to write: give -o MESH, --patches FILE, --report FIT.json, --deviation "
+                           "DEV.png and/or --cage CAGE.obj")
     suffixes = check_outputs(outputs)
     progress = Progress(quiet)
     plan = ScanFitOptions(plan.faces, plan.tolerance, plan.face_cap, inputs.crease_angle, plan.fit)
@@ -122,8 +129,10 @@ def fit(scan_path, outputs, resolution, plan, control_path, patch_files, surface
     document = fit_document(fitted, report, patch_files)
     for line in summary_lines(document):
         click.echo(line)
-    write_outputs(scan_path, outputs, suffixes, (fitted, report, document), resolution, patch_files, progress)
+    notes = write_outputs(scan_path, outputs, suffixes, (fitted, report, document), resolution, patch_files, progress,
+                          control_path)
     progress.done()
+    echo_notes(notes, quiet)
 
 
 def check_outputs(outputs: FitOutputs) -> dict:
@@ -137,9 +146,11 @@ def check_outputs(outputs: FitOutputs) -> dict:
         suffixes[outputs.report] = output_suffix(outputs.report, {".json": None}, "--report")
     for path in outputs.deviation:
         suffixes[path] = output_suffix(path, dict.fromkeys(DEVIATION_SUFFIXES), "--deviation")
+    if outputs.cage:
+        suffixes[outputs.cage] = output_suffix(outputs.cage, {".obj": None}, "--cage")
     paths = [os.path.abspath(p) for p in outputs.paths()]
     if len(set(paths)) != len(paths):
-        raise UsageFailure("-o, --patches, --report and --deviation must name different files")
+        raise UsageFailure("-o, --patches, --report, --deviation and --cage must name different files")
     return suffixes
 
 
@@ -173,6 +184,7 @@ def fit_document(surface: Surface, report: FitReport, patch_files) -> dict:
                "is_g1": bool(g1.is_g1(1e-9, 1e-9))},
         "fit": {"iterations": result.fit.iterations, "stopped": result.fit.stopped, "solver": result.fit.solver,
                 "history": result.fit.history},
+        "topology": result.topology,
         "rounds": result.rounds, "timings": {**result.timings, **result.fit.timings}, "notes": report.notes,
     }
 
@@ -190,18 +202,35 @@ def summary_lines(document: dict) -> list[str]:
                                   "lies past its rims or over its holes)" if document["surface_over_holes"] else ""),
              f"G1: {'yes' if document['g1']['is_g1'] else 'NO'} (max normal jump {document['g1']['max_normal_jump']:.3e} "
              "rad)"]
+    topology = document.get("topology")
+    if topology:
+        scan, surface = (topology[k] for k in ("scan", "surface"))
+        lines.append(f"topology:         {_counts_text(surface)}" + (" (the scan's)" if not topology["differences"] else
+                                                                      f"; the scan: {_counts_text(scan)}"))
     return lines
 
 
+def _counts_text(counts: dict) -> str:
+    return (f"{counts['components']} component{'s' * (counts['components'] != 1)}, Euler characteristic "
+            f"{counts['euler_characteristic']}, {counts['rims']} rim{'s' * (counts['rims'] != 1)}")
+
+
 def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, fitted: tuple, resolution: int, patch_files,
-                  progress: Progress) -> None:
-    """Every output asked for; ``fitted``: (Surface, FitReport, the report's document). All appear together, or none."""
+                  progress: Progress, control_path=None) -> list:
+    """Every output asked for; ``fitted``: (Surface, FitReport, the report's document). All appear together, or none.
+    Returns the notes of the writing (a cage that does not rebuild the fit bit for bit). No output may overwrite
+    the scan or ``control_path`` (``--control-mesh``: a cage fitted again is written under another name)."""
     surface, report, document = fitted
+    notes = []
     with contextlib.ExitStack() as files:
         def target(path):
             progress.phase(f"writing {path}")
-            return files.enter_context(atomic_output(path, inputs=[scan_path]))
+            return files.enter_context(atomic_output(path, inputs=[p for p in (scan_path, control_path) if p]))
 
+        if outputs.cage:
+            notes = write_fit_cage(target(outputs.cage), surface, report, cage_comments(surface, outputs.cage),
+                                   outputs.cage)
+            document["notes"] = document["notes"] + notes
         adjacency = patch_adjacency(surface.refined, surface.frames)
         if outputs.mesh:
             check_tessellation_size(surface.n_patches, resolution, False)
@@ -224,6 +253,28 @@ def write_outputs(scan_path, outputs: FitOutputs, suffixes: dict, fitted: tuple,
                 json.dump(document, f, indent=1, default=_json_number)
         for path in outputs.deviation:
             write_deviation(target(path), suffixes[path], report)
+    return notes
+
+
+def convert_flags(surface: Surface) -> str:
+    """The ``convert`` options that build ``surface`` again from its cage (``api.cage_options``), as text."""
+    options, inputs = cage_options(surface)
+    default = SurfaceOptions()
+    flags = [f"--refinements {options.refinements}"]
+    flags += [f"--{name.replace('_', '-')} {getattr(options, name)!r}".replace("'", "")
+              for name in ("blend", "alpha", "beta", "tangent_rule", "triangles")
+              if getattr(options, name) != getattr(default, name)]
+    flags += ["--interpolate-vertices"] if options.interpolate_vertices else []
+    flags += ["--g1-creases"] if not inputs.exact_creases and not options.interpolate_vertices else []
+    return " ".join(flags)
+
+
+def cage_comments(surface: Surface, path: str) -> list[str]:
+    """The comment lines that open a ``--cage`` file: what it is and the command that rebuilds the fit."""
+    return [f"c1surf fit cage: the fitted control mesh; c1surf convert {os.path.basename(path)} "
+            f"{convert_flags(surface)} gives the fitted surface bit for bit",
+            "tags as OpenSubdiv writes them (t crease 2/1/0 a b sharpness, indices from 0); sharpness 10: "
+            "infinitely sharp"]
 
 
 def write_deviation(path, suffix: str, report: FitReport) -> None:

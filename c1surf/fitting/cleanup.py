@@ -313,13 +313,14 @@ def _pair_triangles(sizes, vertices, n_vertices):
             len(pairs))
 
 
-def _drop_stray_components(sizes, vertices, n_vertices, scan):
+def _drop_stray_components(sizes, vertices, n_vertices, scan, points=None):
     """Drop the smallest components beyond the scan's count, each under a tenth of the faces.
 
-    Returns sizes, vertices, how many components and faces went.
+    Returns sizes, vertices, how many components and faces went, and a description of each dropped one
+    (``_describe_parts``, with ``points``: (V, 3) float).
     """
     if scan is None:
-        return sizes, vertices, 0, 0
+        return sizes, vertices, 0, 0, []
     a, b, _, _ = edge_keys(sizes, vertices, n_vertices)
     root = component_roots(n_vertices, a, b)
     first = np.concatenate([[0], np.cumsum(sizes)[:-1]])
@@ -330,11 +331,25 @@ def _drop_stray_components(sizes, vertices, n_vertices, scan):
                                 scan_triangles[:, [1, 2]].ravel())
     extra = labels.size - np.unique(scan_root[scan_triangles[:, 0]]).size
     if extra <= 0:
-        return sizes, vertices, 0, 0
+        return sizes, vertices, 0, 0, []
     order = np.argsort(counts, kind="stable")[:extra]
     order = order[counts[order] < 0.1 * sizes.size]
     drop = np.isin(component, labels[order])
-    return sizes[~drop], vertices[np.repeat(~drop, sizes)], int(order.size), int(np.count_nonzero(drop))
+    parts = [] if points is None else _describe_parts(sizes[drop], vertices[np.repeat(drop, sizes)],
+                                                      component[drop], points)
+    return sizes[~drop], vertices[np.repeat(~drop, sizes)], int(order.size), int(np.count_nonzero(drop)), parts
+
+
+def _describe_parts(sizes, vertices, component, points) -> list:
+    """One phrase per component (``component`` (F,) labels of the faces ``sizes``, ``vertices``): its faces,
+    vertices and bounding-box centre."""
+    parts = []
+    for label in np.unique(component):  # the few dropped components
+        corners = vertices[np.repeat(component == label, sizes)]
+        box = points[np.unique(corners)]
+        centre = ", ".join(f"{c:.4g}" for c in 0.5 * (box.min(axis=0) + box.max(axis=0)))
+        parts.append(f"{np.count_nonzero(component == label)} faces, {box.shape[0]} vertices around ({centre})")
+    return parts
 
 
 def _is_closed(triangles: np.ndarray) -> bool:
@@ -371,7 +386,8 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
         repeated), ``non_manifold_faces`` (dropped from edges in three or more faces), ``filled_holes``,
         ``closed_holes`` (of a closed scan's remesh),
         ``split_vertices``, ``flipped_faces``, ``doublets`` (collapsed), ``valence_two`` (dissolved), ``paired_triangles`` (merged into
-        quads), ``stray_components`` and ``stray_faces`` (dropped), ``unused_vertices``
+        quads), ``stray_components`` and ``stray_faces`` (dropped), ``unused_vertices``; and ``stray_parts``,
+        a list of str naming each dropped component (faces, vertices, bounding-box centre)
 
     Long: the cleanup's steps in their one order, each a call, repeated until a round changes nothing;
     splitting it would only hide that order.
@@ -416,9 +432,12 @@ def clean_control_mesh(face_sizes, face_vertices, points, scan=None, rounds: int
         report["valence_two"] += int(dissolved.size)
         sizes, vertices, paired = _pair_triangles(sizes, vertices, points.shape[0])
         report["paired_triangles"] += paired
-        sizes, vertices, stray, stray_faces = _drop_stray_components(sizes, vertices, points.shape[0], scan)
+        sizes, vertices, stray, stray_faces, parts = _drop_stray_components(sizes, vertices, points.shape[0], scan,
+                                                                            points)
         report["stray_components"] += stray
         report["stray_faces"] += stray_faces
+        if parts:
+            report["stray_parts"] = report.get("stray_parts", []) + parts
         vertices, points, unused = _compact(sizes, vertices, points)
         report["unused_vertices"] += unused - int(dissolved.size)  # the dissolved ones are counted there
         if report == before:
@@ -442,7 +461,15 @@ CLEANUP_WORDS = {
 }
 
 
+def _stray_parts_text(report: dict) -> str:
+    """The dropped components as the note names them (faces, vertices, bounding-box centre), or ""."""
+    parts = report.get("stray_parts") or []
+    more = f"; and {len(parts) - 4} more" if len(parts) > 4 else ""
+    return f" ({'; '.join(parts[:4])}{more})" if parts else ""
+
+
 def cleanup_notes(report: dict) -> list[str]:
     """One line saying what the cleanup changed, or nothing when it changed nothing."""
-    parts = [words.format(report[key]) for key, words in CLEANUP_WORDS.items() if report.get(key)]
+    parts = [words.format(report[key]) + (_stray_parts_text(report) if key == "stray_components" else "")
+             for key, words in CLEANUP_WORDS.items() if report.get(key)]
     return [f"control mesh cleanup: {', '.join(parts)}"] if parts else []

@@ -10,7 +10,14 @@
 4. with ``tolerance``: while the largest scan-to-surface distance exceeds it, a larger remesh
    (``local_refine.next_face_count``: cheaper than splitting faces, which makes pentagons that need the
    second Doo-Sabin step everywhere), up to ``face_cap`` faces; a note says when the cap stops it;
-5. the two-sided deviation of the final surface (``deviation.two_sided_deviation``).
+5. the two-sided deviation of the final surface (``deviation.two_sided_deviation``);
+6. the topology of the scan and of the surface side by side (``mesh.topology_counts``; the surface's is its
+   control mesh's, less the faces tagged as holes: the construction covers every other face once), with a
+   note on what differs. A component of the scan that no control point lies near (its nearest scan vertex on
+   another component: the remesher made nothing there, or the cleanup dropped it) is remeshed on its own and
+   added to the control mesh (``remesh_missing_parts``, a note says so); one too small for that is named in a
+   note and left out of the fit, whose samples would otherwise pull the rest of the surface towards it; its
+   distances stay in the deviation (``unfitted_components``).
 """
 from __future__ import annotations
 
@@ -20,6 +27,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..construction.surface import Surface, SurfaceOptions
+from ..mesh.halfedges import component_roots
+from ..mesh.topology_counts import compare_topology, topology_counts
 from .control_mesh import ControlMesh, control_mesh_from_scan
 from .deviation import bounding_diagonal, distance_stats, two_sided_deviation
 from .iterate import fit_surface_points, project_scan
@@ -28,7 +37,7 @@ from .options import FitOptions
 from .system import vertex_normals
 
 __all__ = ["ScanFitOptions", "ScanFit", "fit_scan", "default_face_count", "check_scan", "fitting_samples",
-           "curved_midpoints"]
+           "curved_midpoints", "unfitted_components", "remesh_missing_parts", "fit_topology"]
 
 # control faces when neither --faces nor a control mesh is given. Measured (bench/fit.py, docs/fit.md; RMS / max of
 # the diagonal, scan to surface): 1,000 faces leave the small faceted scans short (goathead 6.4e-4 / 7.0e-3 with
@@ -41,6 +50,10 @@ MIN_FACES, FACE_CAP = 8, 6000
 # 1.1e-3, 4.2e-3 (bulges between samples), wingnut 1.5e-4 / 1.8e-3, 3.6e-3; 8: spot 6.3e-5 / 1.3e-3, 2.4e-3,
 # wingnut 1.8e-4 / 2.6e-3, 2.2e-3, goathead 2.1e-4 / 1.5e-3, 3.9e-3 (4: 1.8e-4 / 1.2e-3, 3.9e-3)
 SAMPLES_PER_FACE = 8
+# parts of the scan the remesh of the whole misses, remeshed on their own (``remesh_missing_parts``): at least this
+# many triangles, this many control faces (a 320-triangle sphere of a twentieth of the diagonal: 28 quads, one
+# Doo-Sabin step, scan to surface max 1e-3 of its own size), the largest this many
+MIN_PART_TRIANGLES, MIN_PART_FACES, MAX_PARTS = 16, 24, 16
 
 
 @dataclass(frozen=True)
@@ -84,6 +97,7 @@ class ScanFit:
     fit : iterate.FitResult of the last fit; deviation : deviation.Deviation of the final surface
     rounds : list of dict, one per control mesh tried (faces, patches, scan-to-surface max, seconds)
     notes : list of str, ``c1surf: note:`` lines; timings : dict, seconds per stage
+    topology : dict, ``fit_topology``: the scan's and the surface's counts and what differs
     """
 
     surface: Surface
@@ -93,6 +107,7 @@ class ScanFit:
     rounds: list = field(default_factory=list)
     notes: list = field(default_factory=list)
     timings: dict = field(default_factory=dict)
+    topology: dict = field(default_factory=dict)
 
 
 def default_face_count(n_triangles: int) -> int:
@@ -192,8 +207,11 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
             mesh = control
             _check_encloses(mesh.points, points, diagonal)
         _clock(timings, "control mesh", start)
+        mesh, keep, parts, left_out = _cover_components(points, triangles, mesh, mesh is not control,
+                                                        (faces, options.crease_angle), diagonal)
+        notes += [n for n in parts if n not in notes]  # left_out: noted after the last round
         surface, result = _fit_round(points, triangles, (mesh, features if mesh is control else None),
-                                     (surface_options, options.fit), timings, tell)
+                                     (surface_options, options.fit), timings, tell, keep)
         worst = result.history[-1]["relative_max"]
         rounds.append({"faces": mesh.n_faces, "patches": surface.n_patches, "refinements": surface.refinements,
                        "relative_max": worst, "relative_rms": result.history[-1]["relative_rms"],
@@ -203,35 +221,197 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
             notes += [stop] if stop else []
             break
         faces = next_face_count(faces, worst / options.tolerance, options.face_cap)
+    notes += left_out  # the last control mesh's
+    # a fresh construction at the fitted points: the bits ``convert`` makes of the cage (``update_points``'s
+    # reused stages, the Doo-Sabin step's matrix form, round differently in the last bit: 4e-16 on a cylinder)
+    start = time.perf_counter()
+    surface = _surface(mesh.with_points(result.points), surface_options, features if mesh is control else None)
+    _clock(timings, "construction", start)
     start = time.perf_counter()
     tell("measuring the deviation", 0, 1)
     deviation = two_sided_deviation(surface, points, triangles, result.footpoints)
     _clock(timings, "deviation", start)
-    return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings)
+    topology = fit_topology(triangles, points.shape[0], mesh, surface.features)
+    if topology["differences"]:
+        notes.append("the surface's topology differs from the scan's: " + "; ".join(topology["differences"]))
+    return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings, topology)
+
+
+def _cover_components(points, triangles, mesh: ControlMesh, remesh: bool, plan: tuple, diagonal: float):
+    """(ControlMesh, keep, notes of parts remeshed, notes of parts left out): the scan's components the control
+    mesh misses remeshed on their own when ``remesh`` (``remesh_missing_parts``; ``plan``: faces, crease angle),
+    and those still missed (``unfitted_components``: ``keep`` (t,) bool or None)."""
+    keep, left_out = unfitted_components(points, triangles, mesh.points, diagonal, mesh.n_faces)
+    parts = []
+    if keep is not None and remesh:
+        mesh, parts = remesh_missing_parts(points, triangles, mesh, keep, *plan, diagonal)
+        keep, left_out = unfitted_components(points, triangles, mesh.points, diagonal, mesh.n_faces)
+    return mesh, keep, parts, left_out
+
+
+def fit_topology(triangles: np.ndarray, n_points: int, control: ControlMesh, features=None) -> dict:
+    """The ``topology`` of the fit report: ``{"scan": counts, "surface": counts, "differences": [phrases]}``
+    (``mesh.topology_counts``), the surface's from its control mesh less the faces ``features`` tags as holes
+    (the construction makes a surface homeomorphic to the mesh it covers).
+
+    triangles : (t, 3) int, the scan's; n_points : its vertices; control : ControlMesh; features : SharpFeatures
+    """
+    scan = topology_counts(np.full(triangles.shape[0], 3), triangles.ravel(), n_points)
+    sizes, vertices = control.face_sizes, control.face_vertices
+    if features is not None and features.hole_faces.size:
+        kept = np.ones(sizes.size, dtype=bool)
+        kept[features.hole_faces] = False
+        sizes, vertices = sizes[kept], vertices[np.repeat(kept, sizes)]
+    surface = topology_counts(sizes, vertices, control.points.shape[0])
+    return {"scan": scan.as_dict(), "surface": surface.as_dict(), "differences": compare_topology(scan, surface)}
+
+
+def unfitted_components(points: np.ndarray, triangles: np.ndarray, control_points: np.ndarray, diagonal: float,
+                        faces: int, shown: int = 4):
+    """The scan's components that no control point lies near, to leave out of the fit (module docstring, 6).
+
+    A component (vertex-connected triangles) is near the control mesh when it holds the nearest scan vertex of
+    some control point.
+
+    Parameters
+    ----------
+    points : (m, 3) float; triangles : (t, 3) int, the scan
+    control_points : (V, 3) float; diagonal : the scan's bounding-box diagonal; faces : the control faces (notes)
+    shown : how many components a note names (the largest first)
+
+    Returns
+    -------
+    keep : (t,) bool, the triangles to fit, or None when every component is near the control mesh
+    notes : list of str, one line naming the components left out (vertices, triangles, bounding-box centre, size)
+    """
+    from scipy.spatial import cKDTree
+
+    count, label = _scan_components(points, triangles)
+    if count == 1 or control_points.shape[0] == 0:
+        return None, []
+    vertex_label = np.full(points.shape[0], -1, dtype=np.int64)
+    vertex_label[triangles.ravel()] = np.repeat(label, 3)
+    near = np.zeros(count, dtype=bool)
+    near[vertex_label[cKDTree(points).query(control_points)[1]]] = True
+    if near.all():
+        return None, []
+    missing = _largest_first(np.flatnonzero(~near), label)
+    parts = _component_phrases(points, triangles, label, missing[:shown], diagonal)
+    more = f" and {missing.size - shown} more" if missing.size > shown else ""
+    note = (f"{missing.size} of the scan's {count} components got no control mesh at {faces} control faces and "
+            f"are left out of the fit (their distances stay in the deviation): {'; '.join(parts)}{more}; fit such a "
+            "part on its own, or ask for more --faces")
+    return ~np.isin(label, missing), [note]
+
+
+def remesh_missing_parts(points: np.ndarray, triangles: np.ndarray, mesh: ControlMesh, keep: np.ndarray,
+                         faces: int, crease_angle: float | None, diagonal: float):
+    """The control mesh with the scan's components that ``keep`` leaves out remeshed on their own and added.
+
+    Instant Meshes resolves nothing below its scale (a sphere of a twentieth of the diagonal at 120 faces comes
+    back as nothing, or as a piece the cleanup removes), but remeshes such a part well alone. Each missing
+    component of at least ``MIN_PART_TRIANGLES`` triangles (the ``MAX_PARTS`` largest) gets its share of
+    ``faces`` by area, at least ``MIN_PART_FACES``; the rest stay left out (``unfitted_components`` names them).
+
+    Returns (ControlMesh, notes): the union (``report["parts"]``: the faces of each part added) and one line
+    naming the parts remeshed on their own.
+    """
+    count, label = _scan_components(points, triangles)
+    missing = _largest_first(np.unique(label[~keep]), label)
+    missing = missing[np.bincount(label, minlength=count)[missing] >= MIN_PART_TRIANGLES][:MAX_PARTS]
+    corners = points[triangles]
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1)
+    share = np.bincount(label, weights=area, minlength=count) / max(float(area.sum()), 1e-300)
+    pieces, added = [mesh], []
+    for k in missing:  # the few parts the remesh of the whole missed
+        sub_points, sub_triangles = _compact_scan(points, triangles[label == k])
+        try:
+            part = control_mesh_from_scan(sub_points, sub_triangles, max(MIN_PART_FACES, int(round(faces * share[k]))),
+                                          crease_angle)
+        except ValueError:
+            continue
+        pieces.append(part)
+        added.append(k)
+    if not added:
+        return mesh, []
+    union = _union(pieces)
+    phrases = _component_phrases(points, triangles, label, np.array(added), diagonal)
+    note = (f"{len(added)} of the scan's {count} components got no control mesh in the remesh of the whole at "
+            f"{mesh.n_faces} faces and were remeshed on their own: "
+            + "; ".join(f"{p}, {piece.n_faces} control faces" for p, piece in zip(phrases, pieces[1:])))
+    return union, [note]
+
+
+def _union(meshes: list) -> ControlMesh:
+    """The disjoint union of ControlMeshes (vertices and faces in order; the first one's notes and report, with
+    ``faces`` the union's and ``parts`` the faces of the others)."""
+    offsets = np.cumsum([0] + [m.points.shape[0] for m in meshes])
+    first = meshes[0]
+    notes = list(first.notes) + [n for m in meshes[1:] for n in m.notes if n not in first.notes]
+    return ControlMesh(np.concatenate([m.face_sizes for m in meshes]),
+                       np.concatenate([m.face_vertices + o for m, o in zip(meshes, offsets)]),
+                       np.concatenate([m.points for m in meshes]),
+                       np.concatenate([m.crease_edges + o for m, o in zip(meshes, offsets)]).reshape(-1, 2),
+                       notes, {**first.report, "faces": int(sum(m.n_faces for m in meshes)),
+                               "parts": [m.n_faces for m in meshes[1:]]})
+
+
+def _scan_components(points: np.ndarray, triangles: np.ndarray):
+    """(count, (t,) int label 0 .. count - 1 of each triangle): the scan's vertex-connected components."""
+    root = component_roots(points.shape[0], triangles[:, [0, 1, 2]].ravel(), triangles[:, [1, 2, 0]].ravel())
+    labels, label = np.unique(root[triangles[:, 0]], return_inverse=True)
+    return int(labels.size), label.ravel()
+
+
+def _largest_first(components: np.ndarray, label: np.ndarray) -> np.ndarray:
+    """``components`` ordered by their triangles, the most first."""
+    sizes = np.bincount(label)[components]
+    return components[np.argsort(-sizes, kind="stable")]
+
+
+def _component_phrases(points, triangles, label, components, diagonal: float) -> list:
+    """One phrase per component of ``components`` (few): vertices, triangles, bounding-box centre and size."""
+    phrases = []
+    for k in components:
+        part = triangles[label == k]
+        box = points[np.unique(part)]
+        low, high = box.min(axis=0), box.max(axis=0)
+        phrases.append(f"{box.shape[0]} vertices and {part.shape[0]} triangles around "
+                       f"({', '.join(f'{c:.4g}' for c in 0.5 * (low + high))}), "
+                       f"{np.linalg.norm(high - low) / diagonal:.2g} of the diagonal across")
+    return phrases
 
 
 def _clock(timings: dict, name: str, start: float) -> None:
     timings[name] = timings.get(name, 0.0) + time.perf_counter() - start
 
 
-def _fit_round(points, triangles, control: tuple, options: tuple, timings: dict, tell):
+def _fit_round(points, triangles, control: tuple, options: tuple, timings: dict, tell, keep=None):
     """(Surface, FitResult) of one control mesh: the construction over (ControlMesh, SharpFeatures or None) with
-    (SurfaceOptions, FitOptions), fitted to samples of the scan; the result's deviation is the scan vertices'."""
+    (SurfaceOptions, FitOptions), fitted to samples of the scan (of its triangles ``keep`` ((t,) bool) when not
+    None); the result's deviation is the scan vertices', all of them."""
     (mesh, features), (surface_options, fit_options) = control, options
     start = time.perf_counter()
     surface = _surface(mesh, surface_options, features)
     _clock(timings, "construction", start)
     start = time.perf_counter()
-    samples, sample_triangles = fitting_samples(points, triangles, mesh.n_faces)
+    part = (points, triangles) if keep is None else _compact_scan(points, triangles[keep])
+    samples, sample_triangles = fitting_samples(*part, mesh.n_faces)
     result = fit_surface_points(surface, samples, sample_triangles, fit_options,
                                 progress=lambda label, amount, total: tell(f"fitting {mesh.n_faces} faces", amount,
                                                                            total))
-    if samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
+    if keep is not None or samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
         result.footpoints = project_scan(surface, points, fit_options, None)
         diagonal = bounding_diagonal(points)
         result.history[-1] = {**result.history[-1], **distance_stats(result.footpoints.distance, diagonal)}
     _clock(timings, "fit", start)
     return surface, result
+
+
+def _compact_scan(points: np.ndarray, triangles: np.ndarray):
+    """(points, triangles) of the vertices ``triangles`` use, renumbered."""
+    used, triangles = np.unique(triangles, return_inverse=True)
+    return points[used], triangles.reshape(-1, 3)
 
 
 def _tolerance_stop(options: ScanFitOptions, worst: float, faces: int, given_control: bool):

@@ -26,12 +26,12 @@ import numpy as np
 
 from ...evaluation.stream.spool import SpooledTessellation
 from ..errors import OutputError
-from ..finite import refuse_non_finite_mesh, refuse_non_finite_vertices
+from ..finite import refuse_non_finite, refuse_non_finite_mesh, refuse_non_finite_vertices
 
 from .number_text import (FLOAT32_DIGITS, FLOAT64_DIGITS, constant_field, decimals_for, format_fixed, join_columns,
                           printf_field, text_lines)
 
-__all__ = ["write_obj", "write_obj_stream"]
+__all__ = ["write_obj", "write_obj_stream", "write_cage"]
 
 _BLOCK = 1 << 17  # lines per block: bounds the byte matrices to some MB
 _HEADER = b"# c1surf\n"
@@ -151,3 +151,64 @@ def write_obj_stream(path, tessellation, float32: bool = False) -> None:
             for triangles in spooled.triangle_blocks():
                 index = format_fixed(triangles.astype(np.float64) + 1.0, 0)
                 f.write(text_lines(b"f ", _corner_fields(index, False, True)))
+
+
+def write_cage(path, points, face_sizes, face_vertices, features=None, comments=()) -> None:
+    """Write a polygon control mesh (a SubD cage) as OBJ with OpenSubdiv ``t`` tags, for editing and for
+    ``c1surf convert`` (``fit --cage``).
+
+    Every coordinate and sharpness is Python's ``repr`` (the shortest text that reads back to the same double:
+    the OBJ reader's ``strtod`` gives the very bits back); vertices and faces keep their order, faces their
+    corner order, indices from 1. Tags (indices from 0, as OpenSubdiv writes them): one ``t crease 2/1/0 a b s``
+    per crease edge, ``t corner 1/1/0 v s`` per corner, ``t hole k/0/0 f ...`` for the hole faces.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+    points : (V, 3) float
+    face_sizes : (F,) int; face_vertices : (sum(face_sizes),) int, 0-based
+    features : has ``crease_edges`` (E, 2), ``crease_sharpness`` (E,), ``corner_vertices`` (C,),
+        ``corner_sharpness`` (C,), ``hole_faces`` (H,) (a ``construction.features.SharpFeatures``), or None
+    comments : lines written first, each after ``# ``
+    """
+    points = np.asarray(points, dtype=np.float64)
+    refuse_non_finite_vertices(points, np.zeros((0, 3)), path)
+    sizes = np.asarray(face_sizes, dtype=np.int64)
+    corners = np.asarray(face_vertices, dtype=np.int64)
+    with open(path, "wb") as f:
+        f.write(b"".join(b"# " + line.encode("utf-8") + b"\n" for line in comments))
+        if points.shape[0]:
+            f.write(text_lines(b"v ", [printf_field(points[:, :3], "%r")]))
+        f.write(_polygon_lines(sizes, corners))
+        f.write(_tag_text(features, path).encode("ascii"))
+
+
+def _polygon_lines(sizes: np.ndarray, corners: np.ndarray) -> bytes:
+    """``f a b c ...`` lines (indices from 1) of faces of any sizes, in order: one join over all corners."""
+    if sizes.size == 0:
+        return b""
+    starts = np.zeros(corners.size, dtype=bool)
+    starts[np.cumsum(sizes)[:-1]] = True
+    separators = np.where(starts, "\nf ", " ").astype(object)
+    separators[0] = "f "
+    tokens = np.empty(2 * corners.size, dtype=object)
+    tokens[0::2], tokens[1::2] = separators, (corners + 1).astype(str)
+    return ("".join(tokens) + "\n").encode("ascii")
+
+
+def _tag_text(features, path) -> str:
+    """The OpenSubdiv tag lines of ``features`` (``write_cage``), "" for None."""
+    if features is None:
+        return ""
+    edges, sharpness = np.asarray(features.crease_edges).reshape(-1, 2), np.asarray(features.crease_sharpness)
+    corners, corner_sharpness = np.asarray(features.corner_vertices), np.asarray(features.corner_sharpness)
+    holes = np.asarray(features.hole_faces).ravel()
+    refuse_non_finite(np.r_[sharpness, corner_sharpness], "sharpness values", path)
+    creases = [None] * (3 * len(edges))
+    creases[0::3], creases[1::3], creases[2::3] = edges[:, 0].tolist(), edges[:, 1].tolist(), sharpness.tolist()
+    rows = [v for pair in zip(corners.tolist(), corner_sharpness.tolist()) for v in pair]
+    text = ("t crease 2/1/0 %d %d %r\n" * len(edges)) % tuple(creases)
+    text += ("t corner 1/1/0 %d %r\n" * len(corners)) % tuple(rows)
+    if holes.size:
+        text += f"t hole {holes.size}/0/0 " + " ".join(map(str, holes.tolist())) + "\n"
+    return text
