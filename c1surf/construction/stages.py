@@ -295,7 +295,7 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
 def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs):
     """A1's perturbation of even holes: its matrix, or factored when some even hole has more than
     ``LARGE_HOLE`` sides (the matrix holds (2n)^2 entries for an n-sided hole)."""
-    large = any(g.n % 2 == 0 and g.n > LARGE_HOLE for g in topology.holes)
+    large = any(g.n % 2 == 0 and g.n > LARGE_HOLE and not g.dart for g in topology.holes)
     if large:
         constraints, inverse_gram = perturbation_parts(topology.refined, topology.holes)
         left = None

@@ -70,10 +70,14 @@ def seam_notes(exact_creases: bool, features, topology) -> list[str]:
     if lone.size:
         notes.append(f"{lone.size} infinitely sharp corners are not on a C0 seam and stay the sharpest G1 corner "
                      f"(vertices {', '.join(map(str, lone[:8].tolist()))}{' ...' if lone.size > 8 else ''}, 0-based)")
+    ends = 0 if sheets is None or sheets.dart_vertex is None else sheets.dart_vertex.size
+    if ends:
+        notes.append(f"{ends} C0 crease lines end inside the surface (darts): C0 up to the dart, where the crease "
+                     "fades out into a G1 point (docs/sharp-features.md, \"Darts\")")
     darts = 0 if sheets is None or sheets.dart_edges is None else len(sheets.dart_edges)
     if darts:
-        notes.append(f"{darts} infinitely sharp crease edges lie on crease lines that end inside the surface (darts): "
-                     "they stay the sharpest G1 crease, which fades out at the dart as in OpenSubdiv; the rest of "
+        notes.append(f"{darts} infinitely sharp crease edges lie on crease lines that end inside the surface at both "
+                     "ends: they stay the sharpest G1 crease, which fades out at the darts as in OpenSubdiv; the rest of "
                      "their crease is a C0 seam")
         kept -= darts
     if kept:

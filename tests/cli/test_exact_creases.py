@@ -118,7 +118,7 @@ def test_crease_lines_that_are_not_exact_are_named(tmp_path):
     result = run("check", shared_mesh("opensubdiv/catmark_cubes_infsharp.obj"), "--exact-creases")
     assert result.exit_code == 0, result.output
     assert "C0 creases: 15 of 17 infinitely sharp crease edges are C0 seams" in result.stderr
-    assert "2 infinitely sharp crease edges lie on crease lines that end inside the surface (darts)" in result.stderr
+    assert "2 infinitely sharp crease edges lie on crease lines that end inside the surface at both ends" in result.stderr
     assert "1 infinitely sharp corners are not on a C0 seam" in result.stderr
     assert "crease edges:     60 of 60 listed" in result.output
 

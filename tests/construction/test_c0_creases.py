@@ -209,12 +209,14 @@ def test_opensubdiv_files_with_infinitely_sharp_tags_meet_exactly_where_cut_and_
     assert report.max_normal_jump <= 1e-10
     cut = 0 if sheets is None else len(sheets.cut_edges)
     # cut: closed crease components, and those reaching the boundary, once too large sectors are merged
-    # (fvar_project0: 1 | 3 sectors, inf_crease1: 2 | 4 and corner sectors of 2 and 3 faces); the dart
-    # chain 0 - 4 of inf_crease1 stays a G1 crease; in inf_crease0 the dart edge 16 - 17 lies inside a
-    # sector of the corner 16, which must be one face: merged away (a note), the other 10 edges cut
+    # (fvar_project0: 1 | 3 sectors, inf_crease1: 2 | 4 and corner sectors of 2 and 3 faces); darts are cut
+    # up to their end (the dart's hole): the chain 0 - 4 of inf_crease1, the edge 16 - 17 of inf_crease0; the
+    # lone line 9 - 8 - 10 of cubes_infsharp (darts at both ends) stays a G1 crease
     assert cut == {"catmark_cube_creases2": 11, "catmark_cubes_infsharp": 15, "catmark_edgenone": 18,
                    "catmark_single_crease": 4, "catmark_val2_interior": 3, "catmark_fvar_project0": 4,
-                   "catmark_inf_crease1": 7, "catmark_inf_crease0": 10}.get(name, 0)
+                   "catmark_inf_crease1": 8, "catmark_inf_crease0": 11}.get(name, 0)
+    darts = 0 if sheets is None else sheets.dart_vertex.size
+    assert darts == {"catmark_inf_crease1": 1, "catmark_inf_crease0": 1}.get(name, 0)
 
 
 def test_a_crease_reaching_the_boundary_ends_at_a_corner_of_the_boundary_curve():

@@ -114,5 +114,6 @@ def bicubic_layout(holes: list[HoleGroup], hole_weights, n_points: int, keep=Non
     n_points : int, refined points
     keep : (Nc,) bool or None, the patches kept (open meshes: those at real corners)
     """
-    groups = [(np.concatenate([g.A, g.B1, g.B2, g.C], axis=1).T, hole_weights(g.n)) for g in holes]
+    groups = [(np.concatenate([g.A, g.B1, g.B2, g.C], axis=1).T, hole_weights(g.n, dart=True) if g.dart else hole_weights(g.n))
+              for g in holes]
     return PatchLayout("bicubic", groups, n_points, 16, keep)

@@ -30,7 +30,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .bicubic import bicubic_hole_coefficients, boundary_rows, shift
+from .bicubic import boundary_rows, shift
 
 
 def replaced(x: np.ndarray, index: int, value: np.ndarray) -> np.ndarray:
@@ -124,4 +124,21 @@ def dart_hole_weights(n: int, alpha: float = 1.0, beta: float = 0.0, tangent_rul
     return W
 
 
-__all__ = ["dart_hole_coefficients", "dart_hole_weights", "open_chain_twists", "bicubic_hole_coefficients"]
+@lru_cache(maxsize=64)
+def dart_ring_weights(m: int, alpha: float = 1.0, beta: float = 0.0, tangent_rule: str = "symmetric") -> np.ndarray:
+    """(16 m, 4 m) float: a dart's hole as the refined mesh has it (``refine.holes.split_dart_holes``), on its ring
+    of m = n + 2 corners [A, B1, B2, C], the two ghost corners last: ghost corner n is the mirror of C_{n-1}
+    across the crease (its C and B_{n,1} are the view before the crease), ghost corner n + 1 the mirror of C_0
+    (its C and B_{n+1,2} the view after it). Rows of the real patches p_0..p_{n-1} from ``dart_hole_weights``;
+    the ghost corners' rows (patches not kept) repeat the centre's row."""
+    n = m - 2
+    D = dart_hole_weights(n, alpha, beta, tangent_rule)
+    i = np.arange(n)
+    columns = np.r_[i, m + i, 2 * m + i, 3 * m + i, 3 * m + n, m + n, 3 * m + n + 1, 2 * m + n + 1]
+    W = np.zeros((16 * m, 4 * m))
+    W[: 16 * n, columns] = D
+    W[16 * n :] = W[15]  # P_33 of p_0: S
+    return W
+
+
+__all__ = ["dart_hole_coefficients", "dart_hole_weights", "dart_ring_weights", "open_chain_twists"]

@@ -25,6 +25,7 @@ from typing import Callable
 import numpy as np
 
 from .bicubic import bicubic_hole_coefficients
+from .dart import dart_ring_weights
 from .triangles import triangle_hole_coefficients
 
 
@@ -138,9 +139,12 @@ class HoleRules:
         """Name of the rule that fills n-sided holes."""
         return self.triangles if n == 3 and HOLE_RULES[self.triangles].covers(n) else "g1"
 
-    def weights(self, n: int, large: int = LARGE_HOLE):
+    def weights(self, n: int, large: int = LARGE_HOLE, dart: bool = False):
         """(16 n, 4 n) float, the rule's patches as weights on the hole's points [A, B1, B2, C] (cached);
-        for n > ``large``, a ``HoleOperator`` of that shape that applies them in O(n)."""
+        for n > ``large``, a ``HoleOperator`` of that shape that applies them in O(n). ``dart``: the hole
+        of a dart, n - 2 real corners and two ghost ones (``dart.dart_ring_weights``)."""
+        if dart:
+            return dart_ring_weights(n, float(self.alpha), float(self.beta), self.tangent_rule)
         if n > large and self.rule(n) == "g1":
             return HoleOperator(n, float(self.alpha), float(self.beta), self.tangent_rule)
         return _dense_weights(self.rule(n), n, float(self.alpha), float(self.beta), self.tangent_rule)

@@ -147,7 +147,7 @@ def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndar
     on_seam, exact, corner = exact_crease_vertices(mesh, sharp, corner_tag)
     once = seam & ((mesh.twin < 0) | (h < mesh.twin))
     seam_edges = np.bincount(np.r_[mesh.origin[once], mesh.dest[once]], minlength=mesh.n_vertices)
-    fixable = on_seam & np.where(corner, seam_edges >= 2, seam_edges == 2)
+    fixable = on_seam & (exact | np.where(corner, seam_edges >= 2, seam_edges == 2))  # exact: darts too
     component = component_roots(mesh.n_vertices, mesh.origin[seam], mesh.dest[seam])
     creased = np.zeros(mesh.n_vertices, dtype=bool)
     creased[component[mesh.origin[sharp]]] = True
