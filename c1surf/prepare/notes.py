@@ -76,9 +76,8 @@ def seam_notes(exact_creases: bool, features, topology) -> list[str]:
                      "fades out into a G1 point (docs/sharp-features.md, \"Darts\")")
     darts = 0 if sheets is None or sheets.dart_edges is None else len(sheets.dart_edges)
     if darts:
-        notes.append(f"{darts} infinitely sharp crease edges lie on crease lines that end inside the surface at both "
-                     "ends: they stay the sharpest G1 crease, which fades out at the darts as in OpenSubdiv; the rest of "
-                     "their crease is a C0 seam")
+        notes.append(f"{darts} infinitely sharp crease edges are crease lines of one edge that end inside the surface "
+                     "at both ends: they stay the sharpest G1 crease, which fades out at both ends as in OpenSubdiv")
         kept -= darts
     if kept:
         named = [] if sheets is None else sheets.inexact_vertices.tolist()

@@ -114,13 +114,25 @@ def test_malformed_crease_sides_are_one_line(sharp_cube, tmp_path):
     assert check.stderr.strip().splitlines()[-1].startswith("c1surf: error:") and "crease_sides" in check.stderr
 
 
-def test_crease_lines_that_are_not_exact_are_named(tmp_path):
+def test_crease_lines_that_end_inside_are_named(tmp_path):
     result = run("check", shared_mesh("opensubdiv/catmark_cubes_infsharp.obj"), "--exact-creases")
     assert result.exit_code == 0, result.output
-    assert "C0 creases: 15 of 17 infinitely sharp crease edges are C0 seams" in result.stderr
-    assert "2 infinitely sharp crease edges lie on crease lines that end inside the surface at both ends" in result.stderr
+    assert "C0 creases: 17 of 17 infinitely sharp crease edges are C0 seams" in result.stderr
+    assert "2 C0 crease lines end inside the surface (darts): C0 up to the dart" in result.stderr
     assert "1 infinitely sharp corners are not on a C0 seam" in result.stderr
-    assert "crease edges:     60 of 60 listed" in result.output
+    assert "crease edges:     68 of 68 listed" in result.output
+
+
+def test_a_crease_line_of_one_edge_inside_the_surface_stays_g1(tmp_path):
+    creases = tmp_path / "one.json"
+    creases.write_text(json.dumps({"creases": [[9, 8, 10]]}))  # catmark_cubes_infsharp's edge 9 - 8 alone
+    mesh = tmp_path / "cubes.obj"
+    text = shared_mesh("opensubdiv/catmark_cubes_infsharp.obj").read_text().splitlines()
+    mesh.write_text("\n".join(line for line in text if not line.startswith("t ")) + "\n")
+    result = run("check", mesh, "--exact-creases", "--creases", creases)
+    assert result.exit_code == 0, result.output
+    assert "1 infinitely sharp crease edges stay the sharpest G1 crease" in result.stderr
+    assert "G1: yes" in result.output
 
 
 def test_streamed_and_in_memory_files_are_identical(tmp_path):
@@ -138,7 +150,7 @@ def test_streamed_and_in_memory_files_are_identical(tmp_path):
 def test_inspect_plans_the_seams_that_convert_makes(tmp_path):
     path = shared_mesh("opensubdiv/catmark_cubes_infsharp.obj")
     report = json.loads(run("inspect", path, "--exact-creases", "--json").output)
-    assert "C0 creases: 15 of 17 infinitely sharp crease edges are C0 seams" in report["notes"]
+    assert "C0 creases: 17 of 17 infinitely sharp crease edges are C0 seams" in report["notes"]
     result = run("convert", path, "-o", tmp_path / "x.ply", "--exact-creases", "--patches", tmp_path / "x.json")
     assert result.exit_code == 0, result.output
     counts = json.loads((tmp_path / "x.json").read_text())["counts"]

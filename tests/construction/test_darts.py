@@ -9,10 +9,13 @@ import pytest
 
 from c1surf.api import check_surface
 from c1surf.construction.crease_sides import dart_spoke_pairs
+from c1surf.construction.features import SharpFeatures
 from c1surf.construction.surface import Surface, SurfaceOptions
+from c1surf.io.meshes.read import read_mesh
 
 from dart_cell import side_samples
 from dart_meshes import grid_dart, polar_dart
+from conftest import shared_mesh
 from test_c0_creases import side_pairs
 
 # faces around the dart: ring edges of each face (1 a triangle, 2 a quad, 3 a pentagon); valence 3 to 8
@@ -96,3 +99,32 @@ def test_the_stencil_reproduces_darts(n):
     assert np.abs(surface.bicubic - fresh.bicubic).max() <= 1e-13
     stacked = np.concatenate([surface.biquadratic.reshape(-1, 3), surface.bicubic.reshape(-1, 3)])
     assert np.abs(surface.stencil() @ moved - stacked).max() <= 1e-13 * np.abs(stacked).max()
+
+
+@pytest.mark.parametrize("length", [2, 3])
+def test_a_line_with_darts_at_both_ends(length):
+    points, sizes, corners, _, _ = grid_dart()
+    N = 8
+    at = lambda a, b: a * (N + 1) + b
+    line = np.array([[at(a, N // 2), at(a + 1, N // 2)] for a in range(2, 2 + length)])
+    surface = exact(points, sizes, corners, SharpFeatures(line, np.full(length, 10.0)))
+    assert surface.topology.crease_sheets.dart_vertex.size == 2
+    assert_dart_surface(surface, darts=2)
+
+
+@pytest.mark.parametrize("name", ["catmark_dart_edgeonly", "catmark_dart_edgecorner"])
+def test_opensubdiv_darts_infinitely_sharp_are_c0_up_to_the_dart(name):
+    """Their crease 8 - 17 - 20 (sharpness 2 in the files, semi-sharp: G1 as before) made infinitely sharp: cut
+    from the boundary (8) to the dart (20), C0 along both edges up to the dart's centre."""
+    mesh = read_mesh(shared_mesh(f"opensubdiv/{name}.obj"))
+    tags = mesh.tags
+    assert sorted(map(sorted, tags.crease_edges.tolist())) == [[8, 17], [17, 20]]
+    features = SharpFeatures(tags.crease_edges, np.full(len(tags.crease_edges), 10.0))
+    points = mesh.points.copy()
+    points[[8, 17, 20], 1] += 0.5  # a ridge along the crease: a real crease to measure (the file is flat there)
+    surface = exact(points, mesh.face_sizes, mesh.face_vertices, features)
+    sheets = surface.topology.crease_sheets
+    assert sheets.cut_edges.tolist() == [[8, 17], [17, 20]] and sheets.vertex_name[sheets.dart_vertex].tolist() == [20]
+    report = check_surface(surface)
+    assert report.crease_edges == len(surface.crease_sides) == 8 and report.unpaired_crease_sides == 0
+    assert report.relative_crease_gap < 1e-12 and report.max_normal_jump < 1e-10

@@ -61,8 +61,8 @@ class CreaseSheets:
         (``non_manifold``), whose sheets meet along it
     vertex_name : (V',) int, ``names`` of every vertex of ``mesh`` (crease pieces are named by these)
     kept_edges : (K, 2) int, crease edges left uncut (dart chains, and components that are not exact; ``names``)
-    dart_edges : (k, 2) int, of those, the edges of lone crease lines (both ends inside the surface:
-        ``dart_chains``; ``names``)
+    dart_edges : (k, 2) int, of those, the lone crease edges (one edge between two darts: ``dart_chains``;
+        ``names``)
     dart_vertex : (k,) int, vertices of ``mesh`` where a cut crease ends inside the surface (darts): one copy
         each, in as many real faces as the dart's valence and two ghost quads (``construction.stencils.dart``)
     inexact_vertices : (k,) int, vertices that keep their components from being cut (``names``)
@@ -115,13 +115,14 @@ def dart_ends(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray) 
 
 
 def dart_chains(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray) -> np.ndarray:
-    """(H,) bool: half-edges of the crease lines that end inside the surface at both ends.
+    """(H,) bool: the lone crease edges, each alone on its crease line with both ends inside the surface.
 
     A chain runs along sharp edges through interior vertices on exactly two of them (not tagged corners).
-    A chain with one dart end (a crease end inside the surface) is cut: its dart gets the dart's hole
-    (``construction.stencils.dart``), C0 up to the end. A chain whose two ends are darts (a lone crease
-    line inside the surface) is not: its two ghost quads would close on each other; it keeps the sharpest
-    G1 crease, which fades out at both ends as OpenSubdiv's does.
+    A chain with a dart end (a crease end inside the surface) is cut: its dart gets the dart's hole
+    (``construction.stencils.dart``), C0 up to the end, also at both ends of a line of two or more edges.
+    A line of one edge between two darts is not: its two ghost quads would close on each other (a pillow
+    of two quads whose outer vertices have two faces); it keeps the sharpest G1 crease, which fades out at
+    both ends as OpenSubdiv's does.
 
     Parameters
     ----------
@@ -144,7 +145,8 @@ def dart_chains(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray
     joins = np.tile(np.arange(once.size), 2)[link[ends]]
     chain = component_roots(once.size + n, joins, once.size + ends[link[ends]])[: once.size]
     dart_count = np.bincount(chain, weights=dart[a].astype(float) + dart[b], minlength=once.size + n)
-    lone = dart_count[chain] >= 2
+    edges = np.bincount(chain, minlength=once.size + n)
+    lone = (dart_count[chain] >= 2) & (edges[chain] == 1)
     peeled[once[lone]] = True
     twin = mesh.twin[once[lone]]
     peeled[twin[twin >= 0]] = True
