@@ -327,7 +327,8 @@ def patch_stage(topology: SurfaceTopology, inputs: StageInputs) -> StackedStage:
     """A2 and A3: refined points to the coefficient rows of every kept patch."""
     refined = topology.refined
     biquadratic = biquadratic_layout(refined, topology.quad_frames)
-    bicubic = bicubic_layout(topology.holes, inputs.hole_rules.weights, refined.n_vertices, topology.cubic_keep)
+    bicubic = bicubic_layout(topology.holes, inputs.hole_rules.weights, refined.n_vertices, topology.cubic_keep,
+                             inputs.hole_rules.dart_weights)
     return StackedStage("patches", (biquadratic, bicubic))
 
 

@@ -34,6 +34,7 @@ import numpy as np
 
 from ..console import quiet_stdout
 from ..construction.features import INFINITELY_SHARP, SharpFeatures
+from ..mesh.creases.sectors import merge_crease_sectors
 from ..mesh.feature_edges import feature_edges
 from ..mesh.weld import weld_vertices
 from .cleanup import clean_control_mesh, cleanup_notes, edge_keys
@@ -84,6 +85,16 @@ class ControlMesh:
         """The same connectivity and tags at new points (the fitted ones)."""
         return ControlMesh(self.face_sizes, self.face_vertices, np.asarray(points, dtype=np.float64),
                            self.crease_edges, list(self.notes), dict(self.report))
+
+
+def _merged_sectors(sizes: np.ndarray, vertices: np.ndarray, n_vertices: int, creases: np.ndarray):
+    """(face sizes, face vertices, faces merged): the faces of crease sectors too large for an exact C0 crease
+    merged (``mesh.creases.sectors``, as ``convert`` does), so that every tagged line, darts included, is a
+    C0 seam; the points and the tags stay."""
+    merge = merge_crease_sectors(sizes, vertices, n_vertices, creases, np.zeros(0, dtype=np.int64))
+    if merge is None or len(merge.lost_creases):
+        return sizes, vertices, 0
+    return merge.face_sizes.astype(np.int64), merge.face_vertices.astype(np.int64), int(merge.merged_faces)
 
 
 def _welded_scan(points: np.ndarray, triangles: np.ndarray):
@@ -312,5 +323,10 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
         report["feature_edges"] = int(lines.shape[0])
         notes.append(f"--crease-angle {crease_angle:g}: {lines.shape[0]} scan edges sharper than that; "
                      f"{creases.shape[0]} control edges follow them and are tagged infinitely sharp")
+        sizes, vertices, merged = _merged_sectors(sizes, vertices, control_points.shape[0], creases)
+        if merged:
+            report["merged_sector_faces"] = merged
+            notes.append(f"merged {merged} control faces in crease sectors of three or more faces, so that the "
+                         "crease lines are C0 seams (docs/sharp-features.md, \"Sectors of many faces\")")
     report["crease_edges"] = int(creases.shape[0])
     return ControlMesh(sizes, vertices, control_points, creases, notes, report)

@@ -139,15 +139,17 @@ class HoleRules:
         """Name of the rule that fills n-sided holes."""
         return self.triangles if n == 3 and HOLE_RULES[self.triangles].covers(n) else "g1"
 
-    def weights(self, n: int, large: int = LARGE_HOLE, dart: bool = False):
+    def weights(self, n: int, large: int = LARGE_HOLE):
         """(16 n, 4 n) float, the rule's patches as weights on the hole's points [A, B1, B2, C] (cached);
-        for n > ``large``, a ``HoleOperator`` of that shape that applies them in O(n). ``dart``: the hole
-        of a dart, n - 2 real corners and two ghost ones (``dart.dart_ring_weights``)."""
-        if dart:
-            return dart_ring_weights(n, float(self.alpha), float(self.beta), self.tangent_rule)
+        for n > ``large``, a ``HoleOperator`` of that shape that applies them in O(n)."""
         if n > large and self.rule(n) == "g1":
             return HoleOperator(n, float(self.alpha), float(self.beta), self.tangent_rule)
         return _dense_weights(self.rule(n), n, float(self.alpha), float(self.beta), self.tangent_rule)
+
+    def dart_weights(self, n: int):
+        """(16 n, 4 n) float: the hole of a dart, n - 2 real corners and two ghost ones last, on its ring
+        [A, B1, B2, C] (``dart.dart_ring_weights``; the shape parameters as A3's)."""
+        return dart_ring_weights(n, float(self.alpha), float(self.beta), self.tangent_rule)
 
     def tangent_datum(self, n: int):
         """(u, w): the tangent datum of n-sided holes (see the module docstring)."""
