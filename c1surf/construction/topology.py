@@ -239,9 +239,10 @@ def check_sheets_meet(features: SharpFeatures, sheets: CreaseSheets | None) -> N
         if len(bad):
             raise TopologyError(
                 f"edge between vertices {{0}} and {{1}} is in more than two faces and its sheets cannot be made to meet "
-                f"exactly ({len(bad)} such edges): a sheet holds an end of its line of such edges inside it (a crease "
-                "end, which a C0 seam cannot take yet); split the mesh there, or convert with --non-manifold refuse to "
-                "see the plain error", vertices=list(bad[0]))
+                f"exactly ({len(bad)} such edges): a sheet holds an end of its line of such edges inside it (there its "
+                "crease would end at a dart, whose curve the other sheets' boundary cannot follow), or a vertex of the "
+                "line has too many faces on one side of a sheet; split the mesh there, or convert with --non-manifold "
+                "refuse to see the plain error", vertices=list(bad[0]))
 
 
 def pulled_sharpness(coarse: HalfEdgeMesh, vertex_source: np.ndarray, features: SharpFeatures | None,
