@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -168,3 +169,27 @@ def test_render_of_the_mesh_is_the_render_of_its_patch_file(sharp_cube, tmp_path
     assert run("render", tagged, "--exact-creases", "--png", from_mesh, "--size", "64x64").exit_code == 0
     assert run("render", d / "cube.json", "--png", from_file, "--size", "64x64").exit_code == 0
     assert from_mesh.read_bytes() == from_file.read_bytes()
+
+
+def test_a_dart_from_obj_tags_through_patch_files_and_check(tmp_path):
+    """A crease line tagged in an OBJ file (OpenSubdiv `t crease`) that ends inside the surface: convert writes
+    the dart's crease spoke among the patch file's crease sides, and check measures it C0, G1 elsewhere."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "construction"))
+    from dart_meshes import polar_dart
+
+    points, sizes, corners, features, _ = polar_dart([2, 1, 2, 2, 2], seed=3)
+    faces = np.split(corners, np.cumsum(sizes)[:-1])
+    text = "".join(f"v {x} {y} {z}\n" for x, y, z in points) + "".join(
+        "f " + " ".join(str(v + 1) for v in face) + "\n" for face in faces) + "".join(
+        f"t crease 2/1/0 {a} {b} 10\n" for a, b in features.crease_edges)
+    mesh = tmp_path / "dart.obj"
+    mesh.write_text(text)
+    result = run("convert", mesh, "-o", tmp_path / "dart.ply", "--patches", tmp_path / "dart.json")
+    assert result.exit_code == 0, result.output
+    assert "1 C0 crease lines end inside the surface (darts)" in result.stderr
+    sides = json.loads((tmp_path / "dart.json").read_text())["crease_sides"]
+    check = run("check", tmp_path / "dart.json")
+    assert check.exit_code == 0, check.output
+    assert f"crease edges:     {len(sides)} of {len(sides)} listed" in check.output and "G1: yes" in check.output
