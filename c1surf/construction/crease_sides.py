@@ -77,13 +77,15 @@ def dart_spoke_pairs(topology) -> np.ndarray:
     sizes = [g.n * g.cells.size for g in topology.holes]
     if not any(g.dart for g in topology.holes):
         return np.zeros((0, 2), dtype=np.int64)
-    kept = np.cumsum(np.ones(sum(sizes), dtype=bool) if keep is None else keep) - 1  # index among kept bicubic patches
+    keep = np.ones(sum(sizes), dtype=bool) if keep is None else keep
+    kept = np.cumsum(keep) - 1  # index among the kept bicubic patches
     start, out = 0, []
     for g, size in zip(topology.holes, sizes):
         if g.dart:
             first = start + g.n * np.arange(g.cells.size)  # corner 0 of each hole
+            both = keep[first + g.n - 3] & keep[first]  # (a hole face beside the crease: its side is a boundary)
             before, after = topology.n_quad + kept[first + g.n - 3], topology.n_quad + kept[first]
-            out.append(np.stack([4 * before + 1, 4 * after + 2], axis=1))
+            out.append(np.stack([4 * before + 1, 4 * after + 2], axis=1)[both])
         start += size
     return np.sort(np.concatenate(out), axis=1).astype(np.int64)
 

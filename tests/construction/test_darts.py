@@ -128,3 +128,16 @@ def test_opensubdiv_darts_infinitely_sharp_are_c0_up_to_the_dart(name):
     report = check_surface(surface)
     assert report.crease_edges == len(surface.crease_sides) == 8 and report.unpaired_crease_sides == 0
     assert report.relative_crease_gap < 1e-12 and report.max_normal_jump < 1e-10
+
+
+@pytest.mark.parametrize("hole", [0, 4, 2])
+def test_a_hole_face_beside_the_dart(hole):
+    """A face around the dart tagged as a hole (no patches): beside the crease (0 after it, 4 before it) the
+    crease spoke has one side left, a boundary, and is not listed; elsewhere nothing changes."""
+    points, sizes, corners, features, _ = polar_dart([2, 2, 2, 2, 2])
+    tagged = SharpFeatures(features.crease_edges, features.crease_sharpness, hole_faces=np.array([hole]))
+    surface = exact(points, sizes, corners, tagged)
+    assert len(dart_spoke_pairs(surface.topology)) == (0 if hole in (0, 4) else 1)
+    report = check_surface(surface)
+    assert report.unpaired_crease_sides == 0 and report.crease_edges == len(surface.crease_sides)
+    assert report.max_normal_jump < 1e-10 and report.relative_crease_gap < 1e-12
