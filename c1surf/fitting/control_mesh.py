@@ -38,6 +38,7 @@ import numpy as np
 from ..console import quiet_stdout
 from ..construction.features import INFINITELY_SHARP, SharpFeatures
 from ..mesh.creases.sectors import merge_crease_sectors
+from ..mesh.valence_two import dissolve_valence_two
 from ..mesh.feature_edges import feature_edges
 from ..mesh.weld import weld_vertices
 from .cleanup import clean_control_mesh, cleanup_notes, edge_keys
@@ -87,15 +88,23 @@ class ControlMesh:
                            self.crease_edges, list(self.notes), dict(self.report))
 
 
-def _merged_sectors(sizes: np.ndarray, vertices: np.ndarray, n_vertices: int, creases: np.ndarray):
-    """(face sizes, face vertices, faces merged): the faces of crease sectors too large for an exact C0 crease
-    merged (``mesh.creases.sectors``, as ``convert`` does), so that every tagged line, darts included, is a
-    C0 seam; the points and the tags stay."""
-    merge = merge_crease_sectors(sizes, vertices, n_vertices, creases, np.zeros(0, dtype=np.int64))
+def _merged_sectors(sizes: np.ndarray, vertices: np.ndarray, points: np.ndarray, creases: np.ndarray):
+    """(face sizes, face vertices, points, crease edges, faces merged): the faces of crease sectors too large for
+    an exact C0 crease merged (``mesh.creases.sectors``, as ``convert`` does), so that every tagged line, darts
+    included, is a C0 seam; an interior vertex that this leaves in two faces (next to a corner) is dissolved
+    (``mesh.valence_two``, never a seam's) and the points renumbered without it."""
+    merge = merge_crease_sectors(sizes, vertices, points.shape[0], creases, np.zeros(0, dtype=np.int64))
     if merge is None or len(merge.lost_creases):
-        return sizes, vertices, 0
-    return merge.face_sizes.astype(np.int64), merge.face_vertices.astype(np.int64), int(merge.merged_faces)
-
+        return sizes, vertices, points, creases, 0
+    seam = np.zeros(points.shape[0], dtype=bool)
+    seam[creases.ravel()] = True
+    merged_sizes, merged_vertices, _, gone = dissolve_valence_two(merge.face_sizes, merge.face_vertices, points.shape[0],
+                                                                  keep=seam)
+    used = np.zeros(points.shape[0], dtype=bool)
+    used[merged_vertices] = True
+    rank = np.cumsum(used) - 1
+    return (merged_sizes.astype(np.int64), rank[merged_vertices].astype(np.int64), points[used],
+            rank[creases].astype(np.int64), int(merge.merged_faces))
 
 def _welded_scan(points: np.ndarray, triangles: np.ndarray):
     """The scan with coincident vertices welded (split texture seams would make the remesher see pieces)."""
@@ -270,7 +279,7 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
         report["feature_edges"] = int(lines.shape[0])
         notes.append(f"--crease-angle {crease_angle:g}: {lines.shape[0]} scan edges sharper than that; "
                      f"{creases.shape[0]} control edges follow them and are tagged infinitely sharp")
-        sizes, vertices, merged = _merged_sectors(sizes, vertices, control_points.shape[0], creases)
+        sizes, vertices, control_points, creases, merged = _merged_sectors(sizes, vertices, control_points, creases)
         if merged:
             report["merged_sector_faces"] = merged
             notes.append(f"merged {merged} control faces in crease sectors of three or more faces, so that the "

@@ -325,3 +325,22 @@ def test_a_feature_line_that_fades_out_stays_open_and_is_c0_up_to_its_dart():
     report = check_surface(surface)
     assert report.unpaired_crease_sides == 0 and report.crease_edges == len(surface.crease_sides)
     assert report.max_normal_jump < 1e-10 and report.relative_crease_gap < 1e-12
+
+
+def test_merged_crease_sectors_leave_no_vertex_in_two_faces():
+    """sword's blade edges at --crease-angle 45 on a 4718-face remesh: merging its crease sectors left three
+    interior vertices in two faces (a 2-sided cell), now dissolved as convert dissolves them; every tagged
+    edge is cut, 56 of the lines end in darts."""
+    from c1surf.io.meshes.read import read_mesh
+
+    path = SCANS / "sword.obj"
+    if not path.exists():
+        pytest.skip("../shared/scans not available")
+    scan = read_mesh(path)
+    mesh = control_mesh_from_scan(scan.points, scan.face_vertices.reshape(-1, 3), 4718, crease_angle=45.0)
+    assert mesh.report["merged_sector_faces"] > 0
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(exact_creases=True),
+                      features=mesh.features())
+    sheets = surface.topology.crease_sheets
+    assert len(sheets.cut_edges) == len(mesh.crease_edges) and len(sheets.kept_edges) == 0
+    assert sheets.dart_vertex.size > 0
