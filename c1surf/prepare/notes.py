@@ -111,9 +111,8 @@ def dissolve_notes(mesh_file) -> list[str]:
                      "corner), which the exact C0 crease needs (docs/sharp-features.md)")
         if len(lost):
             edges = ", ".join(f"{a}-{b}" for a, b in lost[:6].tolist()) + (", ..." if len(lost) > 6 else "")
-            notes.append(f"C0 creases: {len(lost)} crease edges that start a crease line ending inside the surface were "
-                         f"merged away inside a corner's sector (edges {edges}, 0-based): not used (the rest of "
-                         "each line stays the sharpest G1 crease)")
+            notes.append(f"C0 creases: {len(lost)} crease edges alone on their line, with both ends inside the surface, "
+                         f"were merged away inside a corner's sector (edges {edges}, 0-based): not used")
     dissolved = getattr(mesh_file, "dissolved_vertices", ())
     if not len(dissolved):
         return notes
