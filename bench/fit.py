@@ -21,7 +21,7 @@ For each scan, each measurement in a process of its own (wall seconds, peak resi
    - the shape column rho (``ripple``) for the fitted surface and for the Catmull-Clark mesh;
    - the fit's STEP file read back by Open CASCADE (OCP, when installed): solids, validity, volume over the scan's;
 3. ``spot`` fitted with its own control mesh (../shared/meshes/spot/spot_control_mesh.obj) and ``wingnut``
-   with ``--crease-angle 45`` (crease edges tagged, loose ends: darts).
+   with ``--crease-angle 45`` (crease edges tagged: C0 rims, loose ends darts).
 
 rho = L x sqrt(sum_i w_i (H_i - Hbar_i)^2 / sum_i w_i), L = sqrt(area / 4 pi): H_i the mean curvature at
 sample i, w_i its area, Hbar_i the area-weighted average of H over the samples within half the median control

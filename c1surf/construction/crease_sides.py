@@ -62,7 +62,32 @@ def crease_side_pairs(topology) -> np.ndarray:
     boundary_keys = open_keys[open_count == 1]  # an edge cut in several sheets is a non-manifold crease
     on_boundary = np.isin(keys[:, 2] * width + keys[:, 3], boundary_keys)
     keys, patch, side = keys[~on_boundary], patch[~on_boundary], side[~on_boundary]  # one side: a boundary
-    return _pairs_by_key(keys, 4 * patch + side)
+    pairs = _pairs_by_key(keys, 4 * patch + side)
+    darts = dart_spoke_pairs(topology)
+    if darts.size:
+        pairs = np.concatenate([pairs, darts])
+        pairs = pairs[np.lexsort((pairs[:, 1], pairs[:, 0]))]
+    return pairs
+
+
+def dart_spoke_pairs(topology) -> np.ndarray:
+    """(k, 2) int: curve ids of the crease spoke of every dart's hole (``refine.holes.split_dart_holes``): side
+    u = 1 of p_{n-1} (P_3k) and side v = 1 of p_0 (P_k3), both real, the hole's two ghost corners last."""
+    keep = topology.cubic_keep
+    sizes = [g.n * g.cells.size for g in topology.holes]
+    if not any(g.dart for g in topology.holes):
+        return np.zeros((0, 2), dtype=np.int64)
+    keep = np.ones(sum(sizes), dtype=bool) if keep is None else keep
+    kept = np.cumsum(keep) - 1  # index among the kept bicubic patches
+    start, out = 0, []
+    for g, size in zip(topology.holes, sizes):
+        if g.dart:
+            first = start + g.n * np.arange(g.cells.size)  # corner 0 of each hole
+            both = keep[first + g.n - 3] & keep[first]  # (a hole face beside the crease: its side is a boundary)
+            before, after = topology.n_quad + kept[first + g.n - 3], topology.n_quad + kept[first]
+            out.append(np.stack([4 * before + 1, 4 * after + 2], axis=1)[both])
+        start += size
+    return np.sort(np.concatenate(out), axis=1).astype(np.int64)
 
 
 def _pairs_by_key(keys: np.ndarray, curves: np.ndarray) -> np.ndarray:

@@ -295,7 +295,7 @@ def second_step_stage(topology: SurfaceTopology, inputs: StageInputs) -> DooSabi
 def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs):
     """A1's perturbation of even holes: its matrix, or factored when some even hole has more than
     ``LARGE_HOLE`` sides (the matrix holds (2n)^2 entries for an n-sided hole)."""
-    large = any(g.n % 2 == 0 and g.n > LARGE_HOLE for g in topology.holes)
+    large = any(g.n % 2 == 0 and g.n > LARGE_HOLE and not g.dart for g in topology.holes)
     if large:
         constraints, inverse_gram = perturbation_parts(topology.refined, topology.holes)
         left = None
@@ -327,7 +327,8 @@ def patch_stage(topology: SurfaceTopology, inputs: StageInputs) -> StackedStage:
     """A2 and A3: refined points to the coefficient rows of every kept patch."""
     refined = topology.refined
     biquadratic = biquadratic_layout(refined, topology.quad_frames)
-    bicubic = bicubic_layout(topology.holes, inputs.hole_rules.weights, refined.n_vertices, topology.cubic_keep)
+    bicubic = bicubic_layout(topology.holes, inputs.hole_rules.weights, refined.n_vertices, topology.cubic_keep,
+                             inputs.hole_rules.dart_weights)
     return StackedStage("patches", (biquadratic, bicubic))
 
 

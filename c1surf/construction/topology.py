@@ -23,7 +23,7 @@ from .features import INFINITELY_SHARP, CoarseSharpness, SharpFeatures, coarse_s
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_VERTEX, RefinedFaces, refine_doo_sabin, refined_halfedges
 from .refine.fewer_steps import check_refinements, fewer_refinement_sources, refinements_needed
 from ..memory import return_freed_memory
-from .refine.holes import HoleGroup, hole_neighbourhoods, patch_frames
+from .refine.holes import HoleGroup, hole_neighbourhoods, patch_frames, split_dart_holes
 
 
 # From this many refined half-edges on (the 1,000,000-quad torus has 64M: its twin is 256 MB), the refined mesh's
@@ -183,6 +183,8 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     faces1, level1, refined = refine(coarse, levels)
     real_vertex = real_refined_vertices(coarse, level1, refined, real_face, levels)
     holes = hole_neighbourhoods(refined, None if real_face.all() else real_vertex)
+    if sheets is not None and sheets.dart_vertex is not None and sheets.dart_vertex.size and levels == 2:
+        holes = split_dart_holes(holes, *dart_cells(coarse, faces1, level1, refined, sheets))
     frames, n_quad, real_cubic = patch_frames(refined, holes, real_vertex)  # bicubic patches at real corners only
     if refined.n_halfedges >= RELEASED_TWIN_HALFEDGES:
         refined.release_twin()  # made again if read: the stages and a tessellation at -r 2 never do
@@ -196,6 +198,16 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
         cubic_hole=np.repeat(np.arange(sizes.size), sizes)[real_cubic],
         sharpness=pulled_sharpness(coarse, vertex_source, features, sheets), hole_faces=hole_faces, crease_sheets=sheets,
     )
+
+
+def dart_cells(coarse: HalfEdgeMesh, faces1: RefinedFaces, level1: HalfEdgeMesh, refined: HalfEdgeMesh,
+               sheets: CreaseSheets):
+    """(refined faces of the darts' holes (k,) int, refined points in the sheets' ghost quads (Vr,) bool).
+
+    A dart's hole is the F-cell (same index) of its vertex's V-cell of the first step."""
+    vertex_cell = np.flatnonzero((faces1.kind == FACE_FROM_VERTEX) & np.isin(faces1.parent, sheets.dart_vertex))
+    ghost = np.isin(coarse.face[level1.origin[np.arange(refined.n_vertices)]], sheets.ghost_faces)
+    return vertex_cell, ghost
 
 
 def crease_sheets(prepared: HalfEdgeMesh, vertex_source: np.ndarray, features: SharpFeatures) -> CreaseSheets | None:
@@ -227,9 +239,10 @@ def check_sheets_meet(features: SharpFeatures, sheets: CreaseSheets | None) -> N
         if len(bad):
             raise TopologyError(
                 f"edge between vertices {{0}} and {{1}} is in more than two faces and its sheets cannot be made to meet "
-                f"exactly ({len(bad)} such edges): a sheet holds an end of its line of such edges inside it (a crease "
-                "end, which a C0 seam cannot take yet); split the mesh there, or convert with --non-manifold refuse to "
-                "see the plain error", vertices=list(bad[0]))
+                f"exactly ({len(bad)} such edges): a sheet holds an end of its line of such edges inside it (there its "
+                "crease would end at a dart, whose curve the other sheets' boundary cannot follow), or a vertex of the "
+                "line has too many faces on one side of a sheet; split the mesh there, or convert with --non-manifold "
+                "refuse to see the plain error", vertices=list(bad[0]))
 
 
 def pulled_sharpness(coarse: HalfEdgeMesh, vertex_source: np.ndarray, features: SharpFeatures | None,

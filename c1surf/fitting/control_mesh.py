@@ -21,9 +21,12 @@ Sharp features (``crease_angle``): the scan's edges whose faces meet at more tha
 follows a line when its two ends and its midpoint lie within a quarter of the median control edge
 of the line and it runs along the line (within ``ALONG_DEGREES``); such edges are tagged
 infinitely sharp (``ControlMesh.features``). A tagged line that stops short (a vertex on one tagged
-edge: a dart, which stays a G1 crease instead of a C0 seam) is extended there by the edge nearest
-the line within twice both allowances, for up to ``EXTEND_ROUNDS`` edges; loose ends left are then
-joined in pairs by short paths near the line (``_bridges``), so a rim becomes a closed crease loop.
+edge) is extended there by the edge nearest the line within twice both allowances, for up to
+``EXTEND_ROUNDS`` edges. Loose ends left are darts, which are C0 up to their end (the dart's hole,
+``construction.stencils.dart``): the lines are not bridged shut (until session 9 they were joined in pairs
+by short paths near the line, because a dart then kept its line G1). The control faces of crease sectors
+of three or more faces are merged (``mesh.creases.sectors``, as ``convert`` does), so every tagged line
+is a C0 seam.
 """
 from __future__ import annotations
 
@@ -34,6 +37,8 @@ import numpy as np
 
 from ..console import quiet_stdout
 from ..construction.features import INFINITELY_SHARP, SharpFeatures
+from ..mesh.creases.sectors import merge_crease_sectors
+from ..mesh.valence_two import dissolve_valence_two
 from ..mesh.feature_edges import feature_edges
 from ..mesh.weld import weld_vertices
 from .cleanup import clean_control_mesh, cleanup_notes, edge_keys
@@ -45,9 +50,6 @@ FACE_SLACK = 0.15  # a second remesh when the count lands further than this from
 NEAR_LINE = 0.25  # of the median control edge: how near a feature line a tagged edge's points lie
 ALONG_DEGREES = 25.0  # largest angle between a tagged edge and the feature line it follows
 EXTEND_ROUNDS = 8  # rounds of extending tagged lines from their loose ends
-BRIDGE_OFF_LINE = 8.0  # bridges between loose ends stay within this many allowances of the line
-BRIDGE_LENGTH = 4.0  # and cost at most this many typical edges
-BRIDGE_DEGREES = 60.0  # and continue both lines within this angle
 RETRY_SCALES = (1.0, 1.04, 0.96)  # remesh targets tried in turn until one Doo-Sabin step suffices
 
 
@@ -85,6 +87,24 @@ class ControlMesh:
         return ControlMesh(self.face_sizes, self.face_vertices, np.asarray(points, dtype=np.float64),
                            self.crease_edges, list(self.notes), dict(self.report))
 
+
+def _merged_sectors(sizes: np.ndarray, vertices: np.ndarray, points: np.ndarray, creases: np.ndarray):
+    """(face sizes, face vertices, points, crease edges, faces merged): the faces of crease sectors too large for
+    an exact C0 crease merged (``mesh.creases.sectors``, as ``convert`` does), so that every tagged line, darts
+    included, is a C0 seam; an interior vertex that this leaves in two faces (next to a corner) is dissolved
+    (``mesh.valence_two``, never a seam's) and the points renumbered without it."""
+    merge = merge_crease_sectors(sizes, vertices, points.shape[0], creases, np.zeros(0, dtype=np.int64))
+    if merge is None or len(merge.lost_creases):
+        return sizes, vertices, points, creases, 0
+    seam = np.zeros(points.shape[0], dtype=bool)
+    seam[creases.ravel()] = True
+    merged_sizes, merged_vertices, _, gone = dissolve_valence_two(merge.face_sizes, merge.face_vertices, points.shape[0],
+                                                                  keep=seam)
+    used = np.zeros(points.shape[0], dtype=bool)
+    used[merged_vertices] = True
+    rank = np.cumsum(used) - 1
+    return (merged_sizes.astype(np.int64), rank[merged_vertices].astype(np.int64), points[used],
+            rank[creases].astype(np.int64), int(merge.merged_faces))
 
 def _welded_scan(points: np.ndarray, triangles: np.ndarray):
     """The scan with coincident vertices welded (split texture seams would make the remesher see pieces)."""
@@ -208,60 +228,7 @@ def tag_feature_edges(face_sizes, face_vertices, points, line_points, line_edges
         order = np.lexsort((distance[:, edge].max(axis=0), end))
         first = order[np.r_[True, end[order][1:] != end[order][:-1]]]
         tagged[edge[first]] = True
-    tagged |= _bridges(a, b, tagged, distance.max(axis=0) / near, typical, points)
     return np.stack([a[tagged], b[tagged]], axis=1).astype(np.int64)
-
-
-def _bridges(a, b, tagged, off_line, typical, points) -> np.ndarray:
-    """(E,) bool: untagged edges that join loose ends of the tagged lines in pairs.
-
-    Shortest paths between loose ends over untagged edges within ``BRIDGE_OFF_LINE`` allowances of the
-    line (a scan's feature line itself has gaps where its dihedral angle dips under the threshold), each
-    edge weighted by the typical length times 1 + (off_line / BRIDGE_OFF_LINE)^2; the cheapest pairs
-    first, each end once, paths costing up to ``BRIDGE_LENGTH`` typical edges, and only where the bridge
-    continues both lines (within ``BRIDGE_DEGREES`` of each loose edge's outward direction). Without it a line with a gap is two
-    darts, which stay G1 (``mesh.creases.sheets.dart_chains``), and a C0 crease needs the closed rim.
-    """
-    from scipy.sparse import csr_matrix
-    from scipy.sparse.csgraph import dijkstra
-
-    n_vertices = points.shape[0]
-    degree = np.bincount(np.r_[a[tagged], b[tagged]], minlength=n_vertices)
-    loose = np.flatnonzero(degree == 1)
-    # the outward direction of each loose end: from its tagged edge's other end to it
-    other = np.full(n_vertices, -1, dtype=np.int64)
-    other[a[tagged]], other[b[tagged]] = b[tagged], a[tagged]
-    outward = points[loose] - points[other[loose]]
-    outward /= np.maximum(np.linalg.norm(outward, axis=1, keepdims=True), 1e-300)
-    bridge = np.zeros(a.size, dtype=bool)
-    if loose.size < 2:
-        return bridge
-    usable = ~tagged & (off_line < BRIDGE_OFF_LINE)
-    weight = typical * (1.0 + (off_line[usable] / BRIDGE_OFF_LINE) ** 2)
-    graph = csr_matrix((np.r_[weight, weight], (np.r_[a[usable], b[usable]], np.r_[b[usable], a[usable]])),
-                       shape=(n_vertices, n_vertices))
-    cost, previous = dijkstra(graph, indices=loose, return_predecessors=True, limit=BRIDGE_LENGTH * typical)
-    pair_cost = cost[:, loose]
-    np.fill_diagonal(pair_cost, np.inf)
-    edge_index = {(int(x), int(y)): k for k, (x, y) in enumerate(zip(a, b))}
-    used = np.zeros(loose.size, dtype=bool)
-    for flat in np.argsort(pair_cost, axis=None):  # the few loose ends: cheapest pairs first
-        i, j = divmod(int(flat), loose.size)
-        if not np.isfinite(pair_cost[i, j]):
-            break
-        if used[i] or used[j]:
-            continue
-        step = points[loose[j]] - points[loose[i]]
-        step /= max(float(np.linalg.norm(step)), 1e-300)
-        if min(outward[i] @ step, -(outward[j] @ step)) < np.cos(np.radians(BRIDGE_DEGREES)):
-            continue
-        used[i] = used[j] = True
-        v = loose[j]
-        while v != loose[i]:
-            u = previous[i, v]
-            bridge[edge_index[(min(u, v), max(u, v))]] = True
-            v = u
-    return bridge
 
 
 def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | None = None) -> ControlMesh:
@@ -312,5 +279,10 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
         report["feature_edges"] = int(lines.shape[0])
         notes.append(f"--crease-angle {crease_angle:g}: {lines.shape[0]} scan edges sharper than that; "
                      f"{creases.shape[0]} control edges follow them and are tagged infinitely sharp")
+        sizes, vertices, control_points, creases, merged = _merged_sectors(sizes, vertices, control_points, creases)
+        if merged:
+            report["merged_sector_faces"] = merged
+            notes.append(f"merged {merged} control faces in crease sectors of three or more faces, so that the "
+                         "crease lines are C0 seams (docs/sharp-features.md, \"Sectors of many faces\")")
     report["crease_edges"] = int(creases.shape[0])
     return ControlMesh(sizes, vertices, control_points, creases, notes, report)

@@ -70,11 +70,14 @@ def seam_notes(exact_creases: bool, features, topology) -> list[str]:
     if lone.size:
         notes.append(f"{lone.size} infinitely sharp corners are not on a C0 seam and stay the sharpest G1 corner "
                      f"(vertices {', '.join(map(str, lone[:8].tolist()))}{' ...' if lone.size > 8 else ''}, 0-based)")
+    ends = 0 if sheets is None or sheets.dart_vertex is None else sheets.dart_vertex.size
+    if ends:
+        notes.append(f"{ends} C0 crease lines end inside the surface (darts): C0 up to the dart, where the crease "
+                     "fades out into a G1 point (docs/sharp-features.md, \"Darts\")")
     darts = 0 if sheets is None or sheets.dart_edges is None else len(sheets.dart_edges)
     if darts:
-        notes.append(f"{darts} infinitely sharp crease edges lie on crease lines that end inside the surface (darts): "
-                     "they stay the sharpest G1 crease, which fades out at the dart as in OpenSubdiv; the rest of "
-                     "their crease is a C0 seam")
+        notes.append(f"{darts} infinitely sharp crease edges are crease lines of one edge that end inside the surface "
+                     "at both ends: they stay the sharpest G1 crease, which fades out at both ends as in OpenSubdiv")
         kept -= darts
     if kept:
         named = [] if sheets is None else sheets.inexact_vertices.tolist()
@@ -108,9 +111,8 @@ def dissolve_notes(mesh_file) -> list[str]:
                      "corner), which the exact C0 crease needs (docs/sharp-features.md)")
         if len(lost):
             edges = ", ".join(f"{a}-{b}" for a, b in lost[:6].tolist()) + (", ..." if len(lost) > 6 else "")
-            notes.append(f"C0 creases: {len(lost)} crease edges that start a crease line ending inside the surface were "
-                         f"merged away inside a corner's sector (edges {edges}, 0-based): not used (the rest of "
-                         "each line stays the sharpest G1 crease)")
+            notes.append(f"C0 creases: {len(lost)} crease edges alone on their line, with both ends inside the surface, "
+                         f"were merged away inside a corner's sector (edges {edges}, 0-based): not used")
     dissolved = getattr(mesh_file, "dissolved_vertices", ())
     if not len(dissolved):
         return notes

@@ -84,7 +84,7 @@ def merge_surface_sectors(mesh, data: SurfaceData | None):
     """Merge the faces of crease sectors too large for an exact C0 crease (``mesh.creases.sectors``).
 
     Faces with different blend ratios, hole tags or other per-face data are not merged, nor semi-sharp
-    crease edges; the first edge of a dart chain inside a corner's sector may go (its tag is dropped from
+    crease edges; a lone crease edge between two darts inside a corner's sector may go (its tag is dropped from
     the features and named in a note, ``MeshFile.sector_merge``); per-face data and holes follow the
     merged polygon's lowest face.
     """
@@ -104,7 +104,7 @@ def merge_surface_sectors(mesh, data: SurfaceData | None):
     merged, kept = merge_sector_faces(mesh, f.crease_edges[sharp], corners, keys, semi_sharp)
     if kept is None:
         return mesh, data
-    lost = merged.sector_merge[3]  # dart chains' first edges, merged away (their own note)
+    lost = merged.sector_merge[3]  # lone crease edges between two darts, merged away (their own note)
     if len(lost):
         n = mesh.n_vertices
         gone = np.isin(np.minimum(*f.crease_edges.T) * n + np.maximum(*f.crease_edges.T), lost[:, 0] * n + lost[:, 1])

@@ -38,6 +38,7 @@ def main():
     crease_strip(HERE / "crease_sharpness.png")
     c0_crease_pair(HERE / "c0_creases.png")
     cad_part(HERE / "cad_creases.png")
+    dart_trio(HERE / "dart_edgeonly.png")
     valence_two_diagram(HERE / "valence_two.png")
 
 
@@ -105,6 +106,29 @@ def cad_part(path):
             c1surf("render", patches, "--zebra", png, "--size", "300x280", "--stripes", "14", "--eye", "2.2", "-2.8", "2.4",
                    "--target", "0", "0", "0", "--up", "0", "0", "1")
             tiles.append((Image.open(png).convert("RGB"), f"{label}: reflection lines"))
+    labelled_row(tiles, 310, path)
+
+
+def dart_trio(path):
+    """Reflection lines of OpenSubdiv's catmark_dart_edgeonly (a crease 8 - 17 - 20 from the boundary to the dart
+    20): its own tags (sharpness 2: the G1 pull), the crease made infinitely sharp (a --creases file) with
+    --g1-creases (the sharpest G1 crease), and by default (C0 up to the dart, the dart's hole)."""
+    import tempfile
+
+    mesh = ROOT.parent / "shared" / "meshes" / "opensubdiv" / "catmark_dart_edgeonly.obj"
+    if not mesh.exists():
+        return
+    tiles = []
+    with tempfile.TemporaryDirectory() as tmp:
+        creases = Path(tmp) / "dart.json"
+        creases.write_text('{"creases": [[8, 17, 20, 10]]}')
+        for label, extra in (("file's tags (sharpness 2): G1", ()), ("sharpness 10, --g1-creases", ("--creases", creases, "--g1-creases")),
+                             ("sharpness 10: C0 up to the dart", ("--creases", creases))):
+            patches, png = Path(tmp) / "p.json", Path(tmp) / "z.png"
+            c1surf("convert", mesh, "-o", Path(tmp) / "m.ply", "-r", "2", "--patches", patches, *extra)
+            c1surf("render", patches, "--zebra", png, "--size", "300x280", "--stripes", "16", "--eye", "2.5", "-3.5", "4.5",
+                   "--target", "0", "0", "0.3", "--up", "0", "0", "1")
+            tiles.append((Image.open(png).convert("RGB"), label))
     labelled_row(tiles, 310, path)
 
 

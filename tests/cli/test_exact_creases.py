@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import os
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -114,13 +115,25 @@ def test_malformed_crease_sides_are_one_line(sharp_cube, tmp_path):
     assert check.stderr.strip().splitlines()[-1].startswith("c1surf: error:") and "crease_sides" in check.stderr
 
 
-def test_crease_lines_that_are_not_exact_are_named(tmp_path):
+def test_crease_lines_that_end_inside_are_named(tmp_path):
     result = run("check", shared_mesh("opensubdiv/catmark_cubes_infsharp.obj"), "--exact-creases")
     assert result.exit_code == 0, result.output
-    assert "C0 creases: 15 of 17 infinitely sharp crease edges are C0 seams" in result.stderr
-    assert "2 infinitely sharp crease edges lie on crease lines that end inside the surface (darts)" in result.stderr
+    assert "C0 creases: 17 of 17 infinitely sharp crease edges are C0 seams" in result.stderr
+    assert "2 C0 crease lines end inside the surface (darts): C0 up to the dart" in result.stderr
     assert "1 infinitely sharp corners are not on a C0 seam" in result.stderr
-    assert "crease edges:     60 of 60 listed" in result.output
+    assert "crease edges:     68 of 68 listed" in result.output
+
+
+def test_a_crease_line_of_one_edge_inside_the_surface_stays_g1(tmp_path):
+    creases = tmp_path / "one.json"
+    creases.write_text(json.dumps({"creases": [[9, 8, 10]]}))  # catmark_cubes_infsharp's edge 9 - 8 alone
+    mesh = tmp_path / "cubes.obj"
+    text = shared_mesh("opensubdiv/catmark_cubes_infsharp.obj").read_text().splitlines()
+    mesh.write_text("\n".join(line for line in text if not line.startswith("t ")) + "\n")
+    result = run("check", mesh, "--exact-creases", "--creases", creases)
+    assert result.exit_code == 0, result.output
+    assert "1 infinitely sharp crease edges stay the sharpest G1 crease" in result.stderr
+    assert "G1: yes" in result.output
 
 
 def test_streamed_and_in_memory_files_are_identical(tmp_path):
@@ -138,7 +151,7 @@ def test_streamed_and_in_memory_files_are_identical(tmp_path):
 def test_inspect_plans_the_seams_that_convert_makes(tmp_path):
     path = shared_mesh("opensubdiv/catmark_cubes_infsharp.obj")
     report = json.loads(run("inspect", path, "--exact-creases", "--json").output)
-    assert "C0 creases: 15 of 17 infinitely sharp crease edges are C0 seams" in report["notes"]
+    assert "C0 creases: 17 of 17 infinitely sharp crease edges are C0 seams" in report["notes"]
     result = run("convert", path, "-o", tmp_path / "x.ply", "--exact-creases", "--patches", tmp_path / "x.json")
     assert result.exit_code == 0, result.output
     counts = json.loads((tmp_path / "x.json").read_text())["counts"]
@@ -156,3 +169,27 @@ def test_render_of_the_mesh_is_the_render_of_its_patch_file(sharp_cube, tmp_path
     assert run("render", tagged, "--exact-creases", "--png", from_mesh, "--size", "64x64").exit_code == 0
     assert run("render", d / "cube.json", "--png", from_file, "--size", "64x64").exit_code == 0
     assert from_mesh.read_bytes() == from_file.read_bytes()
+
+
+def test_a_dart_from_obj_tags_through_patch_files_and_check(tmp_path):
+    """A crease line tagged in an OBJ file (OpenSubdiv `t crease`) that ends inside the surface: convert writes
+    the dart's crease spoke among the patch file's crease sides, and check measures it C0, G1 elsewhere."""
+    import sys
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "construction"))
+    from dart_meshes import polar_dart
+
+    points, sizes, corners, features, _ = polar_dart([2, 1, 2, 2, 2], seed=3)
+    faces = np.split(corners, np.cumsum(sizes)[:-1])
+    text = "".join(f"v {x} {y} {z}\n" for x, y, z in points) + "".join(
+        "f " + " ".join(str(v + 1) for v in face) + "\n" for face in faces) + "".join(
+        f"t crease 2/1/0 {a} {b} 10\n" for a, b in features.crease_edges)
+    mesh = tmp_path / "dart.obj"
+    mesh.write_text(text)
+    result = run("convert", mesh, "-o", tmp_path / "dart.ply", "--patches", tmp_path / "dart.json")
+    assert result.exit_code == 0, result.output
+    assert "1 C0 crease lines end inside the surface (darts)" in result.stderr
+    sides = json.loads((tmp_path / "dart.json").read_text())["crease_sides"]
+    check = run("check", tmp_path / "dart.json")
+    assert check.exit_code == 0, check.output
+    assert f"crease edges:     {len(sides)} of {len(sides)} listed" in check.output and "G1: yes" in check.output

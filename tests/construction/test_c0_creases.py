@@ -155,19 +155,19 @@ def test_c0_creases_are_linear_in_the_points():
     assert np.abs(surface.stencil() @ moved - stacked).max() <= 1e-13
 
 
-def test_a_dart_chain_keeps_the_g1_crease_and_the_rest_is_cut():
-    # catmark_cubes_infsharp: the chain 9 - 8 - 10 ends inside the surface at both ends (darts): its two
-    # edges keep their G1 crease (mesh.creases.sheets.dart_chains); every other component is cut
+def test_a_line_between_two_darts_is_cut_up_to_both_ends():
+    # catmark_cubes_infsharp: the chain 9 - 8 - 10 ends inside the surface at both ends (darts): cut like the
+    # rest, each end a dart's hole (construction.stencils.dart)
     mesh = read_mesh(shared_mesh("opensubdiv/catmark_cubes_infsharp.obj"))
     tags = mesh.tags
     features = SharpFeatures(tags.crease_edges, tags.crease_sharpness, tags.corner_vertices, tags.corner_sharpness)
     surface = exact_surface(mesh, features)
     sheets = surface.topology.crease_sheets
-    assert sheets.kept_edges.tolist() == [[8, 9], [8, 10]] == sheets.dart_edges.tolist()
+    assert len(sheets.kept_edges) == 0 and len(sheets.dart_edges) == 0 and len(sheets.cut_edges) == 17
+    assert sorted(sheets.vertex_name[sheets.dart_vertex].tolist()) == [9, 10]
     assert sheets.inexact_vertices.size == 0
-    assert surface.topology.sharpness is not None  # the kept edges are still pulled
     crease_gap, smooth_gap, smooth_jump, crease_pairs, unmatched = crease_and_smooth(surface)
-    assert unmatched == 0 and crease_pairs > 0
+    assert unmatched == 0 and crease_pairs == len(surface.crease_sides)
     assert crease_gap <= 1e-12 and smooth_jump <= 1e-10
 
 
@@ -209,12 +209,14 @@ def test_opensubdiv_files_with_infinitely_sharp_tags_meet_exactly_where_cut_and_
     assert report.max_normal_jump <= 1e-10
     cut = 0 if sheets is None else len(sheets.cut_edges)
     # cut: closed crease components, and those reaching the boundary, once too large sectors are merged
-    # (fvar_project0: 1 | 3 sectors, inf_crease1: 2 | 4 and corner sectors of 2 and 3 faces); the dart
-    # chain 0 - 4 of inf_crease1 stays a G1 crease; in inf_crease0 the dart edge 16 - 17 lies inside a
-    # sector of the corner 16, which must be one face: merged away (a note), the other 10 edges cut
-    assert cut == {"catmark_cube_creases2": 11, "catmark_cubes_infsharp": 15, "catmark_edgenone": 18,
+    # (fvar_project0: 1 | 3 sectors, inf_crease1: 2 | 4 and corner sectors of 2 and 3 faces); darts are cut
+    # up to their end (the dart's hole): the chain 0 - 4 of inf_crease1, the edge 16 - 17 of inf_crease0, the
+    # line 9 - 8 - 10 of cubes_infsharp (darts at both ends)
+    assert cut == {"catmark_cube_creases2": 11, "catmark_cubes_infsharp": 17, "catmark_edgenone": 18,
                    "catmark_single_crease": 4, "catmark_val2_interior": 3, "catmark_fvar_project0": 4,
-                   "catmark_inf_crease1": 7, "catmark_inf_crease0": 10}.get(name, 0)
+                   "catmark_inf_crease1": 8, "catmark_inf_crease0": 11}.get(name, 0)
+    darts = 0 if sheets is None else sheets.dart_vertex.size
+    assert darts == {"catmark_inf_crease1": 1, "catmark_inf_crease0": 1, "catmark_cubes_infsharp": 2}.get(name, 0)
 
 
 def test_a_crease_reaching_the_boundary_ends_at_a_corner_of_the_boundary_curve():

@@ -300,3 +300,47 @@ def test_degenerate_scan_is_refused_in_one_line():
         control_mesh_from_scan(points, triangles, 100)
     with pytest.raises(ValueError, match="no area"):
         control_mesh_from_scan(np.zeros((3, 3)), np.array([[0, 1, 2]]), 100)
+
+
+def test_a_feature_line_that_fades_out_stays_open_and_is_c0_up_to_its_dart():
+    """A scan of a ridge whose sharp top fades into a smooth dome (a roof z = 1 - |y| for x > 0, blended into a
+    round cap for x < 0): the tagged line is not bridged shut, its loose end is a dart, and with exact creases
+    every tagged edge is a C0 seam (the dart's hole), G1 elsewhere."""
+    import trimesh
+
+    from c1surf.api import check_surface
+
+    grid = trimesh.creation.box(extents=(4.0, 3.0, 1.0)).subdivide_to_size(0.08)
+    points = np.asarray(grid.vertices).copy()
+    top = points[:, 2] > 0.49
+    fade = np.clip(points[:, 0] + 0.5, 0.0, 1.0)  # 0 for x < -0.5, 1 for x > 0.5
+    points[top, 2] += 0.6 * (1 - np.abs(points[top, 1]) / 1.5) * fade[top] + 0.3 * (1 - fade[top]) * (
+        1 - (points[top, 1] / 1.5) ** 2)
+    mesh = control_mesh_from_scan(points, np.asarray(grid.faces), 600, crease_angle=25.0)
+    assert mesh.crease_edges.shape[0] > 12
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(exact_creases=True),
+                      features=mesh.features())
+    sheets = surface.topology.crease_sheets
+    assert sheets.dart_vertex.size >= 1 and len(sheets.kept_edges) == 0
+    report = check_surface(surface)
+    assert report.unpaired_crease_sides == 0 and report.crease_edges == len(surface.crease_sides)
+    assert report.max_normal_jump < 1e-10 and report.relative_crease_gap < 1e-12
+
+
+def test_merged_crease_sectors_leave_no_vertex_in_two_faces():
+    """sword's blade edges at --crease-angle 45 on a 4718-face remesh: merging its crease sectors left three
+    interior vertices in two faces (a 2-sided cell), now dissolved as convert dissolves them; every tagged
+    edge is cut, 56 of the lines end in darts."""
+    from c1surf.io.meshes.read import read_mesh
+
+    path = SCANS / "sword.obj"
+    if not path.exists():
+        pytest.skip("../shared/scans not available")
+    scan = read_mesh(path)
+    mesh = control_mesh_from_scan(scan.points, scan.face_vertices.reshape(-1, 3), 4718, crease_angle=45.0)
+    assert mesh.report["merged_sector_faces"] > 0
+    surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(exact_creases=True),
+                      features=mesh.features())
+    sheets = surface.topology.crease_sheets
+    assert len(sheets.cut_edges) == len(mesh.crease_edges) and len(sheets.kept_edges) == 0
+    assert sheets.dart_vertex.size > 0

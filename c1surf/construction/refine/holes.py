@@ -34,6 +34,8 @@ class HoleGroup:
     cells : (k,) int, refined face index of each hole
     halfedges : (k, n) int, half-edge C_i -> C_{i+1} of each hole
     A, B1, B2, C : (k, n) int, refined vertex indices of A_i, B_{i,1}, B_{i,2}, C_i
+    dart : bool, the holes of darts (``split_dart_holes``): corners n - 2 and n - 1 are the ghost corners
+        across the crease, whose patches are not kept (``construction.stencils.dart``)
     """
 
     n: int
@@ -43,6 +45,7 @@ class HoleGroup:
     B1: np.ndarray
     B2: np.ndarray
     C: np.ndarray
+    dart: bool = False
 
 
 def cell_neighbourhood(mesh: HalfEdgeMesh, h: np.ndarray):
@@ -87,6 +90,42 @@ def hole_neighbourhoods(mesh: HalfEdgeMesh, wanted_vertex=None) -> list[HoleGrou
             raise TopologyError("internal: a hole of the refined mesh is not surrounded by quads")
         groups.append(HoleGroup(n=n, cells=cells, halfedges=h, A=A, B1=B1, B2=B2, C=C))
     return groups
+
+
+def split_dart_holes(holes: list[HoleGroup], dart_cell: np.ndarray, ghost_corner: np.ndarray) -> list[HoleGroup]:
+    """``holes`` with the holes of darts taken out into groups of their own (``HoleGroup.dart``), each turned
+    so that its two ghost corners come last.
+
+    A dart (a crease that ends inside the surface, ``mesh.creases.sheets``) is a cut vertex in its n real
+    faces and two ghost quads, one across the crease from each side: its hole has n + 2 corners, the two
+    ghost ones next to each other, each the mirror of its real neighbour across the crease.
+
+    Parameters
+    ----------
+    holes : list of HoleGroup
+    dart_cell : (k,) int, refined faces (holes) of the darts
+    ghost_corner : (V,) bool, refined points in the crease sheets' ghost quads
+    """
+    if dart_cell.size == 0:
+        return holes
+    plain, darts = [], []
+    for g in holes:
+        is_dart = np.isin(g.cells, dart_cell)
+        if not is_dart.all():
+            part = lambda x: x[~is_dart]
+            plain.append(HoleGroup(g.n, part(g.cells), part(g.halfedges), part(g.A), part(g.B1), part(g.B2), part(g.C)))
+        if not is_dart.any():
+            continue
+        ghost = ghost_corner[g.C[is_dart]]  # (k, n)
+        pair = ghost & np.roll(ghost, -1, axis=1)  # corner i and i + 1 both ghost
+        if np.any(ghost.sum(axis=1) != 2) or np.any(pair.sum(axis=1) != 1):
+            raise TopologyError("internal: a dart's hole without its two ghost corners side by side")
+        first = np.argmax(pair, axis=1)
+        order = (np.arange(g.n)[None, :] + first[:, None] - (g.n - 2)) % g.n  # the ghost pair at n - 2, n - 1
+        turn = lambda x: np.take_along_axis(x[is_dart], order, axis=1)
+        darts.append(HoleGroup(g.n, g.cells[is_dart], turn(g.halfedges), turn(g.A), turn(g.B1), turn(g.B2), turn(g.C),
+                               dart=True))
+    return plain + darts
 
 
 def vertex_frames(mesh: HalfEdgeMesh, first: np.ndarray) -> np.ndarray:

@@ -100,7 +100,7 @@ def bicubic_hole_coefficients(A, B1, B2, C, alpha: float = 1.0, beta: float = 0.
     return P
 
 
-def bicubic_layout(holes: list[HoleGroup], hole_weights, n_points: int, keep=None) -> PatchLayout:
+def bicubic_layout(holes: list[HoleGroup], hole_weights, n_points: int, keep=None, dart_weights=None) -> PatchLayout:
     """Step A3 for all holes: a stage from refined points (V, d) to (Nc 16, d) coefficients.
 
     Patches are numbered hole by hole (``holes`` order), corner i within a hole;
@@ -113,6 +113,9 @@ def bicubic_layout(holes: list[HoleGroup], hole_weights, n_points: int, keep=Non
         n-sided holes on the points [A, B1, B2, C] (``hole_rules.HoleRules.weights``)
     n_points : int, refined points
     keep : (Nc,) bool or None, the patches kept (open meshes: those at real corners)
+    dart_weights : callable n -> (16 n, 4 n) float or None, the weights of the darts' holes (``HoleGroup.dart``:
+        ``hole_rules.HoleRules.dart_weights``)
     """
-    groups = [(np.concatenate([g.A, g.B1, g.B2, g.C], axis=1).T, hole_weights(g.n)) for g in holes]
+    groups = [(np.concatenate([g.A, g.B1, g.B2, g.C], axis=1).T, dart_weights(g.n) if g.dart else hole_weights(g.n))
+              for g in holes]
     return PatchLayout("bicubic", groups, n_points, 16, keep)

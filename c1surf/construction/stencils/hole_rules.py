@@ -25,6 +25,7 @@ from typing import Callable
 import numpy as np
 
 from .bicubic import bicubic_hole_coefficients
+from .dart import dart_ring_weights
 from .triangles import triangle_hole_coefficients
 
 
@@ -144,6 +145,11 @@ class HoleRules:
         if n > large and self.rule(n) == "g1":
             return HoleOperator(n, float(self.alpha), float(self.beta), self.tangent_rule)
         return _dense_weights(self.rule(n), n, float(self.alpha), float(self.beta), self.tangent_rule)
+
+    def dart_weights(self, n: int):
+        """(16 n, 4 n) float: the hole of a dart, n - 2 real corners and two ghost ones last, on its ring
+        [A, B1, B2, C] (``dart.dart_ring_weights``; the shape parameters as A3's)."""
+        return dart_ring_weights(n, float(self.alpha), float(self.beta), self.tangent_rule)
 
     def tangent_datum(self, n: int):
         """(u, w): the tangent datum of n-sided holes (see the module docstring)."""

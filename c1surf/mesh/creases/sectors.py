@@ -18,8 +18,8 @@ with different per-face data (``face_keys``: hole tags, blend ratios), remove a 
 crease (``protected_edges``), make a polygon that visits a vertex twice, or close a ring of faces; a
 crease component whose vertices cannot all be brought to the exact counts keeps its faces (and then
 the sharpest G1 crease, named in a note by the caller). The one tagged edge that may go is the first
-edge of a dart chain (a crease line ending inside the surface, which stays a G1 crease) inside a
-corner's sector, which must be one face: the caller names those edges in a note.
+edge of a lone line (one crease edge whose two ends are darts, inside the surface, which stays a G1
+crease; ``sheets.dart_chains``) inside a corner's sector, which must be one face: the caller names those edges in a note.
 """
 from __future__ import annotations
 
@@ -40,8 +40,8 @@ class SectorMerge:
     merged_faces : int, input faces taken into merged polygons (the lowest of each polygon counted too)
     polygons : int, merged polygons made
     vertices : (k,) int, seam vertices whose sectors were merged
-    lost_creases : (d, 2) int, crease edges merged away: the first edges of dart chains (crease lines that
-        end inside the surface, ``sheets.dart_chains``) inside a corner's sector, which must be one face
+    lost_creases : (d, 2) int, crease edges merged away: lone lines (one crease edge between two darts,
+        ``sheets.dart_chains``) inside a corner's sector, which must be one face
     """
 
     face_sizes: np.ndarray
@@ -84,7 +84,7 @@ def merge_crease_sectors(face_sizes, face_vertices, n_vertices: int, sharp_edges
     corner_tag = np.zeros(n_vertices, dtype=bool)
     corner_tag[np.asarray(tagged_corners, dtype=np.int64)] = True
     tagged = _sharp_halfedges(mesh, sharp_edges)
-    sharp, corner_tag = seam_corners(mesh, tagged, corner_tag)  # as the cut will see them: dart chains left out
+    sharp, corner_tag = seam_corners(mesh, tagged, corner_tag)  # as the cut will see them: lone lines left out
     removed = _planned_removals(mesh, sharp, corner_tag, face_keys, tagged & ~sharp)
     if protected_edges is not None and len(protected_edges):
         removed &= ~_sharp_halfedges(mesh, np.asarray(protected_edges, dtype=np.int64).reshape(-1, 2))
@@ -139,7 +139,7 @@ def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndar
 
     A sector of k faces around a smooth seam vertex keeps one interior edge (``_kept_interior_edges``), a
     corner's sector none. Only components that the counts alone keep from being exact are touched (a lone
-    corner: merging cannot help). ``dart`` (H,) bool, the edges of dart chains: kept by a smooth vertex's
+    corner: merging cannot help). ``dart`` (H,) bool, the lone lines' edges: kept by a smooth vertex's
     sector where it can, removed only in a corner's sector.
     """
     h = np.arange(mesh.n_halfedges)
@@ -147,7 +147,7 @@ def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndar
     on_seam, exact, corner = exact_crease_vertices(mesh, sharp, corner_tag)
     once = seam & ((mesh.twin < 0) | (h < mesh.twin))
     seam_edges = np.bincount(np.r_[mesh.origin[once], mesh.dest[once]], minlength=mesh.n_vertices)
-    fixable = on_seam & np.where(corner, seam_edges >= 2, seam_edges == 2)
+    fixable = on_seam & (exact | np.where(corner, seam_edges >= 2, seam_edges == 2))  # exact: darts too
     component = component_roots(mesh.n_vertices, mesh.origin[seam], mesh.dest[seam])
     creased = np.zeros(mesh.n_vertices, dtype=bool)
     creased[component[mesh.origin[sharp]]] = True
@@ -182,7 +182,7 @@ def _kept_interior_edges(mesh: HalfEdgeMesh, candidate: np.ndarray, sector: np.n
     ``certain``: corners whose edge goes anyway (corner sectors). The edge kept is the one whose far
     vertex can least spare a face (the fewest faces left over ``_least_faces`` once the certain edges
     are gone), ties to the middle of the sector (``size // 2 - 1`` from its start); ``prefer`` (H,) bool:
-    corners whose edge is kept before any other (a dart chain's).
+    corners whose edge is kept before any other (a lone line's).
     """
     far = mesh.origin[mesh.prev]  # prev[h] runs from the far vertex to h's vertex
     lost = np.bincount(far[certain], minlength=mesh.n_vertices)

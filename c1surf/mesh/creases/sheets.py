@@ -61,7 +61,10 @@ class CreaseSheets:
         (``non_manifold``), whose sheets meet along it
     vertex_name : (V',) int, ``names`` of every vertex of ``mesh`` (crease pieces are named by these)
     kept_edges : (K, 2) int, crease edges left uncut (dart chains, and components that are not exact; ``names``)
-    dart_edges : (k, 2) int, of those, the edges of dart chains (``dart_chains``; ``names``)
+    dart_edges : (k, 2) int, of those, the lone crease edges (one edge between two darts: ``dart_chains``;
+        ``names``)
+    dart_vertex : (k,) int, vertices of ``mesh`` where a cut crease ends inside the surface (darts): one copy
+        each, in as many real faces as the dart's valence and two ghost quads (``construction.stencils.dart``)
     inexact_vertices : (k,) int, vertices that keep their components from being cut (``names``)
     """
 
@@ -83,6 +86,7 @@ class CreaseSheets:
     inexact_vertices: np.ndarray
     dart_edges: np.ndarray = None
     vertex_name: np.ndarray = None
+    dart_vertex: np.ndarray = None
 
 
 def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
@@ -100,15 +104,25 @@ def corner_sectors(mesh: HalfEdgeMesh, sharp: np.ndarray) -> np.ndarray:
     return orbit_labels(successor, int(vertex_valences(mesh).max(initial=0)))
 
 
-def dart_chains(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray, rounds: int = 32) -> np.ndarray:
-    """(H,) bool: half-edges of the crease chains that end at a dart (a crease end inside the surface).
+def dart_ends(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray) -> np.ndarray:
+    """(V,) bool: darts, interior vertices (not tagged corners) on exactly one sharp edge: a crease line ends there."""
+    n, h = mesh.n_vertices, np.arange(mesh.n_halfedges)
+    boundary = np.zeros(n, dtype=bool)
+    boundary[mesh.origin[mesh.twin < 0]] = True
+    once = np.flatnonzero(sharp & ((mesh.twin < 0) | (h < mesh.twin)))
+    degree = np.bincount(np.r_[mesh.origin[once], mesh.dest[once]], minlength=n)
+    return (degree == 1) & ~boundary & ~tagged_corner
 
-    A chain runs along sharp edges through interior vertices on exactly two of them (not tagged corners);
-    it is a dart chain when one of its ends is an interior vertex on one sharp edge. The C0 seam cannot
-    end inside the surface (the cut would end at a vertex that is not split), so these chains keep the
-    sharpest G1 crease, which fades out at the dart as OpenSubdiv's does, while the rest of their crease
-    component becomes a C0 seam. Peeling a chain may leave a dart at the junction it hung from: rounds
-    repeat (a tree of branches: ``rounds`` levels at most).
+
+def dart_chains(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray) -> np.ndarray:
+    """(H,) bool: the lone crease edges, each alone on its crease line with both ends inside the surface.
+
+    A chain runs along sharp edges through interior vertices on exactly two of them (not tagged corners).
+    A chain with a dart end (a crease end inside the surface) is cut: its dart gets the dart's hole
+    (``construction.stencils.dart``), C0 up to the end, also at both ends of a line of two or more edges.
+    A line of one edge between two darts is not: its two ghost quads would close on each other (a pillow
+    of two quads whose outer vertices have two faces); it keeps the sharpest G1 crease, which fades out at
+    both ends as OpenSubdiv's does.
 
     Parameters
     ----------
@@ -117,32 +131,30 @@ def dart_chains(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray
     tagged_corner : (V,) bool
     """
     n, h = mesh.n_vertices, np.arange(mesh.n_halfedges)
-    boundary = np.zeros(n, dtype=bool)
-    boundary[mesh.origin[mesh.twin < 0]] = True
     once = np.flatnonzero(sharp & ((mesh.twin < 0) | (h < mesh.twin)))
     a, b = mesh.origin[once], mesh.dest[once]
-    alive = np.ones(once.size, dtype=bool)
-    for _ in range(rounds):
-        degree = np.bincount(np.r_[a[alive], b[alive]], minlength=n)
-        dart = (degree == 1) & ~boundary & ~tagged_corner
-        if not dart.any():
-            break
-        link = (degree == 2) & ~boundary & ~tagged_corner  # chains continue through these
-        edge = np.flatnonzero(alive)
-        ends = np.r_[a[edge], b[edge]]
-        joins = np.tile(np.arange(edge.size), 2)[link[ends]]
-        chain = component_roots(edge.size + n, joins, edge.size + ends[link[ends]])[: edge.size]
-        doomed = np.zeros(edge.size + n, dtype=bool)
-        doomed[chain[dart[a[edge]] | dart[b[edge]]]] = True
-        alive[edge[doomed[chain]]] = False
     peeled = np.zeros(mesh.n_halfedges, dtype=bool)
-    peeled[once[~alive]] = True
-    peeled[mesh.twin[once[~alive]][mesh.twin[once[~alive]] >= 0]] = True
+    dart = dart_ends(mesh, sharp, tagged_corner)
+    if not dart.any():
+        return peeled
+    boundary = np.zeros(n, dtype=bool)
+    boundary[mesh.origin[mesh.twin < 0]] = True
+    degree = np.bincount(np.r_[a, b], minlength=n)
+    link = (degree == 2) & ~boundary & ~tagged_corner  # chains continue through these
+    ends = np.r_[a, b]
+    joins = np.tile(np.arange(once.size), 2)[link[ends]]
+    chain = component_roots(once.size + n, joins, once.size + ends[link[ends]])[: once.size]
+    dart_count = np.bincount(chain, weights=dart[a].astype(float) + dart[b], minlength=once.size + n)
+    edges = np.bincount(chain, minlength=once.size + n)
+    lone = (dart_count[chain] >= 2) & (edges[chain] == 1)
+    peeled[once[lone]] = True
+    twin = mesh.twin[once[lone]]
+    peeled[twin[twin >= 0]] = True
     return peeled
 
 
 def seam_corners(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray):
-    """(sharp edges of the C0 seams, corners): ``sharp`` less the dart chains (``dart_chains``), and
+    """(sharp edges of the C0 seams, corners): ``sharp`` less the lone lines (``dart_chains``), and
     ``tagged_corner`` with every vertex that was on three or more sharp or boundary edges before them
     (OpenSubdiv's corner rule counts the edges whatever becomes of them)."""
     peeled = dart_chains(mesh, sharp, tagged_corner)
@@ -188,7 +200,8 @@ def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: 
     corner = on_seam & ((seam_edges >= 3) | tagged_corner | (boundary & (largest == 1)))
     smooth_ok = (seam_edges == 2) & ~corner & (largest <= 2)
     corner_ok = corner & (seam_edges >= 2) & (largest == 1)
-    return on_seam, on_seam & (smooth_ok | corner_ok), corner
+    dart_ok = dart_ends(mesh, sharp, tagged_corner)  # any valence: the dart's hole (construction.stencils.dart)
+    return on_seam, on_seam & (smooth_ok | corner_ok | dart_ok), corner
 
 
 def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray,
@@ -210,7 +223,7 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     """
     n, h_all = mesh.n_vertices, np.arange(mesh.n_halfedges)
     all_sharp = sharp
-    sharp, tagged_corner = seam_corners(mesh, sharp, tagged_corner)  # dart chains stay G1 creases
+    sharp, tagged_corner = seam_corners(mesh, sharp, tagged_corner)  # lone lines stay G1 creases
     on_seam, exact, corner = exact_crease_vertices(mesh, sharp, tagged_corner)
     # seam components: vertices joined by sharp or boundary edges; cut those that hold a sharp edge
     # and whose every vertex is exact (a boundary loop no crease reaches keeps the ghost layer's rule)
@@ -273,6 +286,8 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
     ghost_at_in[B] = first_quad
     on_cut = np.zeros(n, dtype=bool)
     on_cut[mesh.origin[cut]] = True
+    dart = dart_ends(mesh, sharp, tagged_corner) & on_cut
+    dart_vertex = np.unique(copy[dart[mesh.origin]])
     crease_vertex = np.where(on_cut[source], source, -1)
     return CreaseSheets(
         mesh=cut_mesh, vertex_source=source, ghost_faces=mesh.n_faces + np.arange(len(ghost_quads)),
@@ -283,8 +298,8 @@ def cut_crease_sheets(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.n
         cut_edges=edges(cut & sharp), kept_edges=edges(all_sharp & ~cut), dart_edges=edges(all_sharp & ~sharp),
         open_edges=np.sort(names[np.stack([mesh.origin[cut & (mesh.twin < 0)], mesh.dest[cut & (mesh.twin < 0)]], axis=1)], axis=1),
         vertex_name=names[source],
-        inexact_vertices=np.unique(names[on_crease & ~exact]),
+        inexact_vertices=np.unique(names[on_crease & ~exact]), dart_vertex=dart_vertex,
     )
 
 
-__all__ = ["CreaseSheets", "corner_sectors", "dart_chains", "seam_corners", "exact_crease_vertices", "cut_crease_sheets"]
+__all__ = ["CreaseSheets", "corner_sectors", "dart_ends", "dart_chains", "seam_corners", "exact_crease_vertices", "cut_crease_sheets"]
