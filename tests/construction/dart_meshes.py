@@ -33,8 +33,7 @@ def polar_dart(kinds, rings: int = 3, slope: float = 1.0, noise: float = 0.02, s
         faces.append([0] + [ring(1, start + j) for j in range(k + 1)])
         start += k
     for r in range(1, rings):
-        faces += [[ring(r, k), ring(r + 1, k), ring(r + 1, k + 1), ring(r, k + 1)][::-1] for k in range(m)]
-    faces = [f if i < len(kinds) else f for i, f in enumerate(faces)]
+        faces += [[ring(r, k), ring(r + 1, k), ring(r + 1, k + 1), ring(r, k + 1)] for k in range(m)]
     crease = np.array([[0, ring(1, 0)]] + [[ring(r, 0), ring(r + 1, 0)] for r in range(1, rings)])
     sizes = np.array([len(f) for f in faces])
     features = SharpFeatures(crease, np.full(len(crease), SHARP))
