@@ -3,9 +3,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["FitOptions", "SOLVERS"]
+__all__ = ["FitOptions", "SOLVERS", "FAIRNESS_TERMS"]
 
 SOLVERS = ("auto", "cholesky", "superlu", "cg")
+FAIRNESS_TERMS = ("thin-plate", "umbrella")
 
 
 @dataclass(frozen=True)
@@ -61,6 +62,9 @@ class FitOptions:
     plane: float = 1.0
     point: float = 0.01
     fairness: float = 3e-3
+    fairness_term: str = "umbrella"
+    fairness_growth: float = 0.0
+    smooth_within: float = 0.0
     rim: float = 1.0
     max_iterations: int = 10
     stop: float = 1e-2
@@ -81,6 +85,13 @@ class FitOptions:
             value = getattr(self, name)
             if int(value) != value or value < low:
                 raise ValueError(f"{name} must be an integer >= {low}, got {value!r}")
+        if self.fairness_term not in FAIRNESS_TERMS:
+            raise ValueError(f"fairness_term must be one of {FAIRNESS_TERMS}, got {self.fairness_term!r}")
+        if not (0 <= self.fairness_growth < float("inf")):
+            raise ValueError(f"fairness_growth must be a finite number >= 0, got {self.fairness_growth!r}")
+        if not (0 <= self.smooth_within < 1):
+            raise ValueError(f"smooth_within is a fraction of the bounding-box diagonal in [0, 1), got "
+                             f"{self.smooth_within!r}")
         if self.solver not in SOLVERS:
             raise ValueError(f"solver must be one of {SOLVERS}, got {self.solver!r}")
         return self

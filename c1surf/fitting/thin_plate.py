@@ -152,3 +152,4 @@ def patch_weights(biquadratic: np.ndarray, bicubic: np.ndarray) -> np.ndarray:
     mean = float(area.mean()) if area.size else 1.0
     floor = 1e-3 * mean
     return mean / np.maximum(area, floor if mean > 0 else 1.0)
+
