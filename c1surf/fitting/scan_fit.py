@@ -225,7 +225,7 @@ def _fit_round(points, triangles, control: tuple, options: tuple, timings: dict,
     samples, sample_triangles = fitting_samples(points, triangles, mesh.n_faces)
     result = fit_surface_points(surface, samples, sample_triangles, fit_options,
                                 progress=lambda label, amount, total: tell(f"fitting {mesh.n_faces} faces", amount,
-                                                                           total))
+                                                                           total), measured=points.shape[0])
     if samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
         result.footpoints = project_scan(surface, points, fit_options, None)
         diagonal = bounding_diagonal(points)
