@@ -188,9 +188,9 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
         clock("footpoints")
         return points, new_feet, distance_stats(new_feet.distance, diagonal)
 
-    def rounds(form, limit: int, undo_worse: bool) -> str:
+    def rounds(form, limit: int, undo_worse: bool, beyond=None) -> str:
         """Rounds at the fairness ``form`` until the RMS changes by less than ``options.stop`` (a worse round is
-        undone when ``undo_worse``): why they stopped."""
+        undone when ``undo_worse``; they stop as soon as ``beyond()`` says so): why they stopped."""
         for _ in range(limit):
             round_start = sum(timings.values())
             points, new_feet, stats = one_round(form)
@@ -204,6 +204,8 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
             state["current"], state["feet"] = points, new_feet
             if abs(previous - stats["rms"]) <= options.stop * previous:
                 return "converged"
+            if beyond is not None and beyond():
+                return "beyond"
         return "max_iterations"
 
     kept_samples = slice(0, samples.shape[0] if measured is None else int(measured))
@@ -218,10 +220,14 @@ def fit_surface_points(surface: Surface, scan_points, scan_triangles, options: F
     growth = 1.0  # the fairness grows while the fit stays within the bounds of ``growth_bounds``
     if options.fairness_growth > 0 and options.fairness > 0:
         bounds = growth_bounds(measured_stats(), diagonal, options)
+
+        def beyond() -> bool:  # a larger weight only moves further: stop the rounds at the first one past a bound
+            return any(measured_stats()[k] > bound for k, bound in bounds.items())
+
         while growth * GROWTH_STEP <= GROWTH_CAP * (1 + 1e-9):
             kept = (state["current"], state["feet"], len(history))
-            rounds(growth * GROWTH_STEP * fair, GROWTH_ROUNDS, False)
-            if any(measured_stats()[k] > bound for k, bound in bounds.items()):  # too far from the scan: undo
+            rounds(growth * GROWTH_STEP * fair, GROWTH_ROUNDS, False, beyond)
+            if beyond():  # too far from the scan: undo
                 state["current"], state["feet"] = kept[:2]
                 del history[kept[2]:]
                 surface.update_points(state["current"])
