@@ -4,6 +4,10 @@ Each round projects the scan's vertices onto the exact patches (``footpoints``),
 normal equations at those footpoints (``system``), solves them (``solve``) and moves the control
 points with ``Surface.update_points``: only the points change, the construction stays that of
 the paper, so every fitted surface is G1 (C0 on exact creases) by construction.
+
+After the rounds of the closest fit, the fairness weight grows (``FitOptions.fairness_growth``) while the scan's
+own vertices stay within bounds (``growth_bounds``): the fit returns the smoothest surface within the tolerance
+rather than the closest one (docs/fit.md, fairness).
 """
 from __future__ import annotations
 
