@@ -98,8 +98,7 @@ def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray,
         each coordinate
     current : (V, 3) float, the control points now (the damping's anchor)
     plane, point : float or (m,) float, the weights of ``FitOptions`` (a weight per sample: the scan's rim
-        vertices pull harder, ``iterate.sample_point_weights``; samples well inside the tolerance less,
-        ``iterate.tolerance_weights``)
+        vertices pull harder, ``iterate.sample_point_weights``)
     """
     m, n_vertices = A.shape
     plane_weight = np.broadcast_to(np.asarray(plane, dtype=np.float64), (m,))
