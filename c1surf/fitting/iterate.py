@@ -107,11 +107,14 @@ def growth_bounds(closest: dict, diagonal: float, options: FitOptions) -> dict:
     closest fit's times 1 + ``options.fairness_growth`` (a noisy scan: the noise, not the surface, makes the
     distance), or the accuracy ``options.smooth_within`` asks for (RMS; p99 3.5 and max 10.5 times it: 2.8e-4,
     9.8e-4, 2.94e-3 of the diagonal at the default, inside issue 34's targets 3e-4, 1e-3, 3e-3), whichever is
-    larger."""
+    larger; the largest distance at most ``options.max_within`` (relative) when that is set."""
     grow = 1.0 + options.fairness_growth
     tolerance = options.smooth_within * diagonal
-    return {key: max(grow * closest[key], factor * tolerance) for key, factor in (("rms", 1.0), ("p99", 3.5),
-                                                                                  ("max", 10.5))}
+    bounds = {key: max(grow * closest[key], factor * tolerance) for key, factor in (("rms", 1.0), ("p99", 3.5),
+                                                                                    ("max", 10.5))}
+    if options.max_within > 0:  # never past the largest distance asked for (--tolerance)
+        bounds["max"] = min(bounds["max"], options.max_within * diagonal)
+    return bounds
 
 
 def project_scan(surface: Surface, scan_points: np.ndarray, options: FitOptions,

@@ -67,6 +67,9 @@ class FitOptions:
     smooth_within : float in [0, 1), the scan-to-surface RMS (relative to the diagonal) the continuation may
         reach on a clean scan, with p99 4 and max 12 times it (2.5e-4: RMS 2.5e-4, p99 1e-3, max 3e-3, inside
         issue 34's targets)
+    max_within : float in [0, 1), a cap on the continuation's bound of the largest distance, relative to the
+        diagonal (0: none); ``scan_fit`` sets it to ``--tolerance``, so the smoother surface never leaves the
+        tolerance the control mesh was grown for
     rim : float >= 0, the point-to-point weight of an open scan's rim vertices (those on an edge of one
         triangle), instead of ``point``: the point-to-plane term cannot move the surface's boundary along the
         surface, so without it the fitted surface stops short of the scan's rims (docs/fit.md, open scans)
@@ -86,6 +89,7 @@ class FitOptions:
     fairness_term: str = "umbrella"
     fairness_growth: float = 0.1
     smooth_within: float = 2.8e-4
+    max_within: float = 0.0
     rim: float = 1.0
     max_iterations: int = 10
     stop: float = 1e-2
@@ -110,6 +114,8 @@ class FitOptions:
             raise ValueError(f"fairness_term must be one of {FAIRNESS_TERMS}, got {self.fairness_term!r}")
         if not (0 <= self.fairness_growth < float("inf")):
             raise ValueError(f"fairness_growth must be a finite number >= 0, got {self.fairness_growth!r}")
+        if not (0 <= self.max_within < 1):
+            raise ValueError(f"max_within is a fraction of the bounding-box diagonal in [0, 1), got {self.max_within!r}")
         if not (0 <= self.smooth_within < 1):
             raise ValueError(f"smooth_within is a fraction of the bounding-box diagonal in [0, 1), got "
                              f"{self.smooth_within!r}")

@@ -15,7 +15,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -192,8 +192,9 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
             mesh = control
             _check_encloses(mesh.points, points, diagonal)
         _clock(timings, "control mesh", start)
+        fit_options = options.fit if options.tolerance is None else replace(options.fit, max_within=options.tolerance)
         surface, result = _fit_round(points, triangles, (mesh, features if mesh is control else None),
-                                     (surface_options, options.fit), timings, tell)
+                                     (surface_options, fit_options), timings, tell)
         worst = result.history[-1]["relative_max"]
         rounds.append({"faces": mesh.n_faces, "patches": surface.n_patches, "refinements": surface.refinements,
                        "relative_max": worst, "relative_rms": result.history[-1]["relative_rms"],

@@ -21,7 +21,7 @@ from fit_core import quad_split  # noqa: E402
 
 
 def _sphere_fit(noise: float, options: FitOptions):
-    """(rho, relative RMS) of the fit of a cube split twice into quads (96 faces, 384 patches) to an icosphere
+    """(rho, relative RMS, FitResult) of the fit of a cube split twice into quads (96 faces, 384 patches) to an icosphere
     (2,562 vertices) whose vertices are moved along the radius by Gaussian noise of ``noise`` x its diagonal."""
     mesh = read_obj(str(SAMPLES / "cube.obj"))
     points, sizes, corners = mesh.points, mesh.face_sizes, mesh.face_vertices
@@ -37,14 +37,32 @@ def _sphere_fit(noise: float, options: FitOptions):
     result = fit_surface_points(surface, scan, np.asarray(sphere.faces), options)
     rho = sampler_ripple(PatchSampler([surface.biquadratic, surface.bicubic]),
                          0.5 * median_edge(sizes, corners, result.points))
-    return rho, result.history[-1]["relative_rms"]
+    return rho, result.history[-1]["relative_rms"], result
 
 
 def test_noise_does_not_ripple_the_fit():
     """Noise of 1e-3 of the diagonal: rho of the fitted surface within 10 % of the noiseless fit's, at the default
     fairness; the noisy fit stays at the noise's level from the scan (it is not flattened away)."""
     options = FitOptions()
-    clean_rho, clean_rms = _sphere_fit(0.0, options)
-    noisy_rho, noisy_rms = _sphere_fit(1e-3, options)
+    clean_rho, clean_rms, _ = _sphere_fit(0.0, options)
+    noisy_rho, noisy_rms, noisy = _sphere_fit(1e-3, options)
     assert clean_rms < 5e-4 and noisy_rms < 1.5e-3
     assert abs(noisy_rho - clean_rho) <= 0.1 * clean_rho, (clean_rho, noisy_rho)
+    assert noisy.fairness > options.fairness  # the continuation smoothed the noise away
+    closest_rho = _sphere_fit(1e-3, FitOptions(fairness_growth=0.0))[0]  # the closest fit keeps more of the noise
+    assert noisy_rho < 0.95 * closest_rho, (noisy_rho, closest_rho)
+
+
+def test_the_continuation_stays_within_its_bounds():
+    """The grown fairness keeps the scan within 1.1 times the closest fit's distances or within smooth_within's
+    bounds, and within max_within when it is set (then the weight grows less)."""
+    closest = _sphere_fit(0.0, FitOptions(fairness_growth=0.0))[2].history[-1]
+    free = _sphere_fit(0.0, FitOptions())[2]
+    capped = _sphere_fit(0.0, FitOptions(max_within=1.05 * closest["relative_max"]))[2]
+    smooth = FitOptions().smooth_within
+    for result, cap in ((free, None), (capped, 1.05 * closest["relative_max"])):
+        last = result.history[-1]
+        assert last["relative_rms"] <= max(1.1 * closest["relative_rms"], smooth) * (1 + 1e-12)
+        assert last["relative_p99"] <= max(1.1 * closest["relative_p99"], 3.5 * smooth) * (1 + 1e-12)
+        assert last["relative_max"] <= min(max(1.1 * closest["relative_max"], 10.5 * smooth), cap or 1.0) * (1 + 1e-12)
+    assert free.fairness > FitOptions().fairness and capped.fairness <= free.fairness
