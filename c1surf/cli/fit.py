@@ -75,8 +75,9 @@ def plan_options(command):
                      help="The most control faces --tolerance may ask for."),
         click.option("--fairness", type=FiniteFloat(0.0), default=FitOptions.fairness, show_default=True,
                      help="Starting weight of the umbrella fairness term; it then grows while the scan stays "
-                          "within 10 % of the closest fit's distances or within RMS 2.5e-4, p99 1e-3, max 3e-3 of "
-                          "the diagonal: the smoothest surface within that (docs/fit.md)."),
+                          "within 10 % of the closest fit's distances or within RMS 2.8e-4, p99 9.8e-4, max 2.94e-3 "
+                          "of the diagonal (and --tolerance): the smoothest surface within that, not the closest; 0: "
+                          "no fairness, the closest fit (docs/fit.md)."),
         click.option("--iterations", type=click.IntRange(1, 100), default=FitOptions.max_iterations, show_default=True,
                      help="Most rounds of footpoints and least squares (they stop earlier when the deviation stops "
                           "improving)."),
