@@ -59,7 +59,7 @@ class FitOptions:
         want it
     fairness_growth : float >= 0, the continuation that makes the fit the smoothest surface within a tolerance
         rather than the closest one: once the rounds at ``fairness`` end, the weight is multiplied by 3 at a time
-        (at most 100 times, a few rounds at each) while the scan's own vertices stay within max(1 +
+        (at most 100 times, two rounds at each) while the scan's own vertices stay within max(1 +
         fairness_growth times the closest fit's RMS, p99 and max, ``smooth_within``'s bounds); the first weight
         past them is undone. The relative bound is the noise's: on a noisy scan the distance is the noise's, and
         a smoother surface costs it little (a sphere with noise of 1e-3 of the diagonal: the weight grows 9
