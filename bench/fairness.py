@@ -7,7 +7,7 @@ in --cache) and of the fitted control mesh (``fitted_cc_rho``: the same shape, a
     .venv/bin/python bench/fairness.py goathead fairness_term=thin-plate,fairness=1e-2 fairness_term=umbrella
 
 Each argument after the scan is one variant: comma-separated FitOptions fields (``faces=N`` sets the control
-faces). Prints one JSON line per variant.
+faces, ``crease_angle=DEG`` tags the scan's sharp edges as ``--crease-angle``). Prints one JSON line per variant.
 """
 from __future__ import annotations
 
@@ -27,27 +27,27 @@ import fit as bench_fit  # noqa: E402
 def parse_variant(text: str):
     from c1surf.fitting.options import FitOptions
 
-    fields, faces = {}, None
+    fields, faces, crease = {}, None, None
     for item in filter(None, text.split(",")):
         key, value = item.split("=", 1)
-        if key == "faces":
-            faces = int(value)
+        if key in ("faces", "crease_angle"):
+            faces, crease = (int(value), crease) if key == "faces" else (faces, float(value))
             continue
         kind = type(getattr(FitOptions(), key))
         fields[key] = value if kind is str else kind(float(value))
-    return FitOptions(**fields), faces
+    return FitOptions(**fields), faces, crease
 
 
-def catmull_clark_rho(scan: str, faces: int, cache: Path) -> dict:
+def catmull_clark_rho(scan: str, faces: int, cache: Path, crease_angle: float | None = None) -> dict:
     """rho of the Catmull-Clark limit proxy of the fit's control mesh and the ripple radius (cached)."""
     from c1surf.api import read_scan
     from c1surf.fitting.control_mesh import control_mesh_from_scan
 
-    key = f"{Path(scan).stem}:{faces}"
+    key = f"{Path(scan).stem}:{faces}" + (f":{crease_angle:g}" if crease_angle else "")
     known = json.loads(cache.read_text()) if cache.exists() else {}
     if key not in known:
         points, triangles, _ = read_scan(scan)
-        control = control_mesh_from_scan(points, triangles, faces, None)
+        control = control_mesh_from_scan(points, triangles, faces, crease_angle)
         radius = 0.5 * bench_fit.median_edge(control.face_sizes, control.face_vertices, control.points)
         cc_points, cc_triangles = bench_fit.catmull_clark(control, bench_fit.CC_LEVELS)
         H, area = bench_fit.cotangent_mean_curvature(cc_points, cc_triangles)
@@ -61,13 +61,13 @@ def measure(scan: str, variant: str, cache: Path) -> dict:
     from c1surf.evaluation.curvature import PatchSampler
     from c1surf.fitting.scan_fit import ScanFitOptions, default_face_count, fit_scan
 
-    options, faces = parse_variant(variant)
+    options, faces, crease = parse_variant(variant)
     points, triangles, _ = read_scan(scan)
     start = time.perf_counter()
-    result = fit_scan(points, triangles, ScanFitOptions(faces=faces, fit=options))
+    result = fit_scan(points, triangles, ScanFitOptions(faces=faces, crease_angle=crease, fit=options))
     seconds = time.perf_counter() - start
     requested = faces or default_face_count(triangles.shape[0])
-    cc = catmull_clark_rho(scan, requested, cache)
+    cc = catmull_clark_rho(scan, requested, cache, crease)
     surface = result.surface
     rho = bench_fit.sampler_ripple(PatchSampler([surface.biquadratic, surface.bicubic]), cc["radius"])
     cc_points, cc_triangles = bench_fit.catmull_clark(result.control, bench_fit.CC_LEVELS)  # the fitted cage's
