@@ -155,7 +155,11 @@ def surface_ripple(npz: str, radius: float) -> float:
     from c1surf.evaluation.curvature import PatchSampler
 
     patches, _ = load_patches(npz)
-    sampler = PatchSampler(patches.groups) if hasattr(patches, "groups") else patches
+    return sampler_ripple(PatchSampler(patches.groups) if hasattr(patches, "groups") else patches, radius)
+
+
+def sampler_ripple(sampler, radius: float) -> float:
+    """rho of the patches of a ``PatchSampler`` (exact H on a grid of cell centres per patch)."""
     n = RIPPLE_GRID
     t = (np.arange(n) + 0.5) / n
     u, v = np.meshgrid(t, t, indexing="ij")

@@ -22,7 +22,7 @@
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
@@ -210,8 +210,9 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
         mesh, keep, parts, left_out = _cover_components(points, triangles, mesh, mesh is not control,
                                                         (faces, options.crease_angle), diagonal)
         notes += [n for n in parts if n not in notes]  # left_out: noted after the last round
+        fit_options = options.fit if options.tolerance is None else replace(options.fit, max_within=options.tolerance)
         surface, result = _fit_round(points, triangles, (mesh, features if mesh is control else None),
-                                     (surface_options, options.fit), timings, tell, keep)
+                                     (surface_options, fit_options), timings, tell, keep)
         worst = result.history[-1]["relative_max"]
         rounds.append({"faces": mesh.n_faces, "patches": surface.n_patches, "refinements": surface.refinements,
                        "relative_max": worst, "relative_rms": result.history[-1]["relative_rms"],
@@ -399,7 +400,7 @@ def _fit_round(points, triangles, control: tuple, options: tuple, timings: dict,
     samples, sample_triangles = fitting_samples(*part, mesh.n_faces)
     result = fit_surface_points(surface, samples, sample_triangles, fit_options,
                                 progress=lambda label, amount, total: tell(f"fitting {mesh.n_faces} faces", amount,
-                                                                           total))
+                                                                           total), measured=part[0].shape[0])
     if keep is not None or samples.shape[0] > points.shape[0]:  # the deviation is the scan's own vertices'
         result.footpoints = project_scan(surface, points, fit_options, None)
         diagonal = bounding_diagonal(points)

@@ -10,7 +10,8 @@ are N x = b with N = sum of
 
     plane / m  P^T P        P (m x 3V): entry (i, 3a + c) = A_ia n_ic (built as six A^T diag A blocks)
     point / m  A^T A (x) I_3
-    fairness / V  L^T L (x) I_3       L the umbrella Laplacian of the control mesh
+    fairness / P  K (x) I_3           K the thin-plate form of the P patches (``thin_plate``), or
+    fairness / V  L^T L (x) I_3       L the umbrella Laplacian of the control mesh (``fairness_term``)
     damping I                         damping = 1e-12 of N's mean diagonal, towards the current points
 
 all sparse (never a dense matrix). The damping only makes N definite where no sample and no
@@ -24,7 +25,7 @@ import scipy.sparse as sp
 from ..evaluation.bezier import bernstein_columns
 from .footpoints import Footpoints
 
-__all__ = ["basis_rows", "umbrella_laplacian", "normal_equations", "vertex_normals", "DAMPING"]
+__all__ = ["basis_rows", "umbrella_laplacian", "normal_equations", "vertex_normals", "fairness_form", "DAMPING"]
 
 DAMPING = 1e-12
 
@@ -84,20 +85,24 @@ def vertex_normals(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     return np.divide(normals, length[:, None], out=np.zeros_like(normals), where=length[:, None] > 0)
 
 
-def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray, laplacian: sp.csr_matrix,
-                     current: np.ndarray, plane: float, point: float, fairness: float):
+def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray, fair: sp.spmatrix,
+                     current: np.ndarray, plane, point):
     """N (3V, 3V) csr_matrix, symmetric positive definite, and b (3V,): the round's normal equations.
 
     Parameters
     ----------
     A : (m, V) csr_matrix, basis rows times stencil
     samples : (m, 3) float, the scan points; normals : (m, 3) float, their unit normals
-    laplacian : (V, V) csr_matrix, ``umbrella_laplacian``
+    fair : (V, V) sparse, symmetric positive semi-definite, the fairness form with its weight in
+        (``fairness / V  L^T L`` of ``umbrella_laplacian``, or ``fairness / P  K`` of ``thin_plate``), applied to
+        each coordinate
     current : (V, 3) float, the control points now (the damping's anchor)
-    plane, point, fairness : float, the weights of ``FitOptions``; ``point`` may be (m,) float, a weight per
-        sample (the scan's rim vertices pull harder: ``iterate.sample_point_weights``)
+    plane, point : float or (m,) float, the weights of ``FitOptions`` (a weight per sample: the scan's rim
+        vertices pull harder, ``iterate.sample_point_weights``)
     """
     m, n_vertices = A.shape
+    plane_weight = np.broadcast_to(np.asarray(plane, dtype=np.float64), (m,))
+    point_weight = np.broadcast_to(np.asarray(point, dtype=np.float64), (m,))
     # block (c, d) of N's data part: A^T diag(plane n_c n_d + point [c = d]) A / m (six products, A has
     # about ten entries a row), placed at rows 3 a + c, columns 3 b + d
     blocks = {}
@@ -105,10 +110,10 @@ def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray,
     row_of_entry = np.repeat(np.arange(m), np.diff(A.indptr))
     for c in range(3):
         for d in range(c, 3):
-            weight = (plane / m) * normals[:, c] * normals[:, d] + (np.asarray(point) / m if c == d else 0.0)
+            weight = (plane_weight / m) * normals[:, c] * normals[:, d] + (point_weight / m if c == d else 0.0)
             scaled = sp.csr_matrix((A.data * weight[row_of_entry], A.indices, A.indptr), shape=A.shape)
             blocks[c, d] = (AT @ scaled).tocoo()
-    fair = ((fairness / n_vertices) * (laplacian.T @ laplacian)).tocoo()
+    fair = sp.coo_matrix(fair)
     rows, cols, vals = [], [], []
     for c in range(3):
         for d in range(3):
@@ -120,8 +125,7 @@ def normal_equations(A: sp.csr_matrix, samples: np.ndarray, normals: np.ndarray,
     N = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
                       shape=(3 * n_vertices, 3 * n_vertices))
     offset = np.einsum("ij,ij->i", normals, samples)
-    point_weight = np.broadcast_to(np.asarray(point, dtype=np.float64), (m,))
-    b = ((plane / m) * (AT @ (normals * offset[:, None])) + AT @ (samples * (point_weight / m)[:, None])).ravel()
+    b = (AT @ (normals * (plane_weight * offset / m)[:, None]) + AT @ (samples * (point_weight / m)[:, None])).ravel()
     damping = DAMPING * float(N.diagonal().mean())
     N = (N + damping * sp.identity(3 * n_vertices, format="csr")).tocsr()
     b = b + damping * np.asarray(current, dtype=np.float64).ravel()
