@@ -18,7 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from .stencils.doo_sabin import LARGE_FACE
-from .stencils.hole_rules import LARGE_HOLE
+from .stencils.holes.hole_rules import LARGE_HOLE
 from .stencils.layout import _step
 
 FLOAT = 8

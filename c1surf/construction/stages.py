@@ -30,14 +30,14 @@ from ..mesh.ghost_layer import ghost_points_parts, reflex_corners
 from .extensions.interpolation import normal_constraint, vertex_interpolation_parts
 from .features import INFINITELY_SHARP
 from .refine.doo_sabin import FACE_FROM_VERTEX
-from .stencils.bicubic import bicubic_layout
+from .stencils.holes.bicubic import bicubic_layout
 from .stencils.biquadratic import biquadratic_layout
 from .stencils.blend import second_step_ratios
 from .stencils.creases import (crease_correction, mirror_perturbation, mirror_perturbation_left, mirror_rows,
                                refined_sharpness)
 from .stencils.doo_sabin import (LARGE_FACE, DooSabinStep, FirstDooSabinStep, centroid_columns,
                                  doo_sabin_augmented, doo_sabin_matrix, has_large_face, large_face_centroids)
-from .stencils.hole_rules import LARGE_HOLE, HoleRules
+from .stencils.holes.hole_rules import LARGE_HOLE, HoleRules
 from .stencils.perturbation import PerturbationStep, perturbation_matrix, perturbation_parts
 from .topology import RELEASED_TWIN_HALFEDGES, SurfaceTopology
 

@@ -24,7 +24,7 @@ from .stages import STAGE_BUILDERS, StageInputs
 from .stencil import flat_stencil, row_stencil
 from .stencils.blend import check_ratios, corner_ratios
 from .stencils.creases import crease_corner_ratios
-from .stencils.hole_rules import TRIANGLE_RULES, HoleRules
+from .stencils.holes.hole_rules import TRIANGLE_RULES, HoleRules
 from .topology import build_topology
 
 SOURCE_NAMES = {FACE_FROM_FACE: "face", FACE_FROM_EDGE: "edge", FACE_FROM_VERTEX: "vertex"}

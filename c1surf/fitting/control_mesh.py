@@ -23,7 +23,7 @@ of the line and it runs along the line (within ``ALONG_DEGREES``); such edges ar
 infinitely sharp (``ControlMesh.features``). A tagged line that stops short (a vertex on one tagged
 edge) is extended there by the edge nearest the line within twice both allowances, for up to
 ``EXTEND_ROUNDS`` edges. Loose ends left are darts, which are C0 up to their end (the dart's hole,
-``construction.stencils.dart``): the lines are not bridged shut (until session 9 they were joined in pairs
+``construction.stencils.holes.dart``): the lines are not bridged shut (until session 9 they were joined in pairs
 by short paths near the line, because a dart then kept its line G1). The control faces of crease sectors
 of three or more faces are merged (``mesh.creases.sectors``, as ``convert`` does), so every tagged line
 is a C0 seam.

@@ -1,4 +1,4 @@
-"""Numerical check of the dart's hole (construction.stencils.dart) on cells built by hand.
+"""Numerical check of the dart's hole (construction.stencils.holes.dart) on cells built by hand.
 
 Run from the repository root: ``python docs/research/c0_dart_hole.py``. For n = 3..8 it builds the refined
 mesh around an n-sided cell (``tests/construction/dart_cell.py``: n sectors of 5 x 5 points on the valley

@@ -1,5 +1,5 @@
 """A dart's cell after refinement, built by hand: the n-sided hole, the quads around it, and a C0 crease that
-arrives along one spoke (test helper for ``construction.stencils.dart``; docs/research/c0_dart_hole.py prints it).
+arrives along one spoke (test helper for ``construction.stencils.holes.dart``; docs/research/c0_dart_hole.py prints it).
 
 Sector i of the refined mesh around the n-gon is a grid G_i[r][s], r, s = 0..R, with G_i[0][0] = C_i,
 G_i[1][0] = B_{i,2}, G_i[0][1] = B_{i,1}, G_i[1][1] = A_i; the strip between sectors i and i + 1 is the
@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from c1surf.construction.stencils.dart import dart_hole_coefficients
+from c1surf.construction.stencils.holes.dart import dart_hole_coefficients
 from c1surf.evaluation.bezier import bernstein_basis, raise_degree
 
 
@@ -78,7 +78,7 @@ def hole_patches(G: np.ndarray, chi: np.ndarray, **shape) -> np.ndarray:
     A, B1, B2, C = G[:, 1, 1], G[:, 0, 1], G[:, 1, 0], G[:, 0, 0]
     before_C, before_B = 2 * chi[0] - C[n - 1], 2 * chi[1] - B2[n - 1]  # sector n - 1's view of C_0, B_{0,1}
     after_C, after_B = 2 * chi[0] - C[0], 2 * chi[1] - B1[0]  # sector 0's view of C_{n-1}, B_{n-1,2}
-    return dart_hole_coefficients(A, B1, B2, C, before_C, before_B, after_C, after_B, **shape)
+    return dart_hole_coefficients(A, B1, B2, C, (before_C, before_B, after_C, after_B), **shape)
 
 
 def side_rows(patch: np.ndarray, side: int):

@@ -157,7 +157,7 @@ def test_c0_creases_are_linear_in_the_points():
 
 def test_a_line_between_two_darts_is_cut_up_to_both_ends():
     # catmark_cubes_infsharp: the chain 9 - 8 - 10 ends inside the surface at both ends (darts): cut like the
-    # rest, each end a dart's hole (construction.stencils.dart)
+    # rest, each end a dart's hole (construction.stencils.holes.dart)
     mesh = read_mesh(shared_mesh("opensubdiv/catmark_cubes_infsharp.obj"))
     tags = mesh.tags
     features = SharpFeatures(tags.crease_edges, tags.crease_sharpness, tags.corner_vertices, tags.corner_sharpness)

@@ -14,7 +14,7 @@ from scipy.interpolate import BSpline
 from scipy.spatial import cKDTree
 
 from c1surf.evaluation.bezier import evaluate_patches, raise_degree
-from c1surf.construction.stencils.bicubic import bicubic_hole_coefficients
+from c1surf.construction.stencils.holes.bicubic import bicubic_hole_coefficients
 from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.tessellate import tessellate

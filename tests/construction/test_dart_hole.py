@@ -1,4 +1,4 @@
-"""A dart's hole (``construction.stencils.dart``): C0 across the crease spoke, G1 across every other spoke, at the
+"""A dart's hole (``construction.stencils.holes.dart``): C0 across the crease spoke, G1 across every other spoke, at the
 centre and with the biquadratic patches around, on a cell built by hand (``dart_cell``) whose crease has a
 90-degree dihedral angle. Sides are matched from the geometry and measured one by one, and by ``check``'s own
 ``measure_smoothness``."""
@@ -7,8 +7,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from c1surf.construction.stencils.bicubic import bicubic_hole_coefficients
-from c1surf.construction.stencils.dart import dart_hole_coefficients, dart_hole_weights, open_chain_twists
+from c1surf.construction.stencils.holes.bicubic import bicubic_hole_coefficients
+from c1surf.construction.stencils.holes.dart import dart_hole_coefficients, dart_hole_weights, open_chain_twists
 from c1surf.evaluation.smoothness import measure_smoothness
 
 from dart_cell import crease_pair, dart_cell, measure_pairs, shared_sides, uniform_patches
@@ -76,7 +76,7 @@ def test_dart_hole_without_a_crease_is_a3(n):
         sign = (-1.0) ** np.arange(n)
         E = (np.einsum("i,id->d", -sign, B1) + np.einsum("i,id->d", sign, B2)) / (-2 * n)
         B1, B2 = B1 - sign[:, None] * E, B2 + sign[:, None] * E
-    dart = dart_hole_coefficients(A, B1, B2, C, C[0], B1[0], C[n - 1], B2[n - 1])
+    dart = dart_hole_coefficients(A, B1, B2, C, (C[0], B1[0], C[n - 1], B2[n - 1]))
     np.testing.assert_allclose(dart, bicubic_hole_coefficients(A, B1, B2, C), atol=1e-12)
 
 
@@ -87,7 +87,7 @@ def test_dart_hole_weights_are_the_rule(n):
     points = rng.standard_normal((4 * n + 4, 3))
     W = dart_hole_weights(n)
     A, B1, B2, C = (points[k * n : (k + 1) * n] for k in range(4))
-    direct = dart_hole_coefficients(A, B1, B2, C, *points[4 * n :])
+    direct = dart_hole_coefficients(A, B1, B2, C, tuple(points[4 * n :]))
     np.testing.assert_allclose(W @ points, direct.reshape(16 * n, 3), atol=1e-12)
     np.testing.assert_allclose(W.sum(axis=1), 1.0, atol=1e-13)
 

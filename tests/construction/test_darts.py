@@ -1,5 +1,5 @@
 """Darts as C0 (docs/sharp-features.md, "Darts"): a crease line that ends inside the surface is cut up to its
-end, whose vertex gets the dart's hole (``construction.stencils.dart``): C0 across the crease spoke, G1
+end, whose vertex gets the dart's hole (``construction.stencils.holes.dart``): C0 across the crease spoke, G1
 across every other spoke, at the centre and everywhere else. Measured by ``check``'s own measurement
 (``api.check_surface``) and side by side from the geometry alone (``side_pairs``)."""
 from __future__ import annotations

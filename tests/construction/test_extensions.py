@@ -32,7 +32,7 @@ from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.tessellate import tessellate
 from c1surf.mesh.halfedges import build_halfedges
-from c1surf.construction.stencils.triangles import triangle_hole_coefficients
+from c1surf.construction.stencils.holes.triangles import triangle_hole_coefficients
 from c1surf.io.meshes.obj import read_obj
 from c1surf.io.patches.json_patches import read_patch_set_json
 from c1surf.io.meshes.read import read_mesh

@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 from c1surf.cli.reports.inspect import inspection
-from c1surf.construction.stencils.bicubic import bicubic_hole_coefficients
-from c1surf.construction.stencils.cyclic_sums import cosine_sums, twist_sums
+from c1surf.construction.stencils.holes.bicubic import bicubic_hole_coefficients
+from c1surf.construction.stencils.holes.cyclic_sums import cosine_sums, twist_sums
 from c1surf.construction.stencils.doo_sabin import doo_sabin_matrix, doo_sabin_rows
-from c1surf.construction.stencils.hole_rules import LARGE_HOLE, HoleOperator, HoleRules
+from c1surf.construction.stencils.holes.hole_rules import LARGE_HOLE, HoleOperator, HoleRules
 from c1surf.construction.stencils.perturbation import PerturbationStep, perturbation_matrix, perturbation_parts
 from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.construction.topology import build_topology
@@ -162,7 +162,7 @@ def test_o_n_cells_give_the_dense_surface(monkeypatch, make, n):
     surface = Surface(sizes, vertices, points, SurfaceOptions(alpha=0.8))
     import c1surf.construction.stages as stages
     import c1surf.construction.stencils.doo_sabin as doo_sabin
-    import c1surf.construction.stencils.hole_rules as hole_rules
+    import c1surf.construction.stencils.holes.hole_rules as hole_rules
 
     monkeypatch.setattr(hole_rules, "LARGE_HOLE", 10**9)
     monkeypatch.setattr(stages, "LARGE_HOLE", 10**9)

@@ -35,7 +35,7 @@ class HoleGroup:
     halfedges : (k, n) int, half-edge C_i -> C_{i+1} of each hole
     A, B1, B2, C : (k, n) int, refined vertex indices of A_i, B_{i,1}, B_{i,2}, C_i
     dart : bool, the holes of darts (``split_dart_holes``): corners n - 2 and n - 1 are the ghost corners
-        across the crease, whose patches are not kept (``construction.stencils.dart``)
+        across the crease, whose patches are not kept (``construction.stencils.holes.dart``)
     """
 
     n: int

@@ -38,7 +38,7 @@ def perturbation_parts(mesh: HalfEdgeMesh, holes: list[HoleGroup]):
     rows, cols, vals = [], [], []
     count = 0
     for g in holes:
-        if g.n % 2 or g.n <= 4 or g.dart:  # a dart's hole needs none (construction.stencils.dart)
+        if g.n % 2 or g.n <= 4 or g.dart:  # a dart's hole needs none (construction.stencils.holes.dart)
             continue
         k = g.cells.size
         sign = np.where(np.arange(g.n) % 2 == 0, 1.0, -1.0)

@@ -64,7 +64,7 @@ class CreaseSheets:
     dart_edges : (k, 2) int, of those, the lone crease edges (one edge between two darts: ``dart_chains``;
         ``names``)
     dart_vertex : (k,) int, vertices of ``mesh`` where a cut crease ends inside the surface (darts): one copy
-        each, in as many real faces as the dart's valence and two ghost quads (``construction.stencils.dart``)
+        each, in as many real faces as the dart's valence and two ghost quads (``construction.stencils.holes.dart``)
     inexact_vertices : (k,) int, vertices that keep their components from being cut (``names``)
     """
 
@@ -119,7 +119,7 @@ def dart_chains(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: np.ndarray
 
     A chain runs along sharp edges through interior vertices on exactly two of them (not tagged corners).
     A chain with a dart end (a crease end inside the surface) is cut: its dart gets the dart's hole
-    (``construction.stencils.dart``), C0 up to the end, also at both ends of a line of two or more edges.
+    (``construction.stencils.holes.dart``), C0 up to the end, also at both ends of a line of two or more edges.
     A line of one edge between two darts is not: its two ghost quads would close on each other (a pillow
     of two quads whose outer vertices have two faces); it keeps the sharpest G1 crease, which fades out at
     both ends as OpenSubdiv's does.
@@ -200,7 +200,7 @@ def exact_crease_vertices(mesh: HalfEdgeMesh, sharp: np.ndarray, tagged_corner: 
     corner = on_seam & ((seam_edges >= 3) | tagged_corner | (boundary & (largest == 1)))
     smooth_ok = (seam_edges == 2) & ~corner & (largest <= 2)
     corner_ok = corner & (seam_edges >= 2) & (largest == 1)
-    dart_ok = dart_ends(mesh, sharp, tagged_corner)  # any valence: the dart's hole (construction.stencils.dart)
+    dart_ok = dart_ends(mesh, sharp, tagged_corner)  # any valence: the dart's hole (construction.stencils.holes.dart)
     return on_seam, on_seam & (smooth_ok | corner_ok | dart_ok), corner
 
 

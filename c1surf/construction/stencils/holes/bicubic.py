@@ -9,9 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..refine.holes import HoleGroup
+from ...refine.holes import HoleGroup
 from .cyclic_sums import cosine_sums, twist_sums
-from .layout import PatchLayout
+from ..layout import PatchLayout
 
 
 def shift(x: np.ndarray, s: int) -> np.ndarray:

@@ -61,23 +61,23 @@ def open_chain_twists(E: np.ndarray, target: np.ndarray) -> np.ndarray:
     return r + x * h[:, None]
 
 
-def dart_hole_coefficients(A, B1, B2, C, C_before, B_before, C_after, B_after, alpha: float = 1.0, beta: float = 0.0,
+def dart_hole_coefficients(A, B1, B2, C, mirrors, alpha: float = 1.0, beta: float = 0.0,
                            tangent_rule: str = "symmetric"):
     """The n bicubic patches of a dart's hole: C0 across spoke n - 1 (p_{n-1} | p_0), G1 across the others and at S.
 
     Parameters
     ----------
     A, B1, B2, C : (..., n, d) float, the refined points around the hole (``bicubic`` names)
-    C_before, B_before : (..., d) float, what p_{n-1} reads in place of C_0 and B_{0,1}: its own side's
-        mirrors of C_{n-1} and B_{n-1,2} across the crease
-    C_after, B_after : (..., d) float, what p_0 reads in place of C_{n-1} and B_{n-1,2}: the mirrors of
-        C_0 and B_{0,1}
+    mirrors : (C_before, B_before, C_after, B_after), each (..., d) float: C_before, B_before are what p_{n-1}
+        reads in place of C_0 and B_{0,1} (its own side's mirrors of C_{n-1} and B_{n-1,2} across the crease);
+        C_after, B_after what p_0 reads in place of C_{n-1} and B_{n-1,2} (the mirrors of C_0 and B_{0,1})
     alpha, beta, tangent_rule : as ``bicubic.bicubic_hole_coefficients`` (A3's P_32 and S)
 
     Returns
     -------
     (..., n, 4, 4, d) float: P[..., i, k, l] is coefficient P_{kl,i} of patch p_i.
     """
+    C_before, B_before, C_after, B_after = mirrors
     n = C.shape[-2]
     c = np.cos(2 * np.pi / n)
     a = c / (1 - c)
@@ -119,7 +119,7 @@ def dart_hole_weights(n: int, alpha: float = 1.0, beta: float = 0.0, tangent_rul
     C_after, B_after] (n, n, n, n, 1, 1, 1, 1 points)."""
     eye = np.eye(4 * n + 4)
     rows = [eye[k * n : (k + 1) * n] for k in range(4)] + [eye[4 * n + k] for k in range(4)]
-    W = dart_hole_coefficients(*rows, alpha=alpha, beta=beta, tangent_rule=tangent_rule).reshape(16 * n, 4 * n + 4)
+    W = dart_hole_coefficients(*rows[:4], tuple(rows[4:]), alpha=alpha, beta=beta, tangent_rule=tangent_rule).reshape(16 * n, 4 * n + 4)
     W[np.abs(W) < 1e-15] = 0.0
     return W
 
