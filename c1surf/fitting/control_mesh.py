@@ -37,6 +37,7 @@ from ..construction.features import INFINITELY_SHARP, SharpFeatures
 from ..mesh.feature_edges import feature_edges
 from ..mesh.weld import weld_vertices
 from .cleanup import clean_control_mesh, cleanup_notes, edge_keys
+from .decimated_quads import decimated_quad_mesh, mesh_topology
 
 __all__ = ["ControlMesh", "control_mesh_from_scan", "quad_remesh", "tag_feature_edges", "scan_feature_edges"]
 
@@ -49,6 +50,10 @@ BRIDGE_OFF_LINE = 8.0  # bridges between loose ends stay within this many allowa
 BRIDGE_LENGTH = 4.0  # and cost at most this many typical edges
 BRIDGE_DEGREES = 60.0  # and continue both lines within this angle
 RETRY_SCALES = (1.0, 1.04, 0.96)  # remesh targets tried in turn until one Doo-Sabin step suffices
+REMESHERS = ("auto", "instant", "decimate")
+# the cleanup's repairs that say Instant Meshes broke the scan's topology at a thin part
+TOPOLOGY_REPAIRS = {"stray_components": "stray pieces dropped", "closed_holes": "holes closed",
+                    "split_vertices": "pinched vertices split", "non_manifold_faces": "faces on non-manifold edges dropped"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -264,7 +269,62 @@ def _bridges(a, b, tagged, off_line, typical, points) -> np.ndarray:
     return bridge
 
 
-def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | None = None) -> ControlMesh:
+def _instant_layout(scan, faces: int, crease_angle, check_topology: bool = False):
+    """Instant Meshes' remesh, cleaned, retried at ``RETRY_SCALES`` while a closed mesh needs two Doo-Sabin steps.
+
+    Returns (steps, remeshed faces, sizes, vertices, points, cleanup report, info) of the mesh needing fewest steps;
+    info: ``remesher``, ``target_vertices``, ``remeshes``, ``seconds`` (all tries) and, with ``check_topology``,
+    ``topology_change`` (``_topology_change`` of the last try: the tries end at the first that changes it).
+    """
+    best, seconds, remeshes, change = None, 0.0, 0, ""
+    for scale in RETRY_SCALES:
+        quad_points, quads, info = quad_remesh(*scan, int(round(faces * scale)), crease_angle)
+        seconds, remeshes = seconds + info["seconds"], remeshes + info["remeshes"]
+        sizes, vertices, control_points, cleanup = clean_control_mesh(
+            np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=scan)
+        steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
+        layout = (steps, quads.shape[0], sizes, vertices, control_points, cleanup, info)
+        change = _topology_change(layout, scan) if check_topology else ""
+        if best is None or steps < best[0]:
+            best = layout
+        if steps <= 1 or change or _has_boundary(sizes, vertices, control_points.shape[0]):
+            break  # an open mesh takes two steps whatever the scale
+    info = {"remesher": "instant", "target_vertices": best[-1]["target_vertices"], "remeshes": remeshes,
+            "seconds": seconds, "topology_change": change}
+    return best[:-1] + (info,)
+
+
+def _has_boundary(sizes, vertices, n_vertices: int) -> bool:
+    """Whether some edge of the mesh is in one face only."""
+    _, _, key, _ = edge_keys(sizes, vertices, n_vertices)
+    return bool(np.any(np.unique(key, return_counts=True)[1] == 1))
+
+
+def _decimated_layout(scan, faces: int):
+    """The scan decimated, paired and split (``decimated_quads``), cleaned; the tuple of ``_instant_layout``."""
+    quad_points, quads, info = decimated_quad_mesh(*scan, faces)
+    sizes, vertices, control_points, cleanup = clean_control_mesh(
+        np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=scan)
+    steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
+    info = {"remesher": "decimate", "target_vertices": 0, "remeshes": 1, "seconds": info["seconds"],
+            "decimated_triangles": info["decimated_triangles"]}
+    return steps, quads.shape[0], sizes, vertices, control_points, cleanup, info
+
+
+def _topology_change(layout, scan) -> str:
+    """What the cleaned remesh changed of the scan's topology (components, Euler characteristic, rims, or the
+    cleanup's repairs of stray pieces, holes and pinches the remesher left at thin parts); "" when nothing."""
+    _, _, sizes, vertices, control_points, cleanup, _ = layout
+    scan_points, scan_triangles = scan
+    want = mesh_topology(np.full(scan_triangles.shape[0], 3), scan_triangles.ravel(), scan_points.shape[0])
+    got = mesh_topology(sizes, vertices, control_points.shape[0]) if sizes.size else dict.fromkeys(want, 0)
+    changed = [f"{got[k]} {k} instead of {want[k]}" for k in want if got[k] != want[k]]
+    changed += [f"{cleanup[k]} {words}" for k, words in TOPOLOGY_REPAIRS.items() if cleanup.get(k)]
+    return ("changed the scan's topology (" + ", ".join(changed) + ")") if changed else ""
+
+
+def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | None = None,
+                           remesher: str = "auto") -> ControlMesh:
     """A quad control mesh of about ``faces`` faces for a dense triangle scan (module docstring).
 
     Parameters
@@ -284,26 +344,32 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     """
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if remesher not in REMESHERS:
+        raise ValueError(f"the remesher must be one of {', '.join(REMESHERS)}, got {remesher!r}")
     scan_points, scan_triangles = _welded_scan(points, triangles)
     _check_area(scan_points, scan_triangles)
-    best, seconds, remeshes = None, 0.0, 0
-    for scale in RETRY_SCALES:
-        quad_points, quads, info = quad_remesh(scan_points, scan_triangles, int(round(faces * scale)), crease_angle)
-        seconds, remeshes = seconds + info["seconds"], remeshes + info["remeshes"]
-        sizes, vertices, control_points, cleanup = clean_control_mesh(
-            np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=(scan_points, scan_triangles))
-        steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
-        if best is None or steps < best[0]:
-            best = (steps, quads.shape[0], sizes, vertices, control_points, cleanup, info)
-        if steps <= 1:
-            break
-    steps, remeshed, sizes, vertices, control_points, cleanup, info = best
+    scan = (scan_points, scan_triangles)
+    notes = []
+    if remesher == "decimate":
+        layout = _decimated_layout(scan, faces)
+    else:
+        layout = _instant_layout(scan, faces, crease_angle, check_topology=remesher == "auto")
+        why = layout[-1]["topology_change"]
+        if why:
+            instant_seconds = layout[-1]["seconds"]
+            layout = _decimated_layout(scan, faces)
+            layout[-1]["seconds"] += instant_seconds
+            notes.append(f"Instant Meshes' remesh {why}: the control mesh is the scan decimated instead "
+                         "(topology kept; irregular, so more CAD faces)")
+    steps, remeshed, sizes, vertices, control_points, cleanup, info = layout
+    seconds, remeshes = info["seconds"], info["remeshes"]
     if sizes.size == 0:
         raise ValueError(f"the quad remesher made no faces of this scan ({len(triangles)} triangles, {faces} faces "
                          "asked): it needs a surface, not points on a line or in one point")
-    notes = cleanup_notes(cleanup)
+    notes = cleanup_notes(cleanup) + notes
     report = {"requested_faces": int(faces), "remeshed_faces": int(remeshed), "faces": int(sizes.size),
-              "remesh_seconds": seconds, "remeshes": remeshes, "target_vertices": info["target_vertices"],
+              "remesher": info["remesher"], "remesh_seconds": seconds, "remeshes": remeshes,
+              "target_vertices": info["target_vertices"],
               "doo_sabin_steps": int(steps), **cleanup}
     creases = np.zeros((0, 2), dtype=np.int64)
     if crease_angle is not None:
@@ -313,4 +379,7 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
         notes.append(f"--crease-angle {crease_angle:g}: {lines.shape[0]} scan edges sharper than that; "
                      f"{creases.shape[0]} control edges follow them and are tagged infinitely sharp")
     report["crease_edges"] = int(creases.shape[0])
+    report["scan_topology"] = mesh_topology(np.full(scan_triangles.shape[0], 3), scan_triangles.ravel(),
+                                            scan_points.shape[0])
+    report["topology"] = mesh_topology(sizes, vertices, control_points.shape[0])
     return ControlMesh(sizes, vertices, control_points, creases, notes, report)

@@ -20,7 +20,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from ..construction.surface import Surface, SurfaceOptions
-from .control_mesh import ControlMesh, control_mesh_from_scan
+from .control_mesh import REMESHERS, ControlMesh, control_mesh_from_scan
 from .deviation import bounding_diagonal, distance_stats, two_sided_deviation
 from .iterate import fit_surface_points, project_scan
 from .local_refine import next_face_count
@@ -53,6 +53,8 @@ class ScanFitOptions:
     face_cap : int, the most control faces a tolerance may ask for
     crease_angle : float degrees or None: scan edges sharper than this become C0 creases of the surface
     fit : FitOptions, the least-squares fit's weights and rounds
+    remesher : "auto" (Instant Meshes' field-aligned remesh where it keeps the scan's topology, else the scan
+        decimated), "instant" or "decimate" (``control_mesh.control_mesh_from_scan``)
     """
 
     faces: int | None = None
@@ -60,6 +62,7 @@ class ScanFitOptions:
     face_cap: int = FACE_CAP
     crease_angle: float | None = None
     fit: FitOptions = field(default_factory=FitOptions)
+    remesher: str = "auto"
 
     def check(self) -> "ScanFitOptions":
         """Raise ValueError for what ``fit_scan`` cannot take; else return self."""
@@ -71,6 +74,8 @@ class ScanFitOptions:
             raise ValueError(f"the face cap must be an integer in [{MIN_FACES}, {10 * FACE_CAP}], got {self.face_cap}")
         if self.crease_angle is not None and not (np.isfinite(self.crease_angle) and 0 < self.crease_angle < 180):
             raise ValueError(f"the crease angle must be in (0, 180) degrees, got {self.crease_angle}")
+        if self.remesher not in REMESHERS:
+            raise ValueError(f"the remesher must be one of {', '.join(REMESHERS)}, got {self.remesher!r}")
         self.fit.check()
         return self
 
@@ -186,7 +191,7 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
         start = time.perf_counter()
         if control is None or rounds:
             tell(f"remeshing the scan to about {faces} quads", 0, 1)
-            mesh = control_mesh_from_scan(points, triangles, faces, options.crease_angle)
+            mesh = control_mesh_from_scan(points, triangles, faces, options.crease_angle, options.remesher)
             notes += [n for n in mesh.notes if n not in notes]
         else:
             mesh = control
