@@ -53,8 +53,10 @@ CC_LEVELS = 4
 RIPPLE_CENTRES = 20000
 RIPPLE_GRID = 6
 CREASE_ANGLE = 45.0
-TARGETS = {"cad_faces": 1500, "rms": 3e-4, "p99": 1e-3, "max": 3e-3, "surface_max": 3e-3, "seconds": 20.0,
-           "peak_mb": 2048.0, "own_control_rms": 1e-3}
+TARGETS = {"cad_faces": 1500, "rms": 3e-4, "p99": 1e-3, "max": 3e-3, "surface_p99": 1e-3, "surface_max": 5e-3,
+           "seconds": 30.0, "peak_mb": 2048.0, "own_control_rms": 1e-3}  # issue 34's
+THIN_SCANS_CAD_FACES = {"scorpion_low_resolution": 2500, "hand_closed": 2500, "cat-low-resolution": 2500,
+                        "human_man": 2500, "boot": 2500}  # CAD faces allowed for the scans with thin parts
 
 
 def log(message: str) -> None:
@@ -83,13 +85,27 @@ def run_fit(scan: Path, work: Path, name: str, extra: list, timeout: float) -> d
                refinements=document["patches"]["refinements"], cad_faces=document["cad_faces"],
                crease_edges=document["control_mesh"]["crease_edges"],
                rms=a["relative_rms"], p99=a["relative_p99"], max=a["relative_max"],
-               surface_rms=b["relative_rms"], surface_max=b["relative_max"],
+               surface_rms=b["relative_rms"], surface_p99=b["relative_p99"], surface_max=b["relative_max"],
+               remesher=document["control_mesh"].get("remesher", ""), topology=topology_pair(document),
                g1_jump=document["g1"]["max_normal_jump"], is_g1=document["g1"]["is_g1"],
                iterations=document["fit"]["iterations"], notes=document["notes"],
                step_bytes=files["step"].stat().st_size if files["step"].exists() else 0,
                files={"npz": str(files["npz"]), "step": str(files["step"]), "deviation": str(picture),
                       "report": str(report)})
     return row
+
+
+def topology_pair(document: dict) -> dict:
+    """The scan's and the surface's (components, Euler characteristic, rims): the report's ``topology`` when it has
+    one, else the control mesh's counts (the surface over it has its topology: the fit moves points only)."""
+    both = document.get("topology")
+    if isinstance(both, dict) and "scan" in both and "surface" in both:
+        return {side: [both[side].get(k) for k in ("components", "euler", "rims")] for side in ("scan", "surface")}
+    control = document["control_mesh"]
+    if "scan_topology" not in control:
+        return {}
+    return {side: [control[key][k] for k in ("components", "euler", "rims")]
+            for side, key in (("scan", "scan_topology"), ("surface", "topology"))}
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -350,8 +366,8 @@ def picture(row: dict, scan: Path, control_faces: int, out: Path, work: Path) ->
 
 def table(results: dict) -> str:
     """The markdown table of docs/fit.md."""
-    head = ("| scan | options | control faces | patches | CAD faces | scan->surface RMS / p99 / max | surface->scan max "
-            "| G1 jump (rad) | seconds (peak MB) | rho fit / CC | unfitted control mesh RMS / max "
+    head = ("| scan | options | control faces | patches | CAD faces | scan->surface RMS / p99 / max "
+            "| surface->scan p99 / max | topology scan; surface (components, Euler, rims) | G1 jump (rad) | seconds (peak MB) | rho fit / CC | unfitted control mesh RMS / max "
             "| Catmull-Clark RMS / max | direct: patches, CAD faces, seconds | STEP: solids, valid, volume / scan's |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for row in results["rows"]:
@@ -362,7 +378,11 @@ def table(results: dict) -> str:
         cc, control, direct = base.get("catmull_clark", {}), base.get("control", {}), base.get("direct", {})
         step = base.get("step", {})
         cells = [row["scan"], row["options"] or "defaults", row["control_faces"], row["patches"], row["cad_faces"],
-                 f"{row['rms']:.2e} / {row['p99']:.2e} / {row['max']:.2e}", f"{row['surface_max']:.2e}",
+                 f"{row['rms']:.2e} / {row['p99']:.2e} / {row['max']:.2e}",
+                 f"{row.get('surface_p99', float('nan')):.2e} / {row['surface_max']:.2e}",
+                 "; ".join(" / ".join(map(str, row["topology"][side])) for side in ("scan", "surface"))
+                 + ("" if row["topology"]["scan"] == row["topology"]["surface"] else " (changed)")
+                 if row.get("topology") else "-",
                  f"{row['g1_jump']:.1e}", f"{row['seconds']:.1f} ({row['peak_mb']:.0f})",
                  f"{base.get('fit_rho') or float('nan'):.3g} / {cc['rho']:.3g}" if "rho" in cc else "-",
                  f"{control['rms']:.2e} / {control['max']:.2e}" if control else "-",
@@ -397,12 +417,18 @@ def check_targets(results: dict) -> list[str]:
         if row["label"].endswith("own-control"):
             checks = [("RMS", row["rms"], TARGETS["own_control_rms"])]
         else:
-            checks = [("CAD faces", row["cad_faces"], TARGETS["cad_faces"]), ("RMS", row["rms"], TARGETS["rms"]),
-                      ("p99", row["p99"], TARGETS["p99"]), ("max", row["max"], TARGETS["max"]),
+            checks = [("CAD faces", row["cad_faces"], THIN_SCANS_CAD_FACES.get(row["scan"], TARGETS["cad_faces"])),
+                      ("RMS", row["rms"], TARGETS["rms"]), ("p99", row["p99"], TARGETS["p99"]),
+                      ("max", row["max"], TARGETS["max"]),
+                      ("surface-to-scan p99", row.get("surface_p99", float("nan")), TARGETS["surface_p99"]),
                       ("surface-to-scan max", row["surface_max"], TARGETS["surface_max"]),
                       ("seconds", row["seconds"], TARGETS["seconds"]), ("peak MB", row["peak_mb"], TARGETS["peak_mb"])]
         for what, value, goal in checks:
             lines.append(f"[{'met' if value <= goal else 'not met'}] {row['label']} {what}: {value:.3g} (goal <= {goal:g})")
+        if row.get("topology"):
+            kept = row["topology"]["scan"] == row["topology"]["surface"]
+            lines.append(f"[{'met' if kept else 'not met'}] {row['label']} topology (components, Euler, rims): scan "
+                         f"{row['topology']['scan']}, surface {row['topology']['surface']}")
         step = row.get("baselines", {}).get("step", {})
         if "solids" in step:
             lines.append(f"[{'met' if step['solids'] == 1 and step['valid'] else 'not met'}] {row['label']} STEP: "
@@ -454,7 +480,8 @@ def run(args) -> dict:
             row.pop("files", None)
             results["rows"].append(row)
             log("  " + json.dumps({k: row.get(k) for k in ("control_faces", "cad_faces", "rms", "p99", "max",
-                                                             "surface_max", "seconds", "peak_mb")}))
+                                                             "surface_p99", "surface_max", "topology", "remesher",
+                                                             "seconds", "peak_mb")}))
     results["machine"]["load_average_at_end"] = os.getloadavg()
     results["targets"] = check_targets(results)
     return results
