@@ -114,6 +114,10 @@ def fit(scan_path, outputs, resolution, plan, control_path, patch_files, surface
     point-to-point share and a fairness term), so the result is G1 by
     construction (C0 along --crease-angle's feature lines). Prints the
     deviation both ways and writes the outputs asked for.
+
+    The defaults aim for a scan-to-surface distance of RMS 3e-4, 99th
+    percentile 1e-3 and max 3e-3 of the bounding-box diagonal; when a scan
+    does not reach it at the default face count, a note says what was reached.
     """
     if not outputs.paths():
         raise UsageFailure("nothing to write: give -o MESH, --patches FILE, --report FIT.json and/or --deviation "

@@ -41,6 +41,9 @@ MIN_FACES, FACE_CAP = 8, 6000
 # 1.1e-3, 4.2e-3 (bulges between samples), wingnut 1.5e-4 / 1.8e-3, 3.6e-3; 8: spot 6.3e-5 / 1.3e-3, 2.4e-3,
 # wingnut 1.8e-4 / 2.6e-3, 2.2e-3, goathead 2.1e-4 / 1.5e-3, 3.9e-3 (4: 1.8e-4 / 1.2e-3, 3.9e-3)
 SAMPLES_PER_FACE = 8
+# what the defaults aim for (scan to surface, relative to the bounding-box diagonal; issue 34): a note says what was
+# reached when a default fit misses it
+DEFAULT_AIM = {"relative_rms": 3e-4, "relative_p99": 1e-3, "relative_max": 3e-3}
 
 
 @dataclass(frozen=True)
@@ -208,11 +211,23 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
             notes += [stop] if stop else []
             break
         faces = next_face_count(faces, worst / options.tolerance, options.face_cap)
+    if options.faces is None and options.tolerance is None and control is None:
+        notes += _aim_note(result.history[-1], mesh.n_faces)
     start = time.perf_counter()
     tell("measuring the deviation", 0, 1)
     deviation = two_sided_deviation(surface, points, triangles, result.footpoints)
     _clock(timings, "deviation", start)
     return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings)
+
+
+def _aim_note(reached: dict, faces: int) -> list:
+    """A note when the default fit misses ``DEFAULT_AIM`` (``reached``: the last round's relative distances)."""
+    if all(reached[key] <= aim for key, aim in DEFAULT_AIM.items()):
+        return []
+    return [f"the defaults aim for a scan-to-surface RMS of {DEFAULT_AIM['relative_rms']:g}, 99th percentile "
+            f"{DEFAULT_AIM['relative_p99']:g} and max {DEFAULT_AIM['relative_max']:g} of the diagonal; reached "
+            f"{reached['relative_rms']:.2g}, {reached['relative_p99']:.2g} and {reached['relative_max']:.2g} with "
+            f"{faces} control faces (give --faces or --tolerance for more)"]
 
 
 def _clock(timings: dict, name: str, start: float) -> None:
