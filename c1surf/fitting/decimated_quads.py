@@ -1,26 +1,30 @@
 """A pure-quad control mesh with the scan's topology: decimate, pair, split (fine to coarse).
 
-``decimated_quad_mesh`` makes the control mesh ``c1surf fit`` starts from by default:
+``decimated_quad_mesh`` makes the control mesh ``c1surf fit`` starts from where Instant Meshes' remesh breaks the
+scan's topology (``control_mesh``, ``--remesher auto``), or always with ``--remesher decimate``:
 
 1. **Decimate.** Quadric-error edge collapses (Garland and Heckbert 1997, pymeshlab's
-   ``meshing_decimation_quadric_edge_collapse``) of the welded scan down to about half the control faces
-   wanted, refusing every collapse that breaks the link condition (``preservetopology``) and keeping the
-   rims (``preserveboundary``): components, Euler characteristic and boundary loops stay the scan's by
-   construction (Hoppe 1994; the control meshes of Ma et al. 2004 are made so). The quadric error puts
+   ``meshing_decimation_quadric_edge_collapse``) of the welded scan down to ``TRIANGLES_PER_FACE`` triangles
+   per control face wanted, refusing every collapse that breaks the link condition (``preservetopology``):
+   components, Euler characteristic and boundary loops stay the scan's by construction (Hoppe 1994; the
+   control meshes of Ma et al. 2004 are made so). The rims are decimated too, unless that closes one (then
+   no boundary edge is collapsed: ``keep_rims``). The quadric error puts
    the triangles where the scan bends: a thin leg keeps a ring of edges around it, a flat side gives
    them up.
-2. **Pair.** Triangles sharing an edge become quads where the quad is good (its corner angles within
-   ``PAIR_DEGREES`` of 90 degrees, nearly planar), best first, in rounds of a matching that is
+2. **Pair.** Triangles sharing an edge become quads where the quad is good enough (its corner angles within
+   ``PAIR_DEGREES`` of 90 degrees, its triangles' normals within 90 degrees), best first, in rounds of a matching that is
    greedy in each neighbourhood (``pair_triangles``). An edge is never removed at a vertex it would leave
    with two edges (an interior valence-2 vertex the construction refuses).
 3. **Split.** Every n-gon into n quads at its centroid and edge midpoints (``split_faces``): pure quads,
    and every vertex that is not a face centre or an edge midpoint has only those around it, so the
    irregular vertices lie apart and one Doo-Sabin step suffices on a closed mesh (four patches a quad).
 
-Measured (welded scans of ``../shared/scans``, 1,500 triangles): components, Euler characteristic and rims
-of all fifteen kept (boot: genus 12, Euler -22; plane_holes: 27 rims, Euler -25); 0.2 s (hammer's 60k
-triangles: 1.0 s). Instant Meshes at 3,000 faces changes scorpion's, cat's, boot's, plane_holes' and
-demosthenes' topology (docs/fit.md).
+Measured (welded scans of ``../shared/scans``, 3,000 faces asked: 2,924-2,976 quads): components, Euler
+characteristic and rims of all fifteen kept (boot: genus 12, Euler -22; plane_holes: 27 rims, Euler -25);
+1.3-7.5 s on the loaded 2-core machine, decimation, pairing, split, projection and cleanup (hammer's 60k
+triangles the longest). Instant Meshes' cleaned remesh at 3,000 faces changes boot's (Euler 2) and
+plane_holes' (Euler -1, 3 rims), and needs stray pieces dropped or pinches split on scorpion and human_man
+(docs/fit.md).
 """
 from __future__ import annotations
 
@@ -33,10 +37,16 @@ from .cleanup import edge_keys
 
 __all__ = ["mesh_topology", "decimate_scan", "pair_triangles", "split_faces", "decimated_quad_mesh"]
 
-PAIR_DEGREES = 50.0  # a pair of triangles becomes a quad when every corner angle is within this of 90 degrees
-PAIR_PLANAR = 0.5  # and the two triangles' normals differ by less than 60 degrees (cosine above this)
+# a pair of triangles becomes a quad when every corner angle is within PAIR_DEGREES of 90 degrees and the two
+# triangles' normals differ by less than 90 degrees (cosine above PAIR_PLANAR). Each triangle left alone becomes three
+# quads around a valence-3 vertex: three bicubic patches, three CAD faces. Measured on scorpion at 3,000 faces
+# (1,320 decimated triangles; control faces, CAD faces, scan-to-surface RMS): 50 degrees and cosine 0.5: 368 alone,
+# 3,008 faces, 4,632 CAD faces (fitted at 3,058 faces: 5,052 CAD faces, RMS 3.05e-4); 70 and 0: 214 alone, 3,773 CAD
+# faces; 85 and 0: 192 alone, 2,832 faces, 3,638 CAD faces, RMS 3.29e-4
+PAIR_DEGREES = 85.0
+PAIR_PLANAR = 0.0
 PAIR_ROUNDS = 30  # rounds of the local matching at most
-TRIANGLES_PER_FACE = 0.44  # decimated triangles per control face wanted (a pair gives 4 quads, a lone triangle 3)
+TRIANGLES_PER_FACE = 0.46  # decimated triangles per control face wanted (a pair gives 4 quads, a lone triangle 3)
 
 
 def mesh_topology(face_sizes, face_vertices, n_vertices: int) -> dict:
