@@ -10,7 +10,12 @@ scan's topology (``control_mesh``, ``--remesher auto``), or always with ``--reme
    control meshes of Ma et al. 2004 are made so). The rims are decimated too, unless that closes one (then
    no boundary edge is collapsed: ``keep_rims``). The quadric error puts
    the triangles where the scan bends: a thin leg keeps a ring of edges around it, a flat side gives
-   them up.
+   them up. Thin parts weigh more (``thin_part_weights``: the squared ratio of the control edge wanted to 0.6
+   times the local thickness, one inward ray per vertex), so a limb keeps control edges below about 0.6 of its
+   diameter where the budget allows. Measured (3,000 faces asked; RMS / p99 / max scan to surface, max surface
+   to scan, CAD faces): human_man unweighted 1.9e-4 / 7.3e-4 / 2.6e-3, 2.9e-3, 3,657; weighted 1.5e-4 / 5.7e-4 /
+   2.6e-3, 1.7e-3, 3,914 (at 1,900 faces asked: 2.4e-4 / 8.7e-4 / 2.8e-3, 3.6e-3, 2,393); scorpion unweighted
+   3.3e-4 / 1.1e-3 / 2.6e-3, 5.0e-3, 3,638; weighted 3.1e-4 / 1.0e-3 / 2.7e-3, 5.2e-3, 3,869.
 2. **Pair.** Triangles sharing an edge become quads where the quad is good enough (its corner angles within
    ``PAIR_DEGREES`` of 90 degrees, its triangles' normals within 90 degrees), best first, in rounds of a matching that is
    greedy in each neighbourhood (``pair_triangles``). An edge is never removed at a vertex it would leave
@@ -46,6 +51,8 @@ __all__ = ["mesh_topology", "decimate_scan", "pair_triangles", "split_faces", "d
 PAIR_DEGREES = 85.0
 PAIR_PLANAR = 0.0
 PAIR_ROUNDS = 30  # rounds of the local matching at most
+THIN_EDGE = 0.6  # a limb of diameter d wants a control edge below 0.6 d (a closed quadratic B-spline: 1e-3 of d)
+THIN_MOST = 10.0  # the largest ratio of control edge to that the weights follow
 TRIANGLES_PER_FACE = 0.46  # decimated triangles per control face wanted (a pair gives 4 quads, a lone triangle 3)
 
 
@@ -93,6 +100,38 @@ def decimate_scan(points: np.ndarray, triangles: np.ndarray, target: int, qualit
             qualityweight=quality is not None)
     out = meshes.current_mesh()
     return np.asarray(out.vertex_matrix(), dtype=np.float64), np.asarray(out.face_matrix(), dtype=np.int64)
+
+
+def thickness(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
+    """(m,) float: the scan's thickness at each vertex, the distance along the inward vertex normal to the first
+    triangle hit (a one-ray shape diameter; the bounding-box diagonal where the ray leaves the mesh).
+
+    points : (m, 3) float; triangles : (t, 3) int, outward
+    """
+    import trimesh
+
+    from .system import vertex_normals
+
+    normals = vertex_normals(points, triangles)
+    diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
+    mesh = trimesh.Trimesh(points, triangles, process=False)
+    origins = points - 1e-6 * diagonal * normals
+    where, ray, _ = mesh.ray.intersects_location(origins, -normals, multiple_hits=False)
+    out = np.full(points.shape[0], diagonal)
+    hit = np.linalg.norm(where - origins[ray], axis=1)
+    np.minimum.at(out, ray, np.maximum(hit, 1e-9 * diagonal))
+    return out
+
+
+def thin_part_weights(points: np.ndarray, triangles: np.ndarray, faces: int) -> np.ndarray:
+    """(m,) float >= 1: the decimation's vertex weights, (edge / (THIN_EDGE x thickness))^2 where the scan is
+    thinner than the control edge wants (``edge``: the control edge of ``faces`` squares over the scan's area), else 1.
+    """
+    corners = points[triangles]
+    area = 0.5 * np.linalg.norm(np.cross(corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]), axis=1).sum()
+    edge = np.sqrt(area / max(faces, 1))
+    ratio = edge / (THIN_EDGE * thickness(points, triangles))
+    return np.clip(ratio, 1.0, THIN_MOST) ** 2
 
 
 def _corner_cosines(quads: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -207,7 +246,8 @@ def decimated_quad_mesh(points: np.ndarray, triangles: np.ndarray, faces: int, q
     ----------
     points : (m, 3) float; triangles : (t, 3) int, the welded scan
     faces : int > 0, the quads wanted
-    quality : (m,) float > 0 or None, the decimation's per-vertex weight (``decimate_scan``)
+    quality : (m,) float > 0 or None, the decimation's per-vertex weight (``decimate_scan``; None:
+        ``thin_part_weights``)
 
     Returns
     -------
@@ -219,6 +259,8 @@ def decimated_quad_mesh(points: np.ndarray, triangles: np.ndarray, faces: int, q
     start = time.perf_counter()
     scan_points, scan_triangles = points, triangles
     target = max(4, int(round(TRIANGLES_PER_FACE * faces)))
+    if quality is None:
+        quality = thin_part_weights(points, triangles, faces)
     if target < triangles.shape[0]:
         want = mesh_topology(np.full(triangles.shape[0], 3), triangles.ravel(), points.shape[0])
         decimated = decimate_scan(points, triangles, target, quality, keep_rims=False)
