@@ -324,7 +324,7 @@ def _topology_change(layout, scan) -> str:
 
 
 def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | None = None,
-                           remesher: str = "auto") -> ControlMesh:
+                           remesher: str = "auto", decimated_share: float = 1.0) -> ControlMesh:
     """A quad control mesh of about ``faces`` faces for a dense triangle scan (module docstring).
 
     Parameters
@@ -333,6 +333,9 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     triangles : (t, 3) int
     faces : int > 0, the control faces wanted
     crease_angle : float degrees or None: tag the control edges along the scan's sharper edges
+    remesher : "auto", "instant" or "decimate" (module docstring)
+    decimated_share : float in (0, 1], a decimated control mesh gets this share of ``faces`` (its irregular layout
+        costs more CAD faces a control face: ``scan_fit.DECIMATED_START``)
 
     Raises ValueError for a scan without area and when the remesher makes no face.
 
@@ -350,14 +353,15 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     _check_area(scan_points, scan_triangles)
     scan = (scan_points, scan_triangles)
     notes = []
+    decimated_faces = max(8, int(round(faces * decimated_share)))
     if remesher == "decimate":
-        layout = _decimated_layout(scan, faces)
+        layout = _decimated_layout(scan, decimated_faces)
     else:
         layout = _instant_layout(scan, faces, crease_angle, check_topology=remesher == "auto")
         why = layout[-1]["topology_change"]
         if why:
             instant_seconds = layout[-1]["seconds"]
-            layout = _decimated_layout(scan, faces)
+            layout = _decimated_layout(scan, decimated_faces)
             layout[-1]["seconds"] += instant_seconds
             notes.append(f"Instant Meshes' remesh {why}: the control mesh is the scan decimated instead "
                          "(topology kept; irregular, so more CAD faces)")

@@ -53,6 +53,7 @@ PAIR_PLANAR = 0.0
 PAIR_ROUNDS = 30  # rounds of the local matching at most
 THIN_EDGE = 0.6  # a limb of diameter d wants a control edge below 0.6 d (a closed quadratic B-spline: 1e-3 of d)
 THIN_MOST = 10.0  # the largest ratio of control edge to that the weights follow
+RIM_TRIES = 3  # decimations with the rims collapsed too, at 1, 1.5 and 2.25 times the target
 TRIANGLES_PER_FACE = 0.46  # decimated triangles per control face wanted (a pair gives 4 quads, a lone triangle 3)
 
 
@@ -132,6 +133,22 @@ def thin_part_weights(points: np.ndarray, triangles: np.ndarray, faces: int) -> 
     edge = np.sqrt(area / max(faces, 1))
     ratio = edge / (THIN_EDGE * thickness(points, triangles))
     return np.clip(ratio, 1.0, THIN_MOST) ** 2
+
+
+def _decimate_keeping_topology(points, triangles, target: int, quality):
+    """``decimate_scan`` at ``target`` triangles whose result has the scan's components, Euler characteristic and
+    rims: with the weights and the rims decimated too; else without the weights (measured: pymeshlab's weighted
+    collapses can break an open mesh's topology, a cut twisted torus to Euler 6 instead of 1); else at 1.5 and
+    2.25 times the target; else with no boundary edge collapsed (``keep_rims``)."""
+    want = mesh_topology(np.full(triangles.shape[0], 3), triangles.ravel(), points.shape[0])
+    tries = [(quality, 1.0, False)] if quality is not None else []
+    tries += [(None, 1.5 ** k, False) for k in range(RIM_TRIES)] + [(None, 1.0, True)]
+    for weights, scale, keep_rims in tries:
+        decimated = decimate_scan(points, triangles, int(target * scale), weights, keep_rims)
+        got = mesh_topology(np.full(decimated[1].shape[0], 3), decimated[1].ravel(), decimated[0].shape[0])
+        if got == want:
+            break
+    return decimated
 
 
 def _corner_cosines(quads: np.ndarray, points: np.ndarray) -> np.ndarray:
@@ -262,12 +279,7 @@ def decimated_quad_mesh(points: np.ndarray, triangles: np.ndarray, faces: int, q
     if quality is None:
         quality = thin_part_weights(points, triangles, faces)
     if target < triangles.shape[0]:
-        want = mesh_topology(np.full(triangles.shape[0], 3), triangles.ravel(), points.shape[0])
-        decimated = decimate_scan(points, triangles, target, quality, keep_rims=False)
-        if want["rims"] and mesh_topology(np.full(decimated[1].shape[0], 3), decimated[1].ravel(),
-                                          decimated[0].shape[0]) != want:
-            decimated = decimate_scan(points, triangles, target, quality, keep_rims=True)
-        points, triangles = decimated
+        points, triangles = _decimate_keeping_topology(points, triangles, target, quality)
     quads, lone = pair_triangles(triangles, points)
     sizes = np.r_[np.full(quads.shape[0], 4), np.full(lone.shape[0], 3)]
     split, split_points = split_faces(sizes, np.r_[quads.ravel(), lone.ravel()], points)
