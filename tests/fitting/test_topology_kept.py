@@ -99,3 +99,25 @@ def test_a_default_fit_short_of_the_aim_says_what_it_reached():
     assert _aim_note(dict(DEFAULT_AIM), 3000) == []
     note, = _aim_note({**DEFAULT_AIM, "relative_p99": 2.5e-3}, 3000)
     assert "reached 0.0003, 0.0025 and 0.003 with 3000 control faces" in note
+
+
+def test_a_small_second_component_is_fitted_too(tmp_path):
+    """Two spheres, radii 1 and 0.05: Instant Meshes' scale at 200 faces is about the small one's diameter, so
+    its remesh loses it; the decimated control mesh keeps both, and the fitted surface has both components."""
+    import trimesh
+
+    big = trimesh.creation.icosphere(4, radius=1.0)
+    small = trimesh.creation.icosphere(3, radius=0.05)
+    small.apply_translation([1.5, 0.0, 0.0])
+    scan = tmp_path / "two.ply"
+    trimesh.util.concatenate([big, small]).export(scan)
+    points, triangles, _ = read_scan(str(scan))
+    assert triangle_topology(points, triangles) == (2, 4, 0)
+    surface, report = fit_surface(str(scan), ScanFitOptions(faces=200, fit=FitOptions(max_iterations=3)),
+                                  SurfaceOptions(refinements="auto"))
+    mesh = tessellate([surface.biquadratic, surface.bicubic], surface.refined, surface.frames, 3)
+    assert triangle_topology(mesh.points[:, :3], np.asarray(mesh.triangles)) == (2, 4, 0)
+    feet = report.fit.deviation.scan_to_surface
+    on_small = np.linalg.norm(points - [1.5, 0.0, 0.0], axis=1) < 0.1
+    assert feet[on_small].max() < 0.05 * 0.05  # the small sphere is fitted, to 5 % of its radius (measured 2.4 %)
+    assert any("1 components instead of 2" in note for note in report.notes)
