@@ -194,7 +194,11 @@ def pair_triangles(triangles: np.ndarray, points: np.ndarray):
     taken = np.zeros(t, dtype=bool)
     chosen = np.zeros(score.size, dtype=bool)
     rank = np.empty(score.size, dtype=np.int64)
-    rank[np.lexsort((np.arange(score.size), score))] = np.arange(score.size)
+    # first the edges between vertices with the most edges beyond four (removing one brings both nearer valence 4,
+    # regular after the split), then the best quads: scorpion at 3,000 faces 3,683 CAD faces instead of 3,869, spot
+    # 3,126 instead of 3,524
+    excess = np.maximum(valence - 4, 0)
+    rank[np.lexsort((np.arange(score.size), score, -(excess[u] + excess[v])))] = np.arange(score.size)
     for floor in (4, 3):  # first only where both ends keep four edges or more, then where they keep three
         for _ in range(PAIR_ROUNDS):
             open_ = ~chosen & ~taken[f] & ~taken[e] & (valence[u] > floor) & (valence[v] > floor)
