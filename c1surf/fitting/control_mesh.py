@@ -361,10 +361,16 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
         why = layout[-1]["topology_change"]
         if why:
             instant_seconds = layout[-1]["seconds"]
-            layout = _decimated_layout(scan, decimated_faces)
-            layout[-1]["seconds"] += instant_seconds
-            notes.append(f"Instant Meshes' remesh {why}: the control mesh is the scan decimated instead "
-                         "(topology kept; irregular, so more CAD faces)")
+            decimated = _decimated_layout(scan, decimated_faces)
+            decimated[-1]["seconds"] += instant_seconds
+            also = _topology_change(decimated, scan)
+            if not also or decimated[2].size and not layout[2].size:
+                layout = decimated
+                notes.append(f"Instant Meshes' remesh {why}: the control mesh is the scan decimated instead "
+                             "(topology kept; irregular, so more CAD faces)")
+            else:  # a scan the decimation cannot keep either (edges in three triangles, pinched vertices)
+                notes.append(f"Instant Meshes' remesh {why}; the decimated scan {also} too: Instant Meshes' "
+                             "remesh is kept")
     steps, remeshed, sizes, vertices, control_points, cleanup, info = layout
     seconds, remeshes = info["seconds"], info["remeshes"]
     if sizes.size == 0:
