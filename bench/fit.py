@@ -457,12 +457,41 @@ def plan(args) -> list[dict]:
     return runs
 
 
+ADAPTIVITY_SCANS = ("spot", "fish", "koala_low_resolution")
+ADAPTIVITY_FACES = (2100, 3000)  # Instant Meshes' uniform remesh at both; the decimated one at the first
+
+
+def adaptivity(args, work: Path) -> list:
+    """Issue 34's adaptivity column: the control faces Instant Meshes' uniform remesh needs for the RMS the decimated
+    (curvature- and thickness-adaptive) control mesh reaches at ``ADAPTIVITY_FACES[0]``, from a power law through
+    its two runs (RMS = c faces^-k); the saving is 1 - decimated faces / those."""
+    rows = []
+    for name in ADAPTIVITY_SCANS:
+        scan = SCANS / f"{name}.obj"
+        runs = {}
+        for remesher, faces in [("instant", f) for f in ADAPTIVITY_FACES] + [("decimate", ADAPTIVITY_FACES[0])]:
+            log(f"adaptivity {name} --remesher {remesher} --faces {faces}")
+            row = run_fit(scan, work, f"{name}_{remesher}_{faces}", ["--remesher", remesher, "--faces", str(faces)],
+                          args.timeout)
+            runs[(remesher, faces)] = (row["control_faces"], row["rms"]) if row["ok"] else (faces, float("nan"))
+        (f1, r1), (f2, r2) = runs[("instant", ADAPTIVITY_FACES[0])], runs[("instant", ADAPTIVITY_FACES[1])]
+        fd, rd = runs[("decimate", ADAPTIVITY_FACES[0])]
+        k = np.log(r1 / r2) / np.log(f2 / f1)
+        needed = f1 * (r1 / rd) ** (1.0 / k)
+        rows.append({"scan": name, "instant": [[f1, r1], [f2, r2]], "decimate": [fd, rd], "exponent": k,
+                     "instant_faces_at_decimate_rms": needed, "saving": 1.0 - fd / needed})
+        log("  " + json.dumps(rows[-1]))
+    return rows
+
+
 def run(args) -> dict:
     SETTINGS.update(root=Path(args.c1surf_root).resolve())
     results = {"format": "c1surf-fit-bench", "version": 1, "scans": str(SCANS), "rows": [],
                "machine": {"load_average_at_start": os.getloadavg(), "cpus": os.cpu_count()}}
     with tempfile.TemporaryDirectory(prefix="c1surf-fit-bench-") as folder:
         work = Path(folder)
+        if args.adaptivity:
+            results["adaptivity"] = adaptivity(args, work)
         for item in plan(args):
             log(f"fit {item['label']} {' '.join(map(str, item['extra']))}")
             row = run_fit(item["scan"], work, item["label"], item["extra"], args.timeout)
@@ -492,6 +521,8 @@ def main(argv=None) -> int:
     parser.add_argument("--only", default="", help="comma-separated scan names (prefixes)")
     parser.add_argument("--faces", type=int, default=0, help="control faces (default: c1surf fit's default)")
     parser.add_argument("--no-baselines", action="store_true", help="the fits only")
+    parser.add_argument("--adaptivity", action="store_true",
+                        help="also issue 34's adaptivity column: spot, fish, koala decimated against Instant Meshes")
     parser.add_argument("--no-extras", dest="quick_extras", action="store_false",
                         help="skip spot with its own control mesh and wingnut with --crease-angle")
     parser.add_argument("--pictures", default="goathead", help="comma-separated labels to draw into --images")
@@ -513,6 +544,10 @@ def main(argv=None) -> int:
         write_doc_table(Path(args.doc), table(results))
     print(table(results) + "\n")
     print("\n".join(results["targets"]))
+    for row in results.get("adaptivity", []):
+        print(f"[{'met' if row['saving'] >= 0.3 else 'not met'}] {row['scan']} adaptivity: the decimated control mesh "
+              f"reaches RMS {row['decimate'][1]:.3g} with {row['decimate'][0]} faces, Instant Meshes would need "
+              f"{row['instant_faces_at_decimate_rms']:.0f} ({100 * row['saving']:.0f} % fewer; goal >= 30 %)")
     return 0
 
 
