@@ -3,13 +3,16 @@
 
     python bench/fit.py                      # every scan, the default face count; writes bench/fit_results.json
     python bench/fit.py --only goathead --faces 200 --no-picture --out /tmp/fit.json     # a smoke run
+    python bench/fit.py --no-baselines --adaptivity      # the fits only, and issue 34's adaptivity column
 
 For each scan, each measurement in a process of its own (wall seconds, peak resident MB from ``os.wait4``):
 
 1. the fit as a user runs it: ``c1surf fit SCAN --patches x.step --patches x.npz --report r.json --deviation
    dev.png`` (the NPZ only feeds the shape column and the picture; the STEP is the CAD file whose faces count):
-   control faces, patches, CAD faces, scan-to-surface RMS / p99 / max and surface-to-scan max (relative to the
-   scan's bounding-box diagonal, from the report), G1 (largest normal jump), seconds, peak MB;
+   control faces, patches, CAD faces, scan-to-surface RMS / p99 / max and surface-to-scan p99 / max (relative to the
+   scan's bounding-box diagonal, from the report), the topology of the scan and of the surface (components, Euler
+   characteristic, rims: the report's ``topology``, else the control mesh's), G1 (largest normal jump), seconds,
+   peak MB;
 2. the baselines on the same scan, in one worker process (``--worker``):
    - direct conversion: ``c1surf convert SCAN -o x.ply`` (seconds, peak MB; the mesh only: the STEP of a dense
      scan takes minutes, 100 s for spot's), its patches and the CAD faces its STEP would have (counted on the
