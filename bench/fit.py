@@ -3,13 +3,16 @@
 
     python bench/fit.py                      # every scan, the default face count; writes bench/fit_results.json
     python bench/fit.py --only goathead --faces 200 --no-picture --out /tmp/fit.json     # a smoke run
+    python bench/fit.py --no-baselines --adaptivity      # the fits only, and issue 34's adaptivity column
 
 For each scan, each measurement in a process of its own (wall seconds, peak resident MB from ``os.wait4``):
 
 1. the fit as a user runs it: ``c1surf fit SCAN --patches x.step --patches x.npz --report r.json --deviation
    dev.png`` (the NPZ only feeds the shape column and the picture; the STEP is the CAD file whose faces count):
-   control faces, patches, CAD faces, scan-to-surface RMS / p99 / max and surface-to-scan max (relative to the
-   scan's bounding-box diagonal, from the report), G1 (largest normal jump), seconds, peak MB;
+   control faces, patches, CAD faces, scan-to-surface RMS / p99 / max and surface-to-scan p99 / max (relative to the
+   scan's bounding-box diagonal, from the report), the topology of the scan and of the surface (components, Euler
+   characteristic, rims: the report's ``topology``, else the control mesh's), G1 (largest normal jump), seconds,
+   peak MB;
 2. the baselines on the same scan, in one worker process (``--worker``):
    - direct conversion: ``c1surf convert SCAN -o x.ply`` (seconds, peak MB; the mesh only: the STEP of a dense
      scan takes minutes, 100 s for spot's), its patches and the CAD faces its STEP would have (counted on the
@@ -53,8 +56,10 @@ CC_LEVELS = 4
 RIPPLE_CENTRES = 20000
 RIPPLE_GRID = 6
 CREASE_ANGLE = 45.0
-TARGETS = {"cad_faces": 1500, "rms": 3e-4, "p99": 1e-3, "max": 3e-3, "surface_max": 3e-3, "seconds": 20.0,
-           "peak_mb": 2048.0, "own_control_rms": 1e-3}
+TARGETS = {"cad_faces": 1500, "rms": 3e-4, "p99": 1e-3, "max": 3e-3, "surface_p99": 1e-3, "surface_max": 5e-3,
+           "seconds": 30.0, "peak_mb": 2048.0, "own_control_rms": 1e-3}  # issue 34's
+THIN_SCANS_CAD_FACES = {"scorpion_low_resolution": 2500, "hand_closed": 2500, "cat-low-resolution": 2500,
+                        "human_man": 2500, "boot": 2500}  # CAD faces allowed for the scans with thin parts
 
 
 def log(message: str) -> None:
@@ -83,15 +88,28 @@ def run_fit(scan: Path, work: Path, name: str, extra: list, timeout: float) -> d
                refinements=document["patches"]["refinements"], cad_faces=document["cad_faces"],
                crease_edges=document["control_mesh"]["crease_edges"],
                rms=a["relative_rms"], p99=a["relative_p99"], max=a["relative_max"],
-               surface_rms=b["relative_rms"], surface_max=b["relative_max"],
+               surface_rms=b["relative_rms"], surface_p99=b["relative_p99"], surface_max=b["relative_max"],
+               remesher=document["control_mesh"].get("remesher", ""), topology=topology_pair(document),
                g1_jump=document["g1"]["max_normal_jump"], is_g1=document["g1"]["is_g1"],
                iterations=document["fit"]["iterations"], notes=document["notes"],
-               topology={k: [document["topology"][k][c] for c in ("components", "euler_characteristic", "rims")]
-                         for k in ("scan", "surface")} if "topology" in document else None,
                step_bytes=files["step"].stat().st_size if files["step"].exists() else 0,
                files={"npz": str(files["npz"]), "step": str(files["step"]), "deviation": str(picture),
                       "report": str(report)})
     return row
+
+
+def topology_pair(document: dict) -> dict:
+    """The scan's and the surface's (components, Euler characteristic, rims): the report's ``topology`` when it has
+    one, else the control mesh's counts (the surface over it has its topology: the fit moves points only)."""
+    both = document.get("topology")
+    if isinstance(both, dict) and "scan" in both and "surface" in both:
+        return {side: [both[side].get(k) for k in ("components", "euler_characteristic", "rims")]
+                for side in ("scan", "surface")}
+    control = document["control_mesh"]
+    if "scan_topology" not in control:
+        return {}
+    return {side: [control[key][k] for k in ("components", "euler", "rims")]
+            for side, key in (("scan", "scan_topology"), ("surface", "topology"))}
 
 
 # ---------------------------------------------------------------------------------------------------------
@@ -356,8 +374,8 @@ def picture(row: dict, scan: Path, control_faces: int, out: Path, work: Path) ->
 
 def table(results: dict) -> str:
     """The markdown table of docs/fit.md."""
-    head = ("| scan | options | control faces | patches | CAD faces | scan->surface RMS / p99 / max | surface->scan max "
-            "| G1 jump (rad) | seconds (peak MB) | rho fit / CC | unfitted control mesh RMS / max "
+    head = ("| scan | options | control faces | patches | CAD faces | scan->surface RMS / p99 / max "
+            "| surface->scan p99 / max | topology scan; surface (components, Euler, rims) | G1 jump (rad) | seconds (peak MB) | rho fit / CC | unfitted control mesh RMS / max "
             "| Catmull-Clark RMS / max | direct: patches, CAD faces, seconds | STEP: solids, valid, volume / scan's |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for row in results["rows"]:
@@ -368,7 +386,11 @@ def table(results: dict) -> str:
         cc, control, direct = base.get("catmull_clark", {}), base.get("control", {}), base.get("direct", {})
         step = base.get("step", {})
         cells = [row["scan"], row["options"] or "defaults", row["control_faces"], row["patches"], row["cad_faces"],
-                 f"{row['rms']:.2e} / {row['p99']:.2e} / {row['max']:.2e}", f"{row['surface_max']:.2e}",
+                 f"{row['rms']:.2e} / {row['p99']:.2e} / {row['max']:.2e}",
+                 f"{row.get('surface_p99', float('nan')):.2e} / {row['surface_max']:.2e}",
+                 "; ".join(" / ".join(map(str, row["topology"][side])) for side in ("scan", "surface"))
+                 + ("" if row["topology"]["scan"] == row["topology"]["surface"] else " (changed)")
+                 if row.get("topology") else "-",
                  f"{row['g1_jump']:.1e}", f"{row['seconds']:.1f} ({row['peak_mb']:.0f})",
                  f"{base.get('fit_rho') or float('nan'):.3g} / {cc['rho']:.3g}" if "rho" in cc else "-",
                  f"{control['rms']:.2e} / {control['max']:.2e}" if control else "-",
@@ -403,16 +425,18 @@ def check_targets(results: dict) -> list[str]:
         if row["label"].endswith("own-control"):
             checks = [("RMS", row["rms"], TARGETS["own_control_rms"])]
         else:
-            checks = [("CAD faces", row["cad_faces"], TARGETS["cad_faces"]), ("RMS", row["rms"], TARGETS["rms"]),
-                      ("p99", row["p99"], TARGETS["p99"]), ("max", row["max"], TARGETS["max"]),
+            checks = [("CAD faces", row["cad_faces"], THIN_SCANS_CAD_FACES.get(row["scan"], TARGETS["cad_faces"])),
+                      ("RMS", row["rms"], TARGETS["rms"]), ("p99", row["p99"], TARGETS["p99"]),
+                      ("max", row["max"], TARGETS["max"]),
+                      ("surface-to-scan p99", row.get("surface_p99", float("nan")), TARGETS["surface_p99"]),
                       ("surface-to-scan max", row["surface_max"], TARGETS["surface_max"]),
                       ("seconds", row["seconds"], TARGETS["seconds"]), ("peak MB", row["peak_mb"], TARGETS["peak_mb"])]
         for what, value, goal in checks:
             lines.append(f"[{'met' if value <= goal else 'not met'}] {row['label']} {what}: {value:.3g} (goal <= {goal:g})")
-        if row.get("topology"):  # issue 34: components, Euler characteristic, rims kept
-            scan, surface = row["topology"]["scan"], row["topology"]["surface"]
-            lines.append(f"[{'met' if scan == surface else 'not met'}] {row['label']} topology (components, Euler "
-                         f"characteristic, rims): scan {scan}, surface {surface}")
+        if row.get("topology"):
+            kept = row["topology"]["scan"] == row["topology"]["surface"]
+            lines.append(f"[{'met' if kept else 'not met'}] {row['label']} topology (components, Euler, rims): scan "
+                         f"{row['topology']['scan']}, surface {row['topology']['surface']}")
         step = row.get("baselines", {}).get("step", {})
         if "solids" in step:
             lines.append(f"[{'met' if step['solids'] == 1 and step['valid'] else 'not met'}] {row['label']} STEP: "
@@ -441,12 +465,41 @@ def plan(args) -> list[dict]:
     return runs
 
 
+ADAPTIVITY_SCANS = ("spot", "fish", "koala_low_resolution")
+ADAPTIVITY_FACES = (2100, 3000)  # Instant Meshes' uniform remesh at both; the decimated one at the first
+
+
+def adaptivity(args, work: Path) -> list:
+    """Issue 34's adaptivity column: the control faces Instant Meshes' uniform remesh needs for the RMS the decimated
+    (curvature- and thickness-adaptive) control mesh reaches at ``ADAPTIVITY_FACES[0]``, from a power law through
+    its two runs (RMS = c faces^-k); the saving is 1 - decimated faces / those."""
+    rows = []
+    for name in ADAPTIVITY_SCANS:
+        scan = SCANS / f"{name}.obj"
+        runs = {}
+        for remesher, faces in [("instant", f) for f in ADAPTIVITY_FACES] + [("decimate", ADAPTIVITY_FACES[0])]:
+            log(f"adaptivity {name} --remesher {remesher} --faces {faces}")
+            row = run_fit(scan, work, f"{name}_{remesher}_{faces}", ["--remesher", remesher, "--faces", str(faces)],
+                          args.timeout)
+            runs[(remesher, faces)] = (row["control_faces"], row["rms"]) if row["ok"] else (faces, float("nan"))
+        (f1, r1), (f2, r2) = runs[("instant", ADAPTIVITY_FACES[0])], runs[("instant", ADAPTIVITY_FACES[1])]
+        fd, rd = runs[("decimate", ADAPTIVITY_FACES[0])]
+        k = np.log(r1 / r2) / np.log(f2 / f1)
+        needed = f1 * (r1 / rd) ** (1.0 / k)
+        rows.append({"scan": name, "instant": [[f1, r1], [f2, r2]], "decimate": [fd, rd], "exponent": k,
+                     "instant_faces_at_decimate_rms": needed, "saving": 1.0 - fd / needed})
+        log("  " + json.dumps(rows[-1]))
+    return rows
+
+
 def run(args) -> dict:
     SETTINGS.update(root=Path(args.c1surf_root).resolve())
     results = {"format": "c1surf-fit-bench", "version": 1, "scans": str(SCANS), "rows": [],
                "machine": {"load_average_at_start": os.getloadavg(), "cpus": os.cpu_count()}}
     with tempfile.TemporaryDirectory(prefix="c1surf-fit-bench-") as folder:
         work = Path(folder)
+        if args.adaptivity:
+            results["adaptivity"] = adaptivity(args, work)
         for item in plan(args):
             log(f"fit {item['label']} {' '.join(map(str, item['extra']))}")
             row = run_fit(item["scan"], work, item["label"], item["extra"], args.timeout)
@@ -464,7 +517,8 @@ def run(args) -> dict:
             row.pop("files", None)
             results["rows"].append(row)
             log("  " + json.dumps({k: row.get(k) for k in ("control_faces", "cad_faces", "rms", "p99", "max",
-                                                             "surface_max", "seconds", "peak_mb")}))
+                                                             "surface_p99", "surface_max", "topology", "remesher",
+                                                             "seconds", "peak_mb")}))
     results["machine"]["load_average_at_end"] = os.getloadavg()
     results["targets"] = check_targets(results)
     return results
@@ -475,6 +529,8 @@ def main(argv=None) -> int:
     parser.add_argument("--only", default="", help="comma-separated scan names (prefixes)")
     parser.add_argument("--faces", type=int, default=0, help="control faces (default: c1surf fit's default)")
     parser.add_argument("--no-baselines", action="store_true", help="the fits only")
+    parser.add_argument("--adaptivity", action="store_true",
+                        help="also issue 34's adaptivity column: spot, fish, koala decimated against Instant Meshes")
     parser.add_argument("--no-extras", dest="quick_extras", action="store_false",
                         help="skip spot with its own control mesh and wingnut with --crease-angle")
     parser.add_argument("--pictures", default="goathead", help="comma-separated labels to draw into --images")
@@ -496,6 +552,10 @@ def main(argv=None) -> int:
         write_doc_table(Path(args.doc), table(results))
     print(table(results) + "\n")
     print("\n".join(results["targets"]))
+    for row in results.get("adaptivity", []):
+        print(f"[{'met' if row['saving'] >= 0.3 else 'not met'}] {row['scan']} adaptivity: the decimated control mesh "
+              f"reaches RMS {row['decimate'][1]:.3g} with {row['decimate'][0]} faces, Instant Meshes would need "
+              f"{row['instant_faces_at_decimate_rms']:.0f} ({100 * row['saving']:.0f} % fewer; goal >= 30 %)")
     return 0
 
 

@@ -42,6 +42,7 @@ from ..mesh.valence_two import dissolve_valence_two
 from ..mesh.feature_edges import feature_edges
 from ..mesh.weld import weld_vertices
 from .cleanup import clean_control_mesh, cleanup_notes, edge_keys
+from .decimated_quads import decimated_quad_mesh, mesh_topology
 
 __all__ = ["ControlMesh", "control_mesh_from_scan", "quad_remesh", "tag_feature_edges", "scan_feature_edges"]
 
@@ -51,6 +52,10 @@ NEAR_LINE = 0.25  # of the median control edge: how near a feature line a tagged
 ALONG_DEGREES = 25.0  # largest angle between a tagged edge and the feature line it follows
 EXTEND_ROUNDS = 8  # rounds of extending tagged lines from their loose ends
 RETRY_SCALES = (1.0, 1.04, 0.96)  # remesh targets tried in turn until one Doo-Sabin step suffices
+REMESHERS = ("auto", "instant", "decimate")
+# the cleanup's repairs that say Instant Meshes broke the scan's topology at a thin part
+TOPOLOGY_REPAIRS = {"stray_components": "stray pieces dropped", "closed_holes": "holes closed",
+                    "split_vertices": "pinched vertices split", "non_manifold_faces": "faces on non-manifold edges dropped"}
 
 
 @dataclass(frozen=True, eq=False)
@@ -231,7 +236,62 @@ def tag_feature_edges(face_sizes, face_vertices, points, line_points, line_edges
     return np.stack([a[tagged], b[tagged]], axis=1).astype(np.int64)
 
 
-def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | None = None) -> ControlMesh:
+def _instant_layout(scan, faces: int, crease_angle, check_topology: bool = False):
+    """Instant Meshes' remesh, cleaned, retried at ``RETRY_SCALES`` while a closed mesh needs two Doo-Sabin steps.
+
+    Returns (steps, remeshed faces, sizes, vertices, points, cleanup report, info) of the mesh needing fewest steps;
+    info: ``remesher``, ``target_vertices``, ``remeshes``, ``seconds`` (all tries) and, with ``check_topology``,
+    ``topology_change`` (``_topology_change`` of the last try: the tries end at the first that changes it).
+    """
+    best, seconds, remeshes, change = None, 0.0, 0, ""
+    for scale in RETRY_SCALES:
+        quad_points, quads, info = quad_remesh(*scan, int(round(faces * scale)), crease_angle)
+        seconds, remeshes = seconds + info["seconds"], remeshes + info["remeshes"]
+        sizes, vertices, control_points, cleanup = clean_control_mesh(
+            np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=scan)
+        steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
+        layout = (steps, quads.shape[0], sizes, vertices, control_points, cleanup, info)
+        change = _topology_change(layout, scan) if check_topology else ""
+        if best is None or steps < best[0]:
+            best = layout
+        if steps <= 1 or change or _has_boundary(sizes, vertices, control_points.shape[0]):
+            break  # an open mesh takes two steps whatever the scale
+    info = {"remesher": "instant", "target_vertices": best[-1]["target_vertices"], "remeshes": remeshes,
+            "seconds": seconds, "topology_change": change}
+    return best[:-1] + (info,)
+
+
+def _has_boundary(sizes, vertices, n_vertices: int) -> bool:
+    """Whether some edge of the mesh is in one face only."""
+    _, _, key, _ = edge_keys(sizes, vertices, n_vertices)
+    return bool(np.any(np.unique(key, return_counts=True)[1] == 1))
+
+
+def _decimated_layout(scan, faces: int):
+    """The scan decimated, paired and split (``decimated_quads``), cleaned; the tuple of ``_instant_layout``."""
+    quad_points, quads, info = decimated_quad_mesh(*scan, faces)
+    sizes, vertices, control_points, cleanup = clean_control_mesh(
+        np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=scan)
+    steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
+    info = {"remesher": "decimate", "target_vertices": 0, "remeshes": 1, "seconds": info["seconds"],
+            "decimated_triangles": info["decimated_triangles"]}
+    return steps, quads.shape[0], sizes, vertices, control_points, cleanup, info
+
+
+def _topology_change(layout, scan) -> str:
+    """What the cleaned remesh changed of the scan's topology (components, Euler characteristic, rims, or the
+    cleanup's repairs of stray pieces, holes and pinches the remesher left at thin parts); "" when nothing."""
+    _, _, sizes, vertices, control_points, cleanup, _ = layout
+    scan_points, scan_triangles = scan
+    want = mesh_topology(np.full(scan_triangles.shape[0], 3), scan_triangles.ravel(), scan_points.shape[0])
+    got = mesh_topology(sizes, vertices, control_points.shape[0]) if sizes.size else dict.fromkeys(want, 0)
+    changed = [f"{got[k]} {k} instead of {want[k]}" for k in want if got[k] != want[k]]
+    changed += [f"{cleanup[k]} {words}" for k, words in TOPOLOGY_REPAIRS.items() if cleanup.get(k)]
+    return ("changed the scan's topology (" + ", ".join(changed) + ")") if changed else ""
+
+
+def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | None = None,
+                           remesher: str = "auto", decimated_share: float = 1.0) -> ControlMesh:
     """A quad control mesh of about ``faces`` faces for a dense triangle scan (module docstring).
 
     Parameters
@@ -240,6 +300,9 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     triangles : (t, 3) int
     faces : int > 0, the control faces wanted
     crease_angle : float degrees or None: tag the control edges along the scan's sharper edges
+    remesher : "auto", "instant" or "decimate" (module docstring)
+    decimated_share : float in (0, 1], a decimated control mesh gets this share of ``faces`` (its irregular layout
+        costs more CAD faces a control face: ``scan_fit.DECIMATED_START``)
 
     Raises ValueError for a scan without area and when the remesher makes no face.
 
@@ -251,26 +314,39 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     """
     points = np.asarray(points, dtype=np.float64)
     triangles = np.asarray(triangles, dtype=np.int64).reshape(-1, 3)
+    if remesher not in REMESHERS:
+        raise ValueError(f"the remesher must be one of {', '.join(REMESHERS)}, got {remesher!r}")
     scan_points, scan_triangles = _welded_scan(points, triangles)
     _check_area(scan_points, scan_triangles)
-    best, seconds, remeshes = None, 0.0, 0
-    for scale in RETRY_SCALES:
-        quad_points, quads, info = quad_remesh(scan_points, scan_triangles, int(round(faces * scale)), crease_angle)
-        seconds, remeshes = seconds + info["seconds"], remeshes + info["remeshes"]
-        sizes, vertices, control_points, cleanup = clean_control_mesh(
-            np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=(scan_points, scan_triangles))
-        steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
-        if best is None or steps < best[0]:
-            best = (steps, quads.shape[0], sizes, vertices, control_points, cleanup, info)
-        if steps <= 1:
-            break
-    steps, remeshed, sizes, vertices, control_points, cleanup, info = best
+    scan = (scan_points, scan_triangles)
+    notes = []
+    decimated_faces = max(8, int(round(faces * decimated_share)))
+    if remesher == "decimate":
+        layout = _decimated_layout(scan, decimated_faces)
+    else:
+        layout = _instant_layout(scan, faces, crease_angle, check_topology=remesher == "auto")
+        why = layout[-1]["topology_change"]
+        if why:
+            instant_seconds = layout[-1]["seconds"]
+            decimated = _decimated_layout(scan, decimated_faces)
+            decimated[-1]["seconds"] += instant_seconds
+            also = _topology_change(decimated, scan)
+            if not also or decimated[2].size and not layout[2].size:
+                layout = decimated
+                notes.append(f"Instant Meshes' remesh {why}: the control mesh is the scan decimated instead "
+                             "(topology kept; irregular, so more CAD faces)")
+            else:  # a scan the decimation cannot keep either (edges in three triangles, pinched vertices)
+                notes.append(f"Instant Meshes' remesh {why}; the decimated scan {also} too: Instant Meshes' "
+                             "remesh is kept")
+    steps, remeshed, sizes, vertices, control_points, cleanup, info = layout
+    seconds, remeshes = info["seconds"], info["remeshes"]
     if sizes.size == 0:
         raise ValueError(f"the quad remesher made no faces of this scan ({len(triangles)} triangles, {faces} faces "
                          "asked): it needs a surface, not points on a line or in one point")
-    notes = cleanup_notes(cleanup)
+    notes = cleanup_notes(cleanup) + notes
     report = {"requested_faces": int(faces), "remeshed_faces": int(remeshed), "faces": int(sizes.size),
-              "remesh_seconds": seconds, "remeshes": remeshes, "target_vertices": info["target_vertices"],
+              "remesher": info["remesher"], "remesh_seconds": seconds, "remeshes": remeshes,
+              "target_vertices": info["target_vertices"],
               "doo_sabin_steps": int(steps), **cleanup}
     creases = np.zeros((0, 2), dtype=np.int64)
     if crease_angle is not None:
@@ -285,4 +361,7 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
             notes.append(f"merged {merged} control faces in crease sectors of three or more faces, so that the "
                          "crease lines are C0 seams (docs/sharp-features.md, \"Sectors of many faces\")")
     report["crease_edges"] = int(creases.shape[0])
+    report["scan_topology"] = mesh_topology(np.full(scan_triangles.shape[0], 3), scan_triangles.ravel(),
+                                            scan_points.shape[0])
+    report["topology"] = mesh_topology(sizes, vertices, control_points.shape[0])
     return ControlMesh(sizes, vertices, control_points, creases, notes, report)
