@@ -53,7 +53,7 @@ def measure(name: str, faces: int, crease_angle):
     from c1surf.construction.surface import Surface, SurfaceOptions
     from c1surf.evaluation.smoothness import measure_smoothness
     from c1surf.evaluation.tessellate import tessellate
-    from c1surf.fitting.control_mesh import control_mesh_from_scan
+    from c1surf.fitting.control.control_mesh import control_mesh_from_scan
 
     scan = trimesh.load(SCANS / f"{name}.obj", process=False)
     points, triangles = np.asarray(scan.vertices, dtype=np.float64), np.asarray(scan.faces)

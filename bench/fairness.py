@@ -41,7 +41,7 @@ def parse_variant(text: str):
 def catmull_clark_rho(scan: str, faces: int, cache: Path, crease_angle: float | None = None) -> dict:
     """rho of the Catmull-Clark limit proxy of the fit's control mesh and the ripple radius (cached)."""
     from c1surf.api import read_scan
-    from c1surf.fitting.control_mesh import control_mesh_from_scan
+    from c1surf.fitting.control.control_mesh import control_mesh_from_scan
 
     key = f"{Path(scan).stem}:{faces}" + (f":{crease_angle:g}" if crease_angle else "")
     known = json.loads(cache.read_text()) if cache.exists() else {}

@@ -222,7 +222,7 @@ def work_baselines(job: dict) -> dict:
     from c1surf.cli.fit import cad_face_count
     from c1surf.cli.options import PatchFileOptions
     from c1surf.construction.surface import Surface, SurfaceOptions
-    from c1surf.fitting.control_mesh import control_mesh_from_scan
+    from c1surf.fitting.control.control_mesh import control_mesh_from_scan
     from c1surf.fitting.deviation import closest_on_triangles, distance_stats
     from c1surf.fitting.iterate import project_scan
     from c1surf.fitting.options import FitOptions
@@ -328,7 +328,7 @@ def picture(row: dict, scan: Path, control_faces: int, out: Path, work: Path) ->
     from PIL import Image
 
     from c1surf.api import read_scan
-    from c1surf.fitting.control_mesh import control_mesh_from_scan
+    from c1surf.fitting.control.control_mesh import control_mesh_from_scan
 
     zebra = work / f"{row['label']}_zebra.png"
     run_process(c1surf_argv("render", row["files"]["npz"], "--zebra", zebra, "--size", "480x360"), 600,

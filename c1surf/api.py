@@ -213,7 +213,7 @@ def read_scan(path):
 def control_mesh_input(path, surface_options: SurfaceOptions, input_options: InputOptions | None = None):
     """A user's control mesh for ``fit_surface``: (ControlMesh, SharpFeatures or None, PreparedInput), read and
     prepared as every mesh file is (``prepared_input``: tags honoured), its unused vertices left out."""
-    from .fitting.control_mesh import ControlMesh
+    from .fitting.control.control_mesh import ControlMesh
 
     prepared = prepared_input(path, surface_options, input_options)
     mesh, data = prepared.mesh, prepared.data

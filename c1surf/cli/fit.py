@@ -14,7 +14,7 @@ from ..api import FitReport, Surface, SurfaceOptions, cage_options, check_surfac
 from ..evaluation.merge import merge_biquadratic
 from ..evaluation.patch_set import surface_patch_set
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
-from ..fitting.control_mesh import REMESHERS
+from ..fitting.control.control_mesh import REMESHERS
 from ..fitting.options import FitOptions
 from ..fitting.scan_fit import ScanFitOptions
 from ..io.atomic import atomic_output

@@ -29,10 +29,10 @@ import numpy as np
 from ..construction.surface import Surface, SurfaceOptions
 from ..mesh.halfedges import component_roots
 from ..mesh.topology_counts import compare_topology, topology_counts
-from .control_mesh import REMESHERS, ControlMesh, control_mesh_from_scan
+from .control.control_mesh import REMESHERS, ControlMesh, control_mesh_from_scan
 from .deviation import bounding_diagonal, distance_stats, two_sided_deviation
 from .iterate import fit_surface_points, project_scan
-from .local_refine import next_face_count
+from .control.local_refine import next_face_count
 from .options import FitOptions
 from .system import vertex_normals
 
@@ -213,6 +213,34 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
     surface_options = surface_options or SurfaceOptions(refinements="auto")
     tell = progress or (lambda label, amount, total: None)
     notes, rounds, timings = [], [], {}
+    mesh, result, left_out = _fit_rounds(points, triangles, options, (surface_options, control, features), diagonal,
+                                         (notes, rounds, timings, tell))
+    notes += left_out  # the last control mesh's
+    # a fresh construction at the fitted points: the bits ``convert`` makes of the cage (``update_points``'s
+    # reused stages, the Doo-Sabin step's matrix form, round differently in the last bit: 4e-16 on a cylinder)
+    start = time.perf_counter()
+    surface = _surface(mesh.with_points(result.points), surface_options, features if mesh is control else None)
+    _clock(timings, "construction", start)
+    start = time.perf_counter()
+    tell("measuring the deviation", 0, 1)
+    deviation = two_sided_deviation(surface, points, triangles, result.footpoints)
+    _clock(timings, "deviation", start)
+    topology = fit_topology(triangles, points.shape[0], mesh, surface.features)
+    if topology["differences"]:
+        notes.append("the surface's topology differs from the scan's: " + "; ".join(topology["differences"]))
+    return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings, topology)
+
+
+def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagonal: float, record: tuple):
+    """The rounds of ``fit_scan``: a control mesh, its components covered, a fit; again with more faces while a
+    tolerance is missed, or once more decimated when a default fit misses ``DEFAULT_AIM`` (the better round kept).
+
+    plan : (SurfaceOptions, the user's ControlMesh or None, its SharpFeatures or None)
+    record : (notes, rounds, timings, tell): the lists and dict the rounds append to, the progress callback
+    Returns (ControlMesh, FitResult, notes of the components the last control mesh leaves out).
+    """
+    surface_options, control, features = plan
+    notes, rounds, timings, tell = record
     faces = options.faces or default_face_count(triangles.shape[0])
     defaults = options.faces is None and options.tolerance is None and control is None
     remesher, share, best = options.remesher, DECIMATED_START if defaults else 1.0, None
@@ -239,35 +267,21 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
         if defaults:
             miss = _aim_miss(result.history[-1])
             if best is None or miss < best[0]:
-                best = (miss, mesh, surface, result)
+                best = (miss, mesh, result, left_out)
             if miss > 1 and share < 1 and mesh.report.get("remesher") == "decimate":
                 grown = min(faces, int(np.ceil(mesh.n_faces * max(DECIMATED_GROWTH, miss))))
                 notes.append(f"the decimated control mesh of {mesh.n_faces} faces fits the scan to "
                              f"{_reached(result.history[-1])}: decimated again to about {grown} faces")
                 remesher, faces, share = "decimate", grown, 1.0
                 continue
-            _, mesh, surface, result = best
+            _, mesh, result, left_out = best  # the better round, and what its control mesh leaves out
             notes += _aim_note(result.history[-1], mesh.n_faces)
-            break
+            return mesh, result, left_out
         stop = _tolerance_stop(options, worst, faces, control is not None)
         if stop is not None:
             notes += [stop] if stop else []
-            break
+            return mesh, result, left_out
         faces = next_face_count(faces, worst / options.tolerance, options.face_cap)
-    notes += left_out  # the last control mesh's
-    # a fresh construction at the fitted points: the bits ``convert`` makes of the cage (``update_points``'s
-    # reused stages, the Doo-Sabin step's matrix form, round differently in the last bit: 4e-16 on a cylinder)
-    start = time.perf_counter()
-    surface = _surface(mesh.with_points(result.points), surface_options, features if mesh is control else None)
-    _clock(timings, "construction", start)
-    start = time.perf_counter()
-    tell("measuring the deviation", 0, 1)
-    deviation = two_sided_deviation(surface, points, triangles, result.footpoints)
-    _clock(timings, "deviation", start)
-    topology = fit_topology(triangles, points.shape[0], mesh, surface.features)
-    if topology["differences"]:
-        notes.append("the surface's topology differs from the scan's: " + "; ".join(topology["differences"]))
-    return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings, topology)
 
 
 def _cover_components(points, triangles, mesh: ControlMesh, remesh: bool, plan: tuple, diagonal: float):

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 import trimesh
 
-from c1surf.fitting.cleanup import clean_control_mesh, cleanup_notes
+from c1surf.fitting.control.cleanup import clean_control_mesh, cleanup_notes
 from c1surf.fitting.options import FitOptions
 from c1surf.fitting.scan_fit import ScanFitOptions, fit_scan, unfitted_components
 
@@ -24,11 +24,13 @@ def two_spheres(radius: float):
     return np.asarray(both.vertices), np.asarray(both.faces)
 
 
-def fitted(radius: float, faces: int = 120):
+def fitted(radius: float, faces: int = 120, remesher: str = "instant"):
     points, triangles = two_spheres(radius)
     # the closest fit (no fairness continuation): what is measured here is whether each component is fitted; the
     # continuation's bounds are relative to the whole scan's diagonal (tests/fitting/test_fairness.py)
-    options = ScanFitOptions(faces=faces, fit=FitOptions(max_iterations=3, fairness_growth=0.0))
+    # Instant Meshes alone: the parts its remesh of the whole misses are what this mechanism covers (``auto`` takes
+    # the decimated scan there instead: test_auto_keeps_both_components_by_decimating)
+    options = ScanFitOptions(faces=faces, fit=FitOptions(max_iterations=3, fairness_growth=0.0), remesher=remesher)
     return points, triangles, fit_scan(points, triangles, options)
 
 
@@ -52,6 +54,19 @@ def test_a_small_component_is_fitted(radius):
         assert fit.control.report["parts"] and fit.control.n_faces == fit.control.report["faces"]
 
 
+def test_auto_keeps_both_components_by_decimating():
+    """The default remesher: Instant Meshes' remesh of the whole misses the small sphere (its topology differs), so
+    the control mesh is the scan decimated with its topology kept; both spheres fitted, the note says why."""
+    points, triangles, fit = fitted(0.05, remesher="auto")
+    topology = fit.topology
+    assert topology["scan"]["components"] == 2 and not topology["differences"]
+    assert fit.control.report["remesher"] == "decimate"
+    assert [n for n in fit.notes if n.startswith("Instant Meshes' remesh changed the scan's topology")]
+    small = np.arange(len(points)) >= 642
+    assert fit.deviation.scan_to_surface[small].max() < 0.05 * 0.05  # fitted: within 5 % of its radius
+    assert fit.deviation.surface_stats["relative_max"] < 5e-3
+
+
 def test_a_component_too_small_to_remesh_is_named_and_left_out():
     """A sphere and an octahedron of 8 triangles far away: too few triangles for a remesh of its own
     (``MIN_PART_TRIANGLES``): named in a note, left out of the fit, its distances in the deviation."""
@@ -61,7 +76,7 @@ def test_a_component_too_small_to_remesh_is_named_and_left_out():
                                                       [1, 2, 5], [3, 1, 5], [0, 3, 5]], process=False)
     both = trimesh.util.concatenate([sphere, speck])
     points, triangles = np.asarray(both.vertices), np.asarray(both.faces)
-    fit = fit_scan(points, triangles, ScanFitOptions(faces=120, fit=FitOptions(max_iterations=3)))
+    fit = fit_scan(points, triangles, ScanFitOptions(faces=120, fit=FitOptions(max_iterations=3), remesher="instant"))
     (note,) = [n for n in fit.notes if "left out of the fit" in n]
     assert "1 of the scan's 2 components got no control mesh" in note
     assert "6 vertices and 8 triangles around (3, 0.5, 0)" in note

@@ -12,9 +12,9 @@ import pytest
 
 from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.smoothness import measure_smoothness
-from c1surf.fitting.cleanup import clean_control_mesh, cleanup_notes
-from c1surf.fitting.control_mesh import ControlMesh, control_mesh_from_scan, scan_feature_edges, tag_feature_edges
-from c1surf.fitting.local_refine import (face_deviation, faces_over_tolerance, nearest_control_faces,
+from c1surf.fitting.control.cleanup import clean_control_mesh, cleanup_notes
+from c1surf.fitting.control.control_mesh import ControlMesh, control_mesh_from_scan, scan_feature_edges, tag_feature_edges
+from c1surf.fitting.control.local_refine import (face_deviation, faces_over_tolerance, nearest_control_faces,
                                          next_face_count, patch_control_faces, refine_control_faces)
 from c1surf.mesh.halfedges import build_halfedges
 

@@ -17,7 +17,7 @@ from scipy.sparse.csgraph import connected_components
 from c1surf.api import fit_surface, read_scan
 from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.tessellate import tessellate
-from c1surf.fitting.control_mesh import control_mesh_from_scan
+from c1surf.fitting.control.control_mesh import control_mesh_from_scan
 from c1surf.fitting.options import FitOptions
 from c1surf.fitting.scan_fit import ScanFitOptions
 from c1surf.mesh.weld import weld_vertices

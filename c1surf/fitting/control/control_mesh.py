@@ -35,12 +35,12 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..console import quiet_stdout
-from ..construction.features import INFINITELY_SHARP, SharpFeatures
-from ..mesh.creases.sectors import merge_crease_sectors
-from ..mesh.valence_two import dissolve_valence_two
-from ..mesh.feature_edges import feature_edges
-from ..mesh.weld import weld_vertices
+from ...console import quiet_stdout
+from ...construction.features import INFINITELY_SHARP, SharpFeatures
+from ...mesh.creases.sectors import merge_crease_sectors
+from ...mesh.valence_two import dissolve_valence_two
+from ...mesh.feature_edges import feature_edges
+from ...mesh.weld import weld_vertices
 from .cleanup import clean_control_mesh, cleanup_notes, edge_keys
 from .decimated_quads import decimated_quad_mesh, mesh_topology
 
@@ -169,8 +169,8 @@ def _check_area(points: np.ndarray, triangles: np.ndarray) -> None:
 
 def _doo_sabin_steps(sizes, vertices, n_vertices) -> int:
     """The fewest Doo-Sabin steps the construction needs on this mesh (``refinements="auto"``; 2 when open)."""
-    from ..construction.refine.fewer_steps import refinements_needed
-    from ..mesh.halfedges import build_halfedges
+    from ...construction.refine.fewer_steps import refinements_needed
+    from ...mesh.halfedges import build_halfedges
 
     mesh = build_halfedges(sizes, vertices, n_vertices)
     return refinements_needed(mesh) if np.all(mesh.twin >= 0) else 2
@@ -290,6 +290,44 @@ def _topology_change(layout, scan) -> str:
     return ("changed the scan's topology (" + ", ".join(changed) + ")") if changed else ""
 
 
+def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_faces: int):
+    """(layout, notes): the remesher's layout (``_instant_layout``'s tuple); with ``auto``, the decimated scan where
+    Instant Meshes' remesh changes the scan's topology and the decimation keeps it, a note saying which and why."""
+    if remesher == "decimate":
+        return _decimated_layout(scan, decimated_faces), []
+    layout = _instant_layout(scan, faces, crease_angle, check_topology=remesher == "auto")
+    why = layout[-1]["topology_change"]
+    if not why:
+        return layout, []
+    decimated = _decimated_layout(scan, decimated_faces)
+    decimated[-1]["seconds"] += layout[-1]["seconds"]
+    also = _topology_change(decimated, scan)
+    if not also or decimated[2].size and not layout[2].size:
+        return decimated, [f"Instant Meshes' remesh {why}: the control mesh is the scan decimated instead "
+                           "(topology kept; irregular, so more CAD faces)"]
+    # a scan the decimation cannot keep either (edges in three triangles, pinched vertices)
+    return layout, [f"Instant Meshes' remesh {why}; the decimated scan {also} too: Instant Meshes' remesh is kept"]
+
+
+def _tagged_creases(scan, mesh: tuple, crease_angle, notes: list, report: dict):
+    """(sizes, vertices, points, (c, 2) crease edges): the control edges along the scan's feature lines tagged,
+    crease sectors of three or more faces merged (as ``convert`` merges them); ``notes`` and ``report`` told."""
+    sizes, vertices, control_points = mesh
+    if crease_angle is None:
+        return sizes, vertices, control_points, np.zeros((0, 2), dtype=np.int64)
+    lines = scan_feature_edges(*scan, crease_angle)
+    creases = tag_feature_edges(sizes, vertices, control_points, scan[0], lines)
+    report["feature_edges"] = int(lines.shape[0])
+    notes.append(f"--crease-angle {crease_angle:g}: {lines.shape[0]} scan edges sharper than that; "
+                 f"{creases.shape[0]} control edges follow them and are tagged infinitely sharp")
+    sizes, vertices, control_points, creases, merged = _merged_sectors(sizes, vertices, control_points, creases)
+    if merged:
+        report["merged_sector_faces"] = merged
+        notes.append(f"merged {merged} control faces in crease sectors of three or more faces, so that the "
+                     "crease lines are C0 seams (docs/sharp-features.md, \"Sectors of many faces\")")
+    return sizes, vertices, control_points, creases
+
+
 def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | None = None,
                            remesher: str = "auto", decimated_share: float = 1.0) -> ControlMesh:
     """A quad control mesh of about ``faces`` faces for a dense triangle scan (module docstring).
@@ -319,25 +357,7 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     scan_points, scan_triangles = _welded_scan(points, triangles)
     _check_area(scan_points, scan_triangles)
     scan = (scan_points, scan_triangles)
-    notes = []
-    decimated_faces = max(8, int(round(faces * decimated_share)))
-    if remesher == "decimate":
-        layout = _decimated_layout(scan, decimated_faces)
-    else:
-        layout = _instant_layout(scan, faces, crease_angle, check_topology=remesher == "auto")
-        why = layout[-1]["topology_change"]
-        if why:
-            instant_seconds = layout[-1]["seconds"]
-            decimated = _decimated_layout(scan, decimated_faces)
-            decimated[-1]["seconds"] += instant_seconds
-            also = _topology_change(decimated, scan)
-            if not also or decimated[2].size and not layout[2].size:
-                layout = decimated
-                notes.append(f"Instant Meshes' remesh {why}: the control mesh is the scan decimated instead "
-                             "(topology kept; irregular, so more CAD faces)")
-            else:  # a scan the decimation cannot keep either (edges in three triangles, pinched vertices)
-                notes.append(f"Instant Meshes' remesh {why}; the decimated scan {also} too: Instant Meshes' "
-                             "remesh is kept")
+    layout, notes = _chosen_layout(scan, faces, crease_angle, remesher, max(8, int(round(faces * decimated_share))))
     steps, remeshed, sizes, vertices, control_points, cleanup, info = layout
     seconds, remeshes = info["seconds"], info["remeshes"]
     if sizes.size == 0:
@@ -348,18 +368,8 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
               "remesher": info["remesher"], "remesh_seconds": seconds, "remeshes": remeshes,
               "target_vertices": info["target_vertices"],
               "doo_sabin_steps": int(steps), **cleanup}
-    creases = np.zeros((0, 2), dtype=np.int64)
-    if crease_angle is not None:
-        lines = scan_feature_edges(scan_points, scan_triangles, crease_angle)
-        creases = tag_feature_edges(sizes, vertices, control_points, scan_points, lines)
-        report["feature_edges"] = int(lines.shape[0])
-        notes.append(f"--crease-angle {crease_angle:g}: {lines.shape[0]} scan edges sharper than that; "
-                     f"{creases.shape[0]} control edges follow them and are tagged infinitely sharp")
-        sizes, vertices, control_points, creases, merged = _merged_sectors(sizes, vertices, control_points, creases)
-        if merged:
-            report["merged_sector_faces"] = merged
-            notes.append(f"merged {merged} control faces in crease sectors of three or more faces, so that the "
-                         "crease lines are C0 seams (docs/sharp-features.md, \"Sectors of many faces\")")
+    sizes, vertices, control_points, creases = _tagged_creases(scan, (sizes, vertices, control_points), crease_angle,
+                                                                notes, report)
     report["crease_edges"] = int(creases.shape[0])
     report["scan_topology"] = mesh_topology(np.full(scan_triangles.shape[0], 3), scan_triangles.ravel(),
                                             scan_points.shape[0])

@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.sparse import csr_matrix
 
-from ..construction.refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX
+from ...construction.refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_FACE, FACE_FROM_VERTEX
 from .cleanup import edge_keys
 from .control_mesh import ControlMesh
 

@@ -37,7 +37,7 @@ import time
 
 import numpy as np
 
-from ..mesh.topology_counts import topology_counts
+from ...mesh.topology_counts import topology_counts
 from .cleanup import edge_keys
 
 __all__ = ["mesh_topology", "decimate_scan", "pair_triangles", "split_faces", "decimated_quad_mesh"]
@@ -81,7 +81,7 @@ def decimate_scan(points: np.ndarray, triangles: np.ndarray, target: int, qualit
     """
     import pymeshlab
 
-    from ..console import quiet_stdout
+    from ...console import quiet_stdout
 
     arrays = [np.ascontiguousarray(points, dtype=np.float64), np.ascontiguousarray(triangles, dtype=np.int32)]
     mesh = pymeshlab.Mesh(*arrays) if quality is None else pymeshlab.Mesh(
@@ -105,7 +105,7 @@ def thickness(points: np.ndarray, triangles: np.ndarray) -> np.ndarray:
     """
     import trimesh
 
-    from .system import vertex_normals
+    from ..system import vertex_normals
 
     normals = vertex_normals(points, triangles)
     diagonal = float(np.linalg.norm(np.ptp(points, axis=0)))
@@ -154,19 +154,11 @@ def _corner_cosines(quads: np.ndarray, points: np.ndarray) -> np.ndarray:
     return np.einsum("ijk,ijk->ij", before, after) / np.maximum(norm, 1e-300)
 
 
-def pair_triangles(triangles: np.ndarray, points: np.ndarray):
-    """Triangles paired into quads (module docstring, step 2).
-
-    Parameters
-    ----------
-    triangles : (t, 3) int, a consistently oriented manifold mesh; points : (m, 3) float
-
-    Returns
-    -------
-    quads : (q, 4) int64, counter-clockwise as the triangles; lone : (t - 2q, 3) int64, the triangles left
-    """
-    t = triangles.shape[0]
-    n = points.shape[0]
+def _candidate_pairs(triangles: np.ndarray, points: np.ndarray):
+    """The pairs of triangles across an interior edge that make a good quad (corner angles within ``PAIR_DEGREES`` of
+    90, normals within 90 degrees): (f, e) their triangles, (u, v) the edge's ends, (k, 4) quads, (k,) score (the
+    largest corner angle off 90 degrees), and every corner's edge key (``edge_keys``)."""
+    t, n = triangles.shape[0], points.shape[0]
     a, b, key, face = edge_keys(np.full(t, 3), triangles.ravel(), n)
     order = np.argsort(key, kind="stable")
     same = key[order][1:] == key[order][:-1]
@@ -183,7 +175,22 @@ def pair_triangles(triangles: np.ndarray, points: np.ndarray):
     planar = np.einsum("ij,ij->i", normal, other) / np.maximum(
         np.linalg.norm(normal, axis=1) * np.linalg.norm(other, axis=1), 1e-300)
     good = (angle_off < PAIR_DEGREES) & (planar > PAIR_PLANAR)
-    f, e, u, v, quads, score = face[h][good], face[g][good], a[h][good], b[h][good], quads[good], angle_off[good]
+    return face[h][good], face[g][good], a[h][good], b[h][good], quads[good], angle_off[good], key
+
+
+def pair_triangles(triangles: np.ndarray, points: np.ndarray):
+    """Triangles paired into quads (module docstring, step 2).
+
+    Parameters
+    ----------
+    triangles : (t, 3) int, a consistently oriented manifold mesh; points : (m, 3) float
+
+    Returns
+    -------
+    quads : (q, 4) int64, counter-clockwise as the triangles; lone : (t - 2q, 3) int64, the triangles left
+    """
+    t, n = triangles.shape[0], points.shape[0]
+    f, e, u, v, quads, score, key = _candidate_pairs(triangles, points)
     valence = _vertex_degrees(key, n)
     taken = np.zeros(t, dtype=bool)
     chosen = np.zeros(score.size, dtype=bool)
@@ -269,7 +276,7 @@ def decimated_quad_mesh(points: np.ndarray, triangles: np.ndarray, faces: int, q
     points : (V, 3) float64; quads : (F, 4) int64; info : dict, ``decimated_triangles``, ``paired``,
     ``lone_triangles``, ``seconds``
     """
-    from .deviation import closest_on_triangles
+    from ..deviation import closest_on_triangles
 
     start = time.perf_counter()
     scan_points, scan_triangles = points, triangles

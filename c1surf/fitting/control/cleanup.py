@@ -36,11 +36,11 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..mesh.duplicate_faces import repeated_faces
-from ..mesh.halfedges import build_halfedges, component_roots
-from ..mesh.repair import orientation_flips, reverse_faces, split_pinched_vertices
-from ..mesh.valence_two import dissolve_valence_two
-from ..mesh.weld import collapse_repeated_corners, weld_vertices
+from ...mesh.duplicate_faces import repeated_faces
+from ...mesh.halfedges import build_halfedges, component_roots
+from ...mesh.repair import orientation_flips, reverse_faces, split_pinched_vertices
+from ...mesh.valence_two import dissolve_valence_two
+from ...mesh.weld import collapse_repeated_corners, weld_vertices
 
 __all__ = ["clean_control_mesh", "cleanup_notes", "edge_keys"]
 
