@@ -67,6 +67,26 @@ def test_check_and_measure_by_blocks_equal_the_whole_surface_on_every_sample_mes
                               for b in TINY), mass_properties(source, adjacency.edges, adjacency.reversed, block=5))
 
 
+@pytest.mark.parametrize("name", ["cube", "high_valence", "twisted"])
+def test_compiled_measure_by_blocks_equals_the_whole_surface(monkeypatch, name):
+    """The compiled integrals (``evaluation.kernels``, from ``measure.COMPILED_FROM`` patches on: here from 0),
+    by blocks and from a streamed Surface, equal the in-memory ones with ``==`` too."""
+    from c1surf.evaluation import measure
+
+    monkeypatch.setattr(measure, "COMPILED_FROM", 0)
+    surface, lazy = _lazy_and_whole(SAMPLES / f"{name}.obj")
+    patch_set = surface_patch_set(surface)
+    groups, adjacency = patch_set.groups, patch_set.adjacency
+    assert measure.compiled_loops(ArrayPatches(groups))
+    mass = mass_properties(groups, adjacency.edges, adjacency.reversed)
+    source = SourcePatches(lazy.patch_source())
+    _assert_same_mass(mass, *(mass_properties(ArrayPatches(groups), adjacency.edges, adjacency.reversed, block=b)
+                              for b in TINY), mass_properties(source, adjacency.edges, adjacency.reversed, block=5))
+    monkeypatch.setattr(measure, "COMPILED_FROM", 10**9)
+    numpy = mass_properties(groups, adjacency.edges, adjacency.reversed)
+    assert abs(numpy.area - mass.area) <= 1e-14 * mass.area and abs(numpy.volume - mass.volume) <= 1e-14 * mass.volume
+
+
 def test_a_rational_surface_by_blocks(tmp_path):
     from c1surf.api import surface_from_file
 

@@ -1,0 +1,160 @@
+"""Compiled loops (numba) for the integrals of ``measure``: one patch at a time, no temporaries of a block's size.
+
+This is the only module that imports numba, and only the commands that run a kernel import it (``measure``
+imports it on its first polynomial block): numba's import (about 0.4 s) and the loading of the compiled
+kernels (cached, see ``compiled``) are paid there and nowhere else.
+
+Every kernel loops over patches and computes each patch's value from that patch's coefficients alone, in a
+fixed order of floating-point operations (no fast-math: no reassociation, no fused multiply-adds), so a
+patch's value does not depend on the block it is computed in, nor on the thread: the streamed and the
+in-memory ``measure`` stay equal to the last bit. The kernels release the GIL (``nogil``): ``parallel``'s
+threads run them on disjoint ranges of patches.
+
+The cache: ``cache=True`` writes the compiled machine code beside this file (``__pycache__``, in a clone) or,
+where that folder is read-only (an installed package), in numba's per-user cache folder; where neither can be
+written, the kernels are compiled at every first use of a process instead (a few seconds), never an error.
+"""
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+
+def compiled(function):
+    """``function`` compiled without the GIL, its machine code cached on the disk when a cache folder can be
+    written (numba refuses ``cache=True`` at decoration when none can: then compiled in each process)."""
+    try:
+        return numba.njit(cache=True, nogil=True, error_model="numpy")(function)
+    except RuntimeError:  # "cannot cache function ...: no locator available"
+        return numba.njit(nogil=True, error_model="numpy")(function)
+
+
+LANES = 128  # patches computed side by side (each in its own lane of the vector units)
+
+
+@compiled
+def _lanes(points, k0, t1, cp):  # pragma: no cover - compiled
+    """``cp[i, j, c, t] = points[k0 + t, i, j, c]`` for t < t1: a run of patches, coordinate-major."""
+    for t in range(t1):
+        for i in range(points.shape[1]):
+            for j in range(points.shape[2]):
+                for c in range(3):
+                    cp[i, j, c, t] = points[k0 + t, i, j, c]
+
+
+@compiled
+def _rows(cp, t1, bv, bv1, b, q, qv):  # pragma: no cover - compiled
+    """``q[i, c, t] = sum_j bv[b, j] cp[i, j, c, t]`` (j in order) and ``qv`` the same with ``bv1``: the rows of
+    control points summed along v at the node ``v_b``, so that ``x(u, v_b) = sum_i B_i(u) q[i]``."""
+    for i in range(cp.shape[0]):
+        for c in range(3):
+            for t in range(t1):
+                q[i, c, t] = 0.0
+                qv[i, c, t] = 0.0
+            for j in range(cp.shape[1]):
+                f, g = bv[b, j], bv1[b, j]
+                for t in range(t1):
+                    q[i, c, t] += f * cp[i, j, c, t]
+                    qv[i, c, t] += g * cp[i, j, c, t]
+
+
+@compiled
+def _combine(q, t1, basis, a, out):  # pragma: no cover - compiled
+    """``out[c, t] = sum_i basis[a, i] q[i, c, t]`` (i in order)."""
+    for c in range(3):
+        for t in range(t1):
+            out[c, t] = 0.0
+    for i in range(q.shape[0]):
+        f = basis[a, i]
+        for c in range(3):
+            for t in range(t1):
+                out[c, t] += f * q[i, c, t]
+
+
+@compiled
+def area_sums(points, bu, bu1, bv, bv1, wu, wv, out):  # pragma: no cover - compiled (tests call it compiled)
+    """``out[k] = sum_b wv[b] sum_a wu[a] |x_u x x_v|(u_a, v_b)`` of patch ``k``: the area by one tensor rule.
+
+    points : (p, du+1, dv+1, 3) float64; bu, bu1 : (mu, du+1) float, the Bernstein basis and its derivative at
+    the u nodes; bv, bv1 : (mv, dv+1) the same in v; wu, wv : (mu,), (mv,) float; out : (p,) float
+    """
+    p, m, n = points.shape[0], points.shape[1], points.shape[2]
+    cp = np.empty((m, n, 3, LANES))
+    q, qv = np.empty((m, 3, LANES)), np.empty((m, 3, LANES))
+    xu, xv, row, total = np.empty((3, LANES)), np.empty((3, LANES)), np.empty(LANES), np.empty(LANES)
+    for k0 in range(0, p, LANES):
+        t1 = min(LANES, p - k0)
+        _lanes(points, k0, t1, cp)
+        total[:] = 0.0
+        for b in range(bv.shape[0]):
+            _rows(cp, t1, bv, bv1, b, q, qv)
+            row[:] = 0.0
+            for a in range(bu.shape[0]):
+                _combine(q, t1, bu1, a, xu)
+                _combine(qv, t1, bu, a, xv)
+                w = wu[a]
+                for t in range(t1):
+                    nx = xu[1, t] * xv[2, t] - xu[2, t] * xv[1, t]
+                    ny = xu[2, t] * xv[0, t] - xu[0, t] * xv[2, t]
+                    nz = xu[0, t] * xv[1, t] - xu[1, t] * xv[0, t]
+                    row[t] += w * math.sqrt(nx * nx + ny * ny + nz * nz)
+            w = wv[b]
+            for t in range(t1):
+                total[t] += w * row[t]
+        for t in range(t1):
+            out[k0 + t] = total[t]
+
+
+@compiled
+def moment_sums(points, bu, bu1, bv, bv1, wu, wv, origin, out):  # pragma: no cover - compiled
+    """The divergence theorem's moments of patch ``k`` by one tensor rule, in ``measure.moment_integrand``'s
+    columns: ``out[k] = (V, int_V y (3), int_V y y^T (9, row-major))`` with ``y = x - origin``: the sums over the
+    nodes of ``w y.N``, ``w y (y.N)``, ``w y y^T (y.N)`` (``N = x_u x x_v``, ``w = wu[a] wv[b]``) over 3, 4, 5.
+
+    points, bu, bu1, bv, bv1, wu, wv : as ``area_sums``'; origin : (3,) float; out : (p, 13) float
+    """
+    p, m, n = points.shape[0], points.shape[1], points.shape[2]
+    cp = np.empty((m, n, 3, LANES))
+    q, qv = np.empty((m, 3, LANES)), np.empty((m, 3, LANES))
+    x, xu, xv, acc = np.empty((3, LANES)), np.empty((3, LANES)), np.empty((3, LANES)), np.empty((10, LANES))
+    for k0 in range(0, p, LANES):
+        t1 = min(LANES, p - k0)
+        _lanes(points, k0, t1, cp)
+        acc[:] = 0.0  # flux; y flux (3); y_i y_j flux for ij = 00 01 02 11 12 22
+        for b in range(bv.shape[0]):
+            _rows(cp, t1, bv, bv1, b, q, qv)
+            for a in range(bu.shape[0]):
+                _combine(q, t1, bu, a, x)
+                _combine(q, t1, bu1, a, xu)
+                _combine(qv, t1, bu, a, xv)
+                w = wu[a] * wv[b]
+                for t in range(t1):
+                    y0, y1, y2 = x[0, t] - origin[0], x[1, t] - origin[1], x[2, t] - origin[2]
+                    flux = w * (y0 * (xu[1, t] * xv[2, t] - xu[2, t] * xv[1, t])
+                                + y1 * (xu[2, t] * xv[0, t] - xu[0, t] * xv[2, t])
+                                + y2 * (xu[0, t] * xv[1, t] - xu[1, t] * xv[0, t]))
+                    f0, f1, f2 = flux * y0, flux * y1, flux * y2
+                    acc[0, t] += flux
+                    acc[1, t] += f0
+                    acc[2, t] += f1
+                    acc[3, t] += f2
+                    acc[4, t] += f0 * y0
+                    acc[5, t] += f0 * y1
+                    acc[6, t] += f0 * y2
+                    acc[7, t] += f1 * y1
+                    acc[8, t] += f1 * y2
+                    acc[9, t] += f2 * y2
+        for t in range(t1):
+            k = k0 + t
+            out[k, 0] = acc[0, t] / 3.0
+            out[k, 1] = acc[1, t] / 4.0
+            out[k, 2] = acc[2, t] / 4.0
+            out[k, 3] = acc[3, t] / 4.0
+            out[k, 4] = acc[4, t] / 5.0
+            out[k, 5] = out[k, 7] = acc[5, t] / 5.0
+            out[k, 6] = out[k, 10] = acc[6, t] / 5.0
+            out[k, 8] = acc[7, t] / 5.0
+            out[k, 9] = out[k, 11] = acc[8, t] / 5.0
+            out[k, 12] = acc[9, t] / 5.0
