@@ -158,3 +158,67 @@ def moment_sums(points, bu, bu1, bv, bv1, wu, wv, origin, out):  # pragma: no co
             out[k, 8] = acc[7, t] / 5.0
             out[k, 9] = out[k, 11] = acc[8, t] / 5.0
             out[k, 12] = acc[9, t] / 5.0
+
+
+@compiled
+def side_frames(points, ids, slots, sides, reverse, offsets, basis, dbasis, across, x_out, n_out):  # pragma: no cover
+    """Points and unit normals along patch sides (``smoothness.side_frames``' values, one side at a time).
+
+    points : (P, (d+1)^2, >= 3) float64, patches flattened (a group's whole array: only the sides' two rows are
+    read);
+    ids : (c,) int, the patch of each side; slots : (c,) int, the row of ``x_out`` and
+    ``n_out`` each side fills; sides : (c,) int, 0..3; reverse : (c,) bool, run the side from 1 to 0;
+    offsets : (4, 2, d+1) int, ``adjacency.side_offsets(d)``; basis, dbasis : (m, d+1) float, the Bernstein basis
+    and its derivative at the parameters along the side; across : (4,) float, d or -d, the sign and factor of the
+    derivative across side s from its two rows; x_out, n_out : (K, m, 3) float, NaN normals where x_u x x_v = 0
+    """
+    n1 = offsets.shape[2]
+    for k in range(ids.shape[0]):
+        e, s, slot, flip = ids[k], sides[k], slots[k], reverse[k]
+        for a in range(basis.shape[0]):
+            x0 = x1 = x2 = g0 = g1 = g2 = h0 = h1 = h2 = 0.0
+            for i in range(n1):
+                r = n1 - 1 - i if flip else i
+                o, q = offsets[s, 0, r], offsets[s, 1, r]
+                p0, p1, p2 = points[e, o, 0], points[e, o, 1], points[e, o, 2]
+                f, g = basis[a, i], dbasis[a, i]
+                x0 += f * p0
+                x1 += f * p1
+                x2 += f * p2
+                g0 += g * p0
+                g1 += g * p1
+                g2 += g * p2
+                h0 += f * (points[e, q, 0] - p0)
+                h1 += f * (points[e, q, 1] - p1)
+                h2 += f * (points[e, q, 2] - p2)
+            if flip:  # along the side, in the patch's own direction
+                g0, g1, g2 = -g0, -g1, -g2
+            c = across[s]
+            h0, h1, h2 = c * h0, c * h1, c * h2
+            if s % 2 == 1:  # sides 1 and 3: across is x_u, along x_v
+                u0, u1, u2, v0, v1, v2 = h0, h1, h2, g0, g1, g2
+            else:
+                u0, u1, u2, v0, v1, v2 = g0, g1, g2, h0, h1, h2
+            m0 = u1 * v2 - u2 * v1
+            m1 = u2 * v0 - u0 * v2
+            m2 = u0 * v1 - u1 * v0
+            length = math.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+            x_out[slot, a, 0], x_out[slot, a, 1], x_out[slot, a, 2] = x0, x1, x2
+            n_out[slot, a, 0], n_out[slot, a, 1], n_out[slot, a, 2] = m0 / length, m1 / length, m2 / length
+
+
+@compiled
+def frame_jumps(xa, na, xb, nb, unoriented, gap, angle):  # pragma: no cover - compiled
+    """Gap ``|xa - xb|`` and normal jump ``atan2(|na x nb|, na . nb)`` (``|na . nb|`` when ``unoriented``; 0 where
+    a normal is undefined) at every sample: xa, na, xb, nb : (k, m, 3) float; gap, angle : (k * m,) float."""
+    m = xa.shape[1]
+    for e in range(xa.shape[0]):
+        for a in range(m):
+            d0, d1, d2 = xa[e, a, 0] - xb[e, a, 0], xa[e, a, 1] - xb[e, a, 1], xa[e, a, 2] - xb[e, a, 2]
+            gap[e * m + a] = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            p0, p1, p2 = na[e, a, 0], na[e, a, 1], na[e, a, 2]
+            q0, q1, q2 = nb[e, a, 0], nb[e, a, 1], nb[e, a, 2]
+            c0, c1, c2 = p1 * q2 - p2 * q1, p2 * q0 - p0 * q2, p0 * q1 - p1 * q0
+            dot = p0 * q0 + p1 * q1 + p2 * q2
+            t = math.atan2(math.sqrt(c0 * c0 + c1 * c1 + c2 * c2), abs(dot) if unoriented else dot)
+            angle[e * m + a] = 0.0 if math.isnan(t) else t

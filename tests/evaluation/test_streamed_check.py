@@ -87,6 +87,49 @@ def test_compiled_measure_by_blocks_equals_the_whole_surface(monkeypatch, name):
     assert abs(numpy.area - mass.area) <= 1e-14 * mass.area and abs(numpy.volume - mass.volume) <= 1e-14 * mass.volume
 
 
+@pytest.mark.parametrize("name", ["cube", "high_valence", "twisted", "torus", "octahedron"])
+def test_compiled_check_by_blocks_equals_the_whole_surface_and_the_numpy_check(monkeypatch, name):
+    """The compiled check (``evaluation.kernels``: side keys, shortest side, side frames and jumps; from
+    ``measure.COMPILED_FROM`` patches on, here from 0) by blocks and from a streamed Surface equals the in-memory
+    one with ``==``; against the numpy check: the same pairs, boundary and counts and bounding box (``==``), the
+    gap and the normal jump at the same samples to rounding (1e-15 of the diagonal, 1e-13 rad)."""
+    from c1surf.evaluation import measure
+
+    surface, lazy = _lazy_and_whole(SAMPLES / f"{name}.obj")
+    groups = surface_patch_set(surface).groups
+    numpy = measure_smoothness(groups, samples=7)
+    monkeypatch.setattr(measure, "COMPILED_FROM", 0)
+    whole = measure_smoothness(groups, samples=7)
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(groups), samples=7, block=b) for b in TINY),
+                            measure_smoothness(SourcePatches(lazy.patch_source()), samples=7, block=5))
+    for field in ("shared_edges", "boundary_edges", "overshared_edges", "bbox_diagonal", "crease_edges",
+                  "unpaired_crease_sides"):
+        assert getattr(whole, field) == getattr(numpy, field)
+    assert abs(whole.max_gap - numpy.max_gap) <= 1e-15 * whole.bbox_diagonal
+    assert abs(whole.max_normal_jump - numpy.max_normal_jump) <= 1e-13
+    assert whole.is_g1(1e-9, 1e-9)
+
+
+@pytest.mark.parametrize("name", ["catmark_single_crease", "catmark_fan"])
+def test_compiled_check_of_crease_pieces(monkeypatch, name):
+    """Listed crease pieces (and non-manifold sheets) through the compiled check: the counts of the numpy check,
+    the crease gap to rounding, by blocks equal."""
+    from c1surf.api import surface_from_file
+    from c1surf.evaluation import measure
+
+    surface, _ = surface_from_file(shared_mesh(f"opensubdiv/{name}.obj"), exact_creases=True)
+    patch_set = surface_patch_set(surface)
+    numpy = measure_smoothness(patch_set.groups, crease_sides=patch_set.crease_sides)
+    monkeypatch.setattr(measure, "COMPILED_FROM", 0)
+    whole = measure_smoothness(patch_set.groups, crease_sides=patch_set.crease_sides)
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(patch_set.groups), block=b,
+                                                        crease_sides=patch_set.crease_sides) for b in TINY))
+    for field in ("shared_edges", "boundary_edges", "overshared_edges", "crease_edges", "unpaired_crease_sides"):
+        assert getattr(whole, field) == getattr(numpy, field)
+    assert abs(whole.max_crease_gap - numpy.max_crease_gap) <= 1e-15 * whole.bbox_diagonal
+    assert whole.is_g1(1e-9, 1e-9)
+
+
 def test_a_rational_surface_by_blocks(tmp_path):
     from c1surf.api import surface_from_file
 
