@@ -28,8 +28,10 @@ process for the largest outputs):
    enclosed volume (spot, sword, small tori);
 7. ``--tolerance`` (when this c1surf has it): triangles against the uniform
    resolution of the same measured chordal error, on the sample meshes and spot;
-   ``check`` of the 100,000-triangle torus's patch file (1.2 M patches) against the
-   ``convert`` that wrote it, the two processes in turn (issue 30's targets).
+   ``check`` and ``measure`` of the 100,000-triangle torus's patch file (1.2 M patches) against the
+   ``convert`` that wrote it, the three processes in turn (issues 30 and 36's targets), and of the meshes
+   of ``--check-inputs`` (ogre.obj of the common-3d-test-models set: 1.49 M patches); ``--only-check`` runs
+   these rows alone.
 8. then (not with --quick or --no-fit) ``bench/fit.py``: ``c1surf fit`` on every scan of ../shared/scans
    against its baselines (issue 29), into bench/fit_results.json; docs/fit.md shows its table.
 

@@ -222,3 +222,140 @@ def frame_jumps(xa, na, xb, nb, unoriented, gap, angle):  # pragma: no cover - c
             dot = p0 * q0 + p1 * q1 + p2 * q2
             t = math.atan2(math.sqrt(c0 * c0 + c1 * c1 + c2 * c2), abs(dot) if unoriented else dot)
             angle[e * m + a] = 0.0 if math.isnan(t) else t
+
+
+@compiled
+def _root(parent, i):  # pragma: no cover - compiled
+    """The root of ``i`` in the union-find ``parent``, the path halved on the way."""
+    while parent[i] != i:
+        parent[i] = parent[parent[i]]
+        i = parent[i]
+    return i
+
+
+@compiled
+def _join(parent, a, b):  # pragma: no cover - compiled
+    ra, rb = _root(parent, a), _root(parent, b)
+    if ra != rb:
+        if ra < rb:
+            parent[rb] = ra
+        else:
+            parent[ra] = rb
+
+
+@compiled
+def cell_components(points, key, order, tolerance, pairs, labels):  # pragma: no cover - compiled
+    """``mesh.points.clusters.cluster_points``' components: the points of one cell hash within ``tolerance`` of
+    each other (squared distance, summed x, y, z, against tolerance squared, as its ``_within``) and the ``pairs``
+    joined; ``labels`` (n,) int64 filled 0, 1, 2, ... in order of each component's first point (scipy's
+    ``connected_components`` numbering).
+
+    points : (n, 3) float; key : (k,) int64, cell hashes sorted; order : (k,) int, the points in that order;
+    pairs : (m, 2) int, more pairs to join (exact duplicates, pairs across cell faces)
+    """
+    n = points.shape[0]
+    parent = np.arange(n)
+    limit = tolerance * tolerance
+    k = key.shape[0]
+    start = 0
+    while start < k:
+        stop = start + 1
+        while stop < k and key[stop] == key[start]:
+            stop += 1
+        for i in range(start, stop):
+            a = order[i]
+            for j in range(i + 1, stop):
+                b = order[j]
+                d0 = points[a, 0] - points[b, 0]
+                d1 = points[a, 1] - points[b, 1]
+                d2 = points[a, 2] - points[b, 2]
+                if d0 * d0 + d1 * d1 + d2 * d2 <= limit:
+                    _join(parent, a, b)
+        start = stop
+    for r in range(pairs.shape[0]):
+        _join(parent, pairs[r, 0], pairs[r, 1])
+    count = 0
+    for i in range(n):  # a component's root is its lowest point (a join keeps the lower root): labelled first
+        root = _root(parent, i)
+        if root == i:
+            labels[i] = count
+            count += 1
+        else:
+            labels[i] = labels[root]
+
+
+@compiled
+def side_keys(points, basis_u, basis_v, corners, samples, box):  # pragma: no cover - compiled
+    """What the side matcher compares (``adjacency._side_points``): corners[e] the corner control points 0..3 of
+    patch ``e``, samples[e, s] side s's points at the parameters of ``basis_u`` (sides 0, 2) or ``basis_v``
+    (sides 1, 3); ``box`` (2, 3) the running minimum and maximum of the control points, updated.
+
+    points : (c, du+1, dv+1, >= 3) float64; basis_u : (r, du+1), basis_v : (r, dv+1) float; corners : (c, 4, 3),
+    samples : (c, 4, r, 3) float
+    """
+    du, dv = points.shape[1] - 1, points.shape[2] - 1
+    for e in range(points.shape[0]):
+        for c in range(3):
+            corners[e, 0, c] = points[e, 0, 0, c]
+            corners[e, 1, c] = points[e, du, 0, c]
+            corners[e, 2, c] = points[e, du, dv, c]
+            corners[e, 3, c] = points[e, 0, dv, c]
+            for a in range(basis_u.shape[0]):
+                s0 = s2 = 0.0
+                for i in range(du + 1):
+                    s0 += basis_u[a, i] * points[e, i, 0, c]
+                    s2 += basis_u[a, i] * points[e, i, dv, c]
+                s1 = s3 = 0.0
+                for j in range(dv + 1):
+                    s1 += basis_v[a, j] * points[e, du, j, c]
+                    s3 += basis_v[a, j] * points[e, 0, j, c]
+                samples[e, 0, a, c], samples[e, 1, a, c], samples[e, 2, a, c], samples[e, 3, a, c] = s0, s1, s2, s3
+            low, high = box[0, c], box[1, c]
+            for i in range(du + 1):
+                for j in range(dv + 1):
+                    x = points[e, i, j, c]
+                    low, high = min(low, x), max(high, x)
+            box[0, c], box[1, c] = low, high
+
+
+@compiled
+def shortest_side(corners, ends, floor):  # pragma: no cover - compiled
+    """The shortest chord between the end corners of a patch side longer than ``floor`` (``inf`` if none), as
+    ``sides.matching.matching_tolerance`` takes it: corners (P, 4, 3) float, ends (4, 2) int (``SIDE_CORNERS``)."""
+    shortest = np.inf
+    for p in range(corners.shape[0]):
+        for s in range(4):
+            a, b = ends[s, 0], ends[s, 1]
+            d0 = corners[p, b, 0] - corners[p, a, 0]
+            d1 = corners[p, b, 1] - corners[p, a, 1]
+            d2 = corners[p, b, 2] - corners[p, a, 2]
+            length = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
+            if length > floor and length < shortest:
+                shortest = length
+    return shortest
+
+
+@compiled
+def same_curves(points, ends, a, b, tolerance, out):  # pragma: no cover - compiled
+    """``sides.matching._same_curves`` pair by pair, without its block-sized copies: out[k] says that the side
+    points of sides a[k] and b[k] (flat ids) lie within ``tolerance`` of each other (squared distances summed
+    x, y, z, against tolerance squared), b's taken backwards where it starts at a's end.
+
+    points : (S, r, 3) float, the side points; ends : (S, 2) int, the start and end corner labels of each side;
+    a, b : (k,) int; out : (k,) bool
+    """
+    limit = tolerance * tolerance
+    r = points.shape[1]
+    for k in range(a.shape[0]):
+        i, j = a[k], b[k]
+        backwards = ends[i, 0] != ends[j, 0]
+        same = True
+        for q in range(r):
+            w = r - 1 - q if backwards else q
+            d0 = points[i, q, 0] - points[j, w, 0]
+            d1 = points[i, q, 1] - points[j, w, 1]
+            d2 = points[i, q, 2] - points[j, w, 2]
+            if not d0 * d0 + d1 * d1 + d2 * d2 <= limit:
+                same = False
+                break
+        out[k] = same

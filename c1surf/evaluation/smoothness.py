@@ -19,6 +19,7 @@ from .stream.patches import BLOCK, ArrayPatches, patch_blocks
 from .stream.welded import in_order_on_threads
 from .measure import compiled_loops
 from ..memory import return_freed_memory
+from ..parallel import for_each_range
 
 
 @dataclass(frozen=True)
@@ -151,13 +152,19 @@ def measure_smoothness(patch_groups, weights=None, crease_sides=None, progress=N
     patches = patch_groups if hasattr(patch_groups, "take") else ArrayPatches(patch_groups, weights)
     if not patches.counts:
         return SmoothnessReport(0, 0, 0, 0.0, 0.0, 0.0, (-1, -1))
+    if compiled_loops(patches):  # numba (150 MB) before the matching's arrays: what the glibc heap kept goes first
+        return_freed_memory()
     corners, points, diagonal = _side_keys(patches, block, progress)
     if progress is not None:
         progress("matching the patch sides", 0, 1)
-    n, absolute = corners.shape[0], matching_tolerance(corners, tolerance * max(diagonal, 1e-300))
-    corner_label = cluster_points(corners.reshape(-1, 3), absolute).reshape(n, 4)
+    compiled = compiled_loops(patches)
+    n, absolute = corners.shape[0], matching_tolerance(corners, tolerance * max(diagonal, 1e-300), compiled)
+    corner_label = cluster_points(corners.reshape(-1, 3), absolute,
+                                  _compiled_components if compiled else None).reshape(n, 4)
     del corners  # as ``sides.matching.match_sides``, each array let go as soon as it is used
-    sides = sides_of_corners(corner_label, points, absolute)
+    if compiled:  # the clustering's arrays given back (the command line has glibc keep freed memory)
+        return_freed_memory()
+    sides = sides_of_corners(corner_label, points, absolute, compiled)
     del corner_label, points
     if progress is not None:
         progress("matching the patch sides", 1, 1)
@@ -173,10 +180,8 @@ def measure_smoothness(patch_groups, weights=None, crease_sides=None, progress=N
     edges = _EdgeMaxima()
     bend = crease_angle if crease_sides is None else None
 
-    compiled = compiled_loops(patches)
-    if compiled:  # numba imported here, on this thread, once the matching's arrays are gone (its 150 MB)
-        return_freed_memory()  # theirs given back first (the command line has glibc keep freed memory)
-        from . import kernels  # noqa: F401
+    if compiled:  # the matching's arrays given back (the command line has glibc keep freed memory)
+        return_freed_memory()
 
     # compiled: the edges in order of their lower patch, so that a block reads a few MB of a memory-mapped file
     # (the file order's: half the pages of the whole file per block, which stayed mapped, 0.57 GB of 1.2 M patches)
@@ -219,11 +224,40 @@ def _compact(sides: np.ndarray) -> np.ndarray:
     return np.array(sides, dtype=np.int32 if sides.size and sides.max() < 2**31 else np.int64)
 
 
+def _compiled_components(points, key, order, tolerance, pairs) -> np.ndarray:
+    """``cluster_points``' components by ``kernels.cell_components`` (a union-find over the pairs of one cell
+    hash and the other pairs: the labels of scipy's connected components of the same pairs)."""
+    from . import kernels  # numba: imported where the loops run
+
+    labels = np.empty(points.shape[0], dtype=np.int64)
+    kernels.cell_components(points, key, order, float(tolerance), pairs.reshape(-1, 2), labels)
+    return labels
+
+
 def _side_keys(patches, block: int, progress):
-    """(corners (P, 4, 3), side points (P, 4, 3, 3), diagonal of the control points' bounding box), by blocks."""
+    """(corners (P, 4, 3), side points (P, 4, 3, 3), diagonal of the control points' bounding box), by blocks;
+    in the compiled loops where ``compiled_loops`` says so (``kernels.side_keys``, on the thread pool)."""
     n = int(sum(patches.counts))
     corners, points = np.empty((n, 4, 3)), np.empty((n, 4, len(SIDE_SAMPLES), 3))
     low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    if compiled_loops(patches):
+        from . import kernels  # numba: imported where the loops run
+
+        boxes = []
+        for start, k, a, z in patch_blocks(patches, block):
+            part = np.ascontiguousarray(patches.block(k, a, z)[0], dtype=np.float64)
+            bases = [bernstein_basis(d, SIDE_SAMPLES) for d in patches.degrees[k]]
+
+            def fill(lo: int, hi: int) -> None:  # a range of the block's patches, on the thread pool
+                box = np.stack([np.full(3, np.inf), np.full(3, -np.inf)])
+                kernels.side_keys(part[lo:hi], *bases, corners[start + lo : start + hi],
+                                  points[start + lo : start + hi], box)
+                boxes.append(box)  # minima and maxima: the same whatever the ranges
+            for_each_range(z - a, fill, minimum=1 << 12)
+            if progress is not None:
+                progress("finding the shared edges", z - a, n)
+        box = np.concatenate(boxes) if boxes else np.zeros((2, 3))
+        return corners, points, float(np.linalg.norm(box[1::2].max(axis=0) - box[0::2].min(axis=0)))
     for start, k, a, z in patch_blocks(patches, block):
         part, weights = patches.block(k, a, z)
         corners[start : start + z - a], points[start : start + z - a] = _side_points(

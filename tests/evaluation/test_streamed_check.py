@@ -270,3 +270,36 @@ def test_geometric_adjacency_unchanged_by_the_cell_clustering():
         surface, _ = _lazy_and_whole(SAMPLES / f"{name}.obj")
         patch_set = surface_patch_set(surface)
         assert adjacency_from_geometry(patch_set.groups) == patch_set.adjacency
+
+
+@pytest.mark.parametrize("tolerance", [1e-4, 5e-4, 2e-3])
+def test_compiled_components_label_as_scipy(tolerance):
+    """``cluster_points`` with the compiled union-find (``smoothness._compiled_components``, the large check's)
+    gives the labels of scipy's connected components of the same pairs, ``==``: points with partners at about a
+    tolerance, exact duplicates, a crowded cell (many equal points: the duplicates' path)."""
+    from c1surf.evaluation.smoothness import _compiled_components
+
+    rng = np.random.default_rng(3)
+    x = rng.random((6000, 3))
+    crowd = np.repeat(x[:1], 200, axis=0)
+    points = np.concatenate([x, x + rng.normal(scale=tolerance / 2, size=x.shape), x[:1500], crowd])
+    assert np.array_equal(cluster_points(points, tolerance, _compiled_components), cluster_points(points, tolerance))
+
+
+def test_compiled_same_curves_as_numpy():
+    """``sides.matching._same_curves`` pair by pair (compiled) and by blocks (numpy): the same answers on side
+    points equal, within, and beyond the tolerance, forwards and backwards."""
+    from c1surf.evaluation.sides.matching import _same_curves
+
+    rng = np.random.default_rng(4)
+    a_points = rng.random((3000, 3, 3))
+    shift = rng.choice([0.0, 0.5e-6, 2e-6], size=(3000, 1, 1)) * rng.normal(size=(3000, 1, 3))
+    backwards = rng.random(3000) < 0.5
+    b_points = np.where(backwards[:, None, None], (a_points + shift)[:, ::-1], a_points + shift)
+    points = np.concatenate([a_points, b_points])
+    ends = np.zeros((6000, 2), dtype=np.int32)
+    ends[3000:, 0] = np.where(backwards, 1, 0)
+    a, b = np.arange(3000), np.arange(3000, 6000)
+    numpy = _same_curves(points, ends, a, b, 1e-6)
+    assert 0 < numpy.sum() < 3000
+    assert np.array_equal(_same_curves(points, ends, a, b, 1e-6, compiled=True), numpy)
