@@ -173,27 +173,32 @@ def side_frames(points, ids, slots, sides, reverse, offsets, basis, dbasis, acro
     derivative across side s from its two rows; x_out, n_out : (K, m, 3) float, NaN normals where x_u x x_v = 0
     """
     n1 = offsets.shape[2]
+    rows = np.empty((n1, 3))  # the side's control points, in the side's direction
+    steps = np.empty((n1, 3))  # the next row inwards minus the side's
     for k in range(ids.shape[0]):
         e, s, slot, flip = ids[k], sides[k], slots[k], reverse[k]
+        for i in range(n1):
+            r = n1 - 1 - i if flip else i
+            o, q = offsets[s, 0, r], offsets[s, 1, r]
+            for c in range(3):
+                rows[i, c] = points[e, o, c]
+                steps[i, c] = points[e, q, c] - points[e, o, c]
+        c = across[s]
         for a in range(basis.shape[0]):
             x0 = x1 = x2 = g0 = g1 = g2 = h0 = h1 = h2 = 0.0
             for i in range(n1):
-                r = n1 - 1 - i if flip else i
-                o, q = offsets[s, 0, r], offsets[s, 1, r]
-                p0, p1, p2 = points[e, o, 0], points[e, o, 1], points[e, o, 2]
                 f, g = basis[a, i], dbasis[a, i]
-                x0 += f * p0
-                x1 += f * p1
-                x2 += f * p2
-                g0 += g * p0
-                g1 += g * p1
-                g2 += g * p2
-                h0 += f * (points[e, q, 0] - p0)
-                h1 += f * (points[e, q, 1] - p1)
-                h2 += f * (points[e, q, 2] - p2)
+                x0 += f * rows[i, 0]
+                x1 += f * rows[i, 1]
+                x2 += f * rows[i, 2]
+                g0 += g * rows[i, 0]
+                g1 += g * rows[i, 1]
+                g2 += g * rows[i, 2]
+                h0 += f * steps[i, 0]
+                h1 += f * steps[i, 1]
+                h2 += f * steps[i, 2]
             if flip:  # along the side, in the patch's own direction
                 g0, g1, g2 = -g0, -g1, -g2
-            c = across[s]
             h0, h1, h2 = c * h0, c * h1, c * h2
             if s % 2 == 1:  # sides 1 and 3: across is x_u, along x_v
                 u0, u1, u2, v0, v1, v2 = h0, h1, h2, g0, g1, g2
