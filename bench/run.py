@@ -437,7 +437,7 @@ def main(argv=None) -> int:
                              "common-3d-test-models set, 1.49 M patches at -r 2; not in ../shared)")
     parser.add_argument("--only-check", action="store_true",
                         help="run the check and measure rows only (convert, check and measure of the torus's and "
-                             "--check-inputs' patch files, in turn), into --out")
+                             "--check-inputs' patch files, in turn), into --out (default bench/check_results.json)")
     parser.add_argument("--worker", nargs=2, metavar=("JOB", "RESULT"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
@@ -455,6 +455,8 @@ def main(argv=None) -> int:
     with tempfile.TemporaryDirectory(prefix="c1surf-bench-") as scratch:
         args.scratch = scratch
         if args.only_check:
+            if Path(args.out) == HERE / "results.json":  # the whole bench's file is not replaced by these rows
+                args.out = str(HERE / "check_results.json")
             return check_rows_only(args)
         results = run(args)
     Path(args.out).write_text(json.dumps(results, indent=1) + "\n")
