@@ -28,8 +28,10 @@ process for the largest outputs):
    enclosed volume (spot, sword, small tori);
 7. ``--tolerance`` (when this c1surf has it): triangles against the uniform
    resolution of the same measured chordal error, on the sample meshes and spot;
-   ``check`` of the 100,000-triangle torus's patch file (1.2 M patches) against the
-   ``convert`` that wrote it, the two processes in turn (issue 30's targets).
+   ``check`` and ``measure`` of the 100,000-triangle torus's patch file (1.2 M patches) against the
+   ``convert`` that wrote it, the three processes in turn (issues 30 and 36's targets), and of the meshes
+   of ``--check-inputs`` (ogre.obj of the common-3d-test-models set: 1.49 M patches); ``--only-check`` runs
+   these rows alone.
 8. then (not with --quick or --no-fit) ``bench/fit.py``: ``c1surf fit`` on every scan of ../shared/scans
    against its baselines (issue 29), into bench/fit_results.json; docs/fit.md shows its table.
 
@@ -56,7 +58,7 @@ from harness import tables
 from harness.meshes import cached_torus_obj, ply_counts, read_polygon_obj
 from harness.peers import PEERS
 from harness.processes import SETTINGS, convert_help, median_of, repeated, run_c1surf, run_worker
-from harness.report import DEFAULT_RESOLUTION_INPUT, comparisons, targets
+from harness.report import DEFAULT_RESOLUTION_INPUT, Targets, comparisons, targets
 
 HERE = Path(__file__).resolve().parent
 SHARED = Path(os.environ.get("C1SURF_SHARED_MESHES", HERE.parent.parent / "shared" / "meshes"))
@@ -211,26 +213,46 @@ def measure_default_resolution(inputs, args, repeats: int) -> dict | None:
 
 
 def measure_check(inputs, args, repeats: int) -> dict | None:
-    """Issue 30: ``convert IN -r 2 --patches x.npz`` then ``check x.npz``, the two processes taken in turn
-    ``repeats`` times (medians), on the 100,000-triangle torus (quick: the largest triangle torus)."""
+    """Issues 30 and 36: ``convert IN -r 2 --patches x.npz``, then ``check x.npz`` and ``measure x.npz``, the three
+    processes taken in turn ``repeats`` times (medians), on the 100,000-triangle torus (quick: the largest
+    triangle torus)."""
     tri = [i for i in inputs if i["kind"] == "triangle torus"]
     item = next((i for i in tri if i["name"] == DEFAULT_RESOLUTION_INPUT), tri[0] if args.quick and tri else None)
-    if item is None:
-        return None
-    log(f"bench: check of {item['name']}'s patch file against the convert that wrote it ...")
+    return None if item is None else check_and_measure(item, args, repeats)
+
+
+def measure_more_checks(args, repeats: int) -> list[dict]:
+    """``measure_check``'s rows on the meshes of ``--check-inputs`` (ogre.obj of the common-3d-test-models set:
+    issue 36's 1.49 M patches at -r 2), each named by its file's stem."""
+    rows = []
+    for path in filter(None, (p.strip() for p in args.check_inputs.split(","))):
+        item = {"name": Path(path).stem, "path": str(Path(path).resolve()), "faces": None}
+        rows.append(guarded(check_and_measure, item, args, repeats) if Path(path).exists()
+                    else {"input": item["name"], "ok": False, "error": f"{path} does not exist"})
+    return rows
+
+
+def check_and_measure(item: dict, args, repeats: int) -> dict:
+    """convert (writing the NPZ), check and measure of it, in turn, ``repeats`` times; their medians, and the
+    machine's load average before the first and after the last (the 2-core VM is shared)."""
+    log(f"bench: check and measure of {item['name']}'s patch file against the convert that wrote it ...")
     npz, ply = Path(args.scratch) / f"check-{os.getpid()}.npz", Path(args.scratch) / f"check-{os.getpid()}.ply"
-    converts, checks = [], []
+    runs, load = {"convert": [], "check": [], "measure": []}, [os.getloadavg()]
+    commands = {"convert": ["convert", item["path"], "-o", ply, "-r", "2", "-q", "--patches", npz],
+                "check": ["check", npz, "-q"], "measure": ["measure", npz, "-q"]}
     for _ in range(repeats):
-        converts.append(run_c1surf(["convert", item["path"], "-o", ply, "-r", "2", "-q", "--patches", npz], args.timeout))
-        if not converts[-1]["ok"]:
+        for name, command in commands.items():
+            runs[name].append(run_c1surf(command, args.timeout))
+            if not runs[name][-1]["ok"]:
+                break
+        if not all(r[-1]["ok"] for r in runs.values() if r) or not runs["measure"]:
             break
-        checks.append(run_c1surf(["check", npz, "-q"], args.timeout))
-        if not checks[-1]["ok"]:
-            break
+    load.append(os.getloadavg())
     npz.unlink(missing_ok=True)
     ply.unlink(missing_ok=True)
-    return {"input": item["name"], "faces": item["faces"], "convert": median_of(converts),
-            "check": median_of(checks) if checks else {"ok": False, "error": "convert failed", "peak_mb": 0}}
+    failed = {"ok": False, "error": "convert failed", "peak_mb": 0}
+    return {"input": item["name"], "faces": item["faces"], "load_average": load,
+            **{name: median_of(r) if r else failed for name, r in runs.items()}}
 
 
 def measure_limits(args, repeats: int) -> dict:
@@ -338,6 +360,7 @@ def run(args) -> dict:
     if "c1surf" in tools:
         results["default_resolution"] = guarded(measure_default_resolution, inputs, args, repeats)
         results["check"] = guarded(measure_check, inputs, args, repeats)
+        results["check_more"] = measure_more_checks(args, repeats)
         limits = guarded(measure_limits, args, repeats)
         results.update(limits if "limit" in limits else {"throughput": limits, "limit": limits})
         results["tolerance"] = guarded(measure_tolerance, inputs, args)
@@ -348,6 +371,23 @@ def run(args) -> dict:
     results["comparisons"] = comparisons(results)
     results["targets"] = targets(results)
     return results
+
+
+def check_rows_only(args) -> int:
+    """``--only-check``: the torus's and ``--check-inputs``' check and measure rows, printed and written to --out."""
+    repeats = args.repeats or (1 if args.quick else 3)
+    SETTINGS["root"] = Path(args.c1surf_root).resolve()
+    args.max_faces, args.no_real = min(args.max_faces, 100_000), True  # the torus of the rows and the smaller ones
+    inputs = make_inputs(Path(args.inputs), args)
+    results = {"format": "c1surf-bench-check", "repeats": repeats, "machine": machine(), "versions": versions(),
+               "check": guarded(measure_check, inputs, args, repeats), "check_more": measure_more_checks(args, repeats)}
+    rows = Targets(results)
+    rows.check_at_scale()
+    results["targets"] = rows.rows
+    Path(args.out).write_text(json.dumps(results, indent=1) + "\n")
+    for t in results["targets"]:
+        print(f"[{t['status']}] {t['target']}: {t['value']} (goal {t['goal']}) {t['note']}")
+    return 0
 
 
 def print_report(results) -> None:
@@ -392,6 +432,12 @@ def main(argv=None) -> int:
     parser.add_argument("--plot", default=str(HERE / "results.png"), help="PNG plot ('' for none)")
     parser.add_argument("--no-fit", action="store_true",
                         help="skip bench/fit.py (c1surf fit on ../shared/scans; --quick skips it too)")
+    parser.add_argument("--check-inputs", default="",
+                        help="more meshes for the check and measure rows, comma-separated (issue 36: ogre.obj of the "
+                             "common-3d-test-models set, 1.49 M patches at -r 2; not in ../shared)")
+    parser.add_argument("--only-check", action="store_true",
+                        help="run the check and measure rows only (convert, check and measure of the torus's and "
+                             "--check-inputs' patch files, in turn), into --out (default bench/check_results.json)")
     parser.add_argument("--worker", nargs=2, metavar=("JOB", "RESULT"), help=argparse.SUPPRESS)
     args = parser.parse_args(argv)
     if args.worker:
@@ -408,6 +454,10 @@ def main(argv=None) -> int:
     Path(args.inputs).mkdir(parents=True, exist_ok=True)
     with tempfile.TemporaryDirectory(prefix="c1surf-bench-") as scratch:
         args.scratch = scratch
+        if args.only_check:
+            if Path(args.out) == HERE / "results.json":  # the whole bench's file is not replaced by these rows
+                args.out = str(HERE / "check_results.json")
+            return check_rows_only(args)
         results = run(args)
     Path(args.out).write_text(json.dumps(results, indent=1) + "\n")
     Path(args.out).with_suffix(".partial.json").unlink(missing_ok=True)

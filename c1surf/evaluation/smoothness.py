@@ -17,6 +17,9 @@ from .bezier import bernstein_basis, cross3, unit_normals
 from .rational import euclidean_derivatives, homogeneous
 from .stream.patches import BLOCK, ArrayPatches, patch_blocks
 from .stream.welded import in_order_on_threads
+from .measure import compiled_loops
+from ..memory import return_freed_memory
+from ..parallel import for_each_range
 
 
 @dataclass(frozen=True)
@@ -149,33 +152,51 @@ def measure_smoothness(patch_groups, weights=None, crease_sides=None, progress=N
     patches = patch_groups if hasattr(patch_groups, "take") else ArrayPatches(patch_groups, weights)
     if not patches.counts:
         return SmoothnessReport(0, 0, 0, 0.0, 0.0, 0.0, (-1, -1))
+    if compiled_loops(patches):  # numba (150 MB) before the matching's arrays: what the glibc heap kept goes first
+        return_freed_memory()
     corners, points, diagonal = _side_keys(patches, block, progress)
     if progress is not None:
         progress("matching the patch sides", 0, 1)
-    n, absolute = corners.shape[0], matching_tolerance(corners, tolerance * max(diagonal, 1e-300))
-    corner_label = cluster_points(corners.reshape(-1, 3), absolute).reshape(n, 4)
+    compiled = compiled_loops(patches)
+    n, absolute = corners.shape[0], matching_tolerance(corners, tolerance * max(diagonal, 1e-300), compiled)
+    corner_label = cluster_points(corners.reshape(-1, 3), absolute,
+                                  _compiled_components if compiled else None).reshape(n, 4)
     del corners  # as ``sides.matching.match_sides``, each array let go as soon as it is used
-    sides = sides_of_corners(corner_label, points, absolute)
+    if compiled:  # the clustering's arrays given back (the command line has glibc keep freed memory)
+        return_freed_memory()
+    sides = sides_of_corners(corner_label, points, absolute, compiled)
     del corner_label, points
     if progress is not None:
         progress("matching the patch sides", 1, 1)
-    first, second = sides.first, sides.second
-    boundary, overshared = int(sides.lone.size), sides.overshared
+    first, second = _compact(sides.first), _compact(sides.second)
+    boundary, overshared, reversed_ = int(sides.lone.size), sides.overshared, sides.reversed
+    if sides.overshared_sides.size == 0:  # nothing for _sheet_creases: the matching's (P, 4) arrays let go
+        sides = None  # (issue 36: 150 MB of a 1.2 M-patch check, before numba's 150 MB come)
     if first.size == 0:
         return SmoothnessReport(0, boundary, overshared, 0.0, 0.0, diagonal, (-1, -1),
                                 unpaired_crease_sides=0 if crease_sides is None else len(crease_sides))
     t = np.linspace(0.0, 1.0, samples)
     listed = None if crease_sides is None else _crease_edges(first, second, crease_sides)
-    edges, reversed_ = _EdgeMaxima(), sides.reversed
+    edges = _EdgeMaxima()
     bend = crease_angle if crease_sides is None else None
+
+    if compiled:  # the matching's arrays given back (the command line has glibc keep freed memory)
+        return_freed_memory()
+
+    # compiled: the edges in order of their lower patch, so that a block reads a few MB of a memory-mapped file
+    # (the file order's: half the pages of the whole file per block, which stayed mapped, 0.57 GB of 1.2 M patches)
+    order = np.argsort(np.minimum(first, second) >> 2, kind="stable") if compiled else None
 
     def measure(a: int):  # a block of shared edges, on the thread pool
         z = min(a + block, first.size)
-        return a, z, _edge_samples(patches, first[a:z], second[a:z], reversed_[a:z], t, unoriented)
+        at = slice(a, z) if order is None else order[a:z]
+        return a, z, _edge_samples(patches, first[at], second[at], reversed_[at], t, unoriented, compiled)
     bent = []
     for a, z, (gap, angle) in in_order_on_threads(range(0, first.size, block), measure, per_task=2):
-        crease = None if listed is None else listed[0][a:z]
-        bent.append(edges.add(gap, angle, first[a:z], second[a:z], samples, crease, bend, a))
+        at = slice(a, z) if order is None else order[a:z]
+        crease = None if listed is None else listed[0][at]
+        bent.append(edges.add(gap, angle, first[at], second[at], samples, crease, bend,
+                              a if order is None else order[a:z]))
         patches.release()
         if progress is not None:
             progress("measuring the shared edges", z - a, int(first.size))
@@ -197,11 +218,46 @@ def measure_smoothness(patch_groups, weights=None, crease_sides=None, progress=N
     )
 
 
+def _compact(sides: np.ndarray) -> np.ndarray:
+    """A contiguous copy of flat side ids (k,), int32 where they fit (``SideMatching.first`` is a strided view
+    of a (2 k,) int64 array, which it would keep alive)."""
+    return np.array(sides, dtype=np.int32 if sides.size and sides.max() < 2**31 else np.int64)
+
+
+def _compiled_components(points, key, order, tolerance, pairs) -> np.ndarray:
+    """``cluster_points``' components by ``kernels.cell_components`` (a union-find over the pairs of one cell
+    hash and the other pairs: the labels of scipy's connected components of the same pairs)."""
+    from . import kernels  # numba: imported where the loops run
+
+    labels = np.empty(points.shape[0], dtype=np.int64)
+    kernels.cell_components(points, key, order, float(tolerance), pairs.reshape(-1, 2), labels)
+    return labels
+
+
 def _side_keys(patches, block: int, progress):
-    """(corners (P, 4, 3), side points (P, 4, 3, 3), diagonal of the control points' bounding box), by blocks."""
+    """(corners (P, 4, 3), side points (P, 4, 3, 3), diagonal of the control points' bounding box), by blocks;
+    in the compiled loops where ``compiled_loops`` says so (``kernels.side_keys``, on the thread pool)."""
     n = int(sum(patches.counts))
     corners, points = np.empty((n, 4, 3)), np.empty((n, 4, len(SIDE_SAMPLES), 3))
     low, high = np.full(3, np.inf), np.full(3, -np.inf)
+    if compiled_loops(patches):
+        from . import kernels  # numba: imported where the loops run
+
+        boxes = []
+        for start, k, a, z in patch_blocks(patches, block):
+            part = np.ascontiguousarray(patches.block(k, a, z)[0], dtype=np.float64)
+            bases = [bernstein_basis(d, SIDE_SAMPLES) for d in patches.degrees[k]]
+
+            def fill(lo: int, hi: int) -> None:  # a range of the block's patches, on the thread pool
+                box = np.stack([np.full(3, np.inf), np.full(3, -np.inf)])
+                kernels.side_keys(part[lo:hi], *bases, corners[start + lo : start + hi],
+                                  points[start + lo : start + hi], box)
+                boxes.append(box)  # minima and maxima: the same whatever the ranges
+            for_each_range(z - a, fill, minimum=1 << 12)
+            if progress is not None:
+                progress("finding the shared edges", z - a, n)
+        box = np.concatenate(boxes) if boxes else np.zeros((2, 3))
+        return corners, points, float(np.linalg.norm(box[1::2].max(axis=0) - box[0::2].min(axis=0)))
     for start, k, a, z in patch_blocks(patches, block):
         part, weights = patches.block(k, a, z)
         corners[start : start + z - a], points[start : start + z - a] = _side_points(
@@ -221,10 +277,11 @@ class _EdgeMaxima:
         self.max_gap = self.max_angle = self.max_crease_gap = 0.0
         self.best, self.worst, self.crease_edges = -1.0, 0, 0
 
-    def add(self, gap, angle, first, second, samples: int, crease, crease_angle, offset: int):
+    def add(self, gap, angle, first, second, samples: int, crease, crease_angle, offset):
         """Take in the ``_edge_samples`` of the edges of sides first, second (k,) int (the k edges from
-        ``offset`` on); return the (b, 2) side pairs found bent more than ``crease_angle`` (none without it);
-        ``crease``: (k,) bool, the listed crease pieces, or None."""
+        ``offset`` on, or ``offset`` (k,) int the edges' positions: blocks out of order, the worst sample still
+        the first of the largest in the edges' order); return the (b, 2) side pairs found bent more than
+        ``crease_angle`` (none without it); ``crease``: (k,) bool, the listed crease pieces, or None."""
         bent = np.zeros((0, 2), dtype=np.int64)
         if crease is None and crease_angle is not None:
             crease = angle.reshape(first.size, -1).max(axis=1) > crease_angle
@@ -236,17 +293,63 @@ class _EdgeMaxima:
             gap, angle = np.where(on_crease, 0.0, gap), np.where(on_crease, 0.0, angle)
         self.max_gap = max(self.max_gap, float(gap.max()))
         worst = int(np.argmax(angle))
-        if angle[worst] > self.best:
-            self.best, self.worst = float(angle[worst]), offset * samples + worst
+        value = float(angle[worst])
+        if isinstance(offset, np.ndarray):  # positions: the tied samples' lowest one
+            tied = np.flatnonzero(angle == value)
+            index = int((offset[tied // samples].astype(np.int64) * samples + tied % samples).min())
+        else:
+            index = offset * samples + worst
+        if value > self.best or (value == self.best and index < self.worst):
+            self.best, self.worst = value, index
         self.max_angle = max(self.best, 0.0)
         return bent
 
 
-def _edge_samples(patches, first, second, reversed_, t, unoriented: bool):
-    """(gap, angle) (k * m,) float at the m parameters ``t`` along the k shared edges of sides ``first``, ``second``."""
+def _edge_samples(patches, first, second, reversed_, t, unoriented: bool, compiled: bool = False):
+    """(gap, angle) (k * m,) float at the m parameters ``t`` along the k shared edges of sides ``first``, ``second``;
+    with ``compiled``, in the compiled loops (``_compiled_edge_samples``)."""
+    if compiled:
+        return _compiled_edge_samples(patches, first, second, reversed_, t, unoriented)
     xa, na = _patch_side_frames(patches, first, t, None)
     xb, nb = _patch_side_frames(patches, second, t, reversed_)
     return np.linalg.norm(xa - xb, axis=1), normal_angles(na, nb, unoriented)
+
+
+def _compiled_edge_samples(patches, first, second, reversed_, t, unoriented: bool):
+    """``_edge_samples`` of polynomial patches by ``kernels.side_frames`` and ``kernels.frame_jumps``: the same
+    values as numpy's to rounding (each side's sums in their own order), a side at a time (the same bits in any
+    block)."""
+    from . import kernels  # numba: imported where the loops run
+
+    k, m = first.size, t.size
+    frames = [np.empty((k, m, 3)) for _ in range(4)]
+    starts = np.concatenate([[0], np.cumsum(patches.counts)])
+    for curves, reverse, (x, n) in ((first, np.zeros(k, dtype=bool), frames[:2]), (second, reversed_, frames[2:])):
+        curves = np.asarray(curves, dtype=np.int64)
+        group = np.searchsorted(starts, curves // 4, side="right") - 1
+        for g in np.unique(group):
+            mine = np.flatnonzero(group == g)
+            ids = curves[mine] // 4 - starts[g]
+            whole = _whole_group(patches, int(g))
+            part, ids = (whole, ids) if whole is not None else (
+                np.ascontiguousarray(patches.take(int(g), ids)[0], dtype=np.float64), np.arange(ids.size))
+            d = part.shape[1] - 1
+            kernels.side_frames(part.reshape(part.shape[0], (d + 1) ** 2, part.shape[-1]), ids, mine, curves[mine] % 4,
+                                np.asarray(reverse[mine], dtype=bool), side_offsets(d).astype(np.int64), bernstein_basis(d, t), bernstein_basis(d, t, 1),
+                                np.array([d, -d, -d, d], dtype=np.float64), x, n)
+    gap, angle = np.empty(k * m), np.empty(k * m)
+    kernels.frame_jumps(*frames, bool(unoriented), gap, angle)
+    return gap, angle
+
+
+def _whole_group(patches, k: int):
+    """Group ``k`` of an ``ArrayPatches`` reader as the array it holds (memory-mapped: the compiled loops read the
+    rows they need, no gather), when it is C-contiguous float64; else None (``take`` then)."""
+    groups = getattr(patches, "groups", None)
+    if groups is None or patches.rational:
+        return None
+    g = groups[k]
+    return g if isinstance(g, np.ndarray) and g.dtype == np.float64 and g.flags.c_contiguous else None
 
 
 def _patch_side_frames(patches, curves: np.ndarray, t: np.ndarray, reverse):
@@ -277,7 +380,10 @@ def normal_angles(na: np.ndarray, nb: np.ndarray, unoriented: bool = False) -> n
 def _sheet_creases(creases: dict, sides, patches, crease_sides, t, tolerance: float) -> int:
     """Measure the listed crease pieces on edges in more than two sides (non-manifold edges cut into
     sheets that meet along one crease: ``mesh.creases.non_manifold``) side against side, into
-    ``creases``; return the edges in more than two sides that no listed piece accounts for."""
+    ``creases``; return the edges in more than two sides that no listed piece accounts for (``sides`` None:
+    there are none)."""
+    if sides is None:
+        return 0
     over = sides.overshared_sides
     if crease_sides is None or len(crease_sides) == 0 or over.size == 0:
         return sides.overshared

@@ -201,3 +201,87 @@ def test_inconsistent_orientation_and_inward_normals():
     np.testing.assert_allclose(inward.inertia, UNIT_CUBE_INERTIA, atol=1e-14)
     volume, _, _ = solid_moments([cube[:, ::-1]])
     assert volume == pytest.approx(-1.0)
+
+
+# --- the compiled loops (evaluation.kernels) and the area's screen (issue 36) -------------------------------------
+
+
+def _sample_groups(names=("cube", "twisted", "high_valence", "torus")):
+    """The biquadratic and bicubic groups of some sample surfaces, concatenated by degree."""
+    sets = [sample_patch_set(name) for name in names]
+    return [np.concatenate([g for ps in sets for g in ps.groups if g.shape[1] == n]) for n in (3, 4)]
+
+
+@pytest.mark.parametrize("rule", [(None, 1), (None, 2), (3, 1), (12, 1)])
+def test_compiled_rules_agree_with_the_numpy_rules_patch_by_patch(rule):
+    """``kernels.area_sums`` and ``kernels.moment_sums`` against the numpy integrands on the same nodes: every
+    patch's area to 1e-14 relative, its moments to 1e-14 of the largest (rounding of sums in another order)."""
+    origin = np.array([0.3, -0.2, 0.1])
+    for points in _sample_groups():
+        d = points.shape[1] - 1
+        nodes = gauss_rule(rule[0] or measure.moment_points(d), rule[1])
+        for integrand in (measure.area_integrand, measure.moment_integrand):
+            compiled = measure._integrate_fixed(points, None, integrand, origin, nodes, nodes, compiled=True)
+            reference = measure._numpy_fixed(points, None, integrand, origin, nodes, nodes)
+            assert compiled.shape == reference.shape
+            scale = np.abs(reference) if integrand is measure.area_integrand else np.abs(reference).max(axis=0)
+            assert np.all(np.abs(compiled - reference) <= 1e-14 * scale + 1e-300)
+
+
+def test_compiled_patch_values_do_not_depend_on_the_block():
+    """A patch's value is its own: the same bits alone, in any slice, and on the thread pool's ranges."""
+    points = _sample_groups()[1]
+    nodes = gauss_rule(10)
+    whole = measure._integrate_fixed(points, None, measure.moment_integrand, np.zeros(3), nodes, nodes, True)
+    for size in (1, 5, 130):
+        parts = [measure._integrate_fixed(points[a:a + size], None, measure.moment_integrand, np.zeros(3), nodes,
+                                          nodes, True) for a in range(0, len(points), size)]
+        assert np.array_equal(np.concatenate(parts), whole)
+
+
+@pytest.mark.parametrize("compiled", [False, True])
+@pytest.mark.parametrize("name", ["cube", "twisted", "high_valence", "torus", "dodecahedron", "double_torus"])
+def test_screened_area_agrees_with_the_subdivided_levels(name, compiled):
+    """The area's screen (two Gauss rules, the finer kept where they agree), in numpy and compiled, against the
+    levels every patch went through before it (the moment rule, sub-squares doubled until two agree to 1e-13),
+    in numpy: to 1e-13 relative on the surface, each patch to 1e-12 of the group's mean area (high_valence's
+    nearly singular corners go through those levels in both)."""
+    from c1surf.evaluation.stream.patches import ArrayPatches
+
+    groups = sample_patch_set(name).groups
+    patches = ArrayPatches(groups)
+    total = reference = 0.0
+    for k in range(len(patches.counts)):
+        screened, error = measure._integrate_group(patches, k, (measure.area_integrand, np.zeros(3), compiled),
+                                                   measure.AREA_RTOL, 7)
+        levels, _ = measure._integrate_group(patches, k, (lambda *a: measure.area_integrand(*a), np.zeros(3), False),
+                                             measure.AREA_RTOL, 7)
+        assert np.all(np.abs(screened - levels) <= 1e-12 * np.abs(levels).mean())
+        assert np.all(error >= 0)
+        total, reference = total + screened.sum(), reference + levels.sum()
+    assert abs(total - reference) <= 1e-13 * reference
+    if not compiled:
+        assert surface_area(groups)[0] == total  # fewer patches than COMPILED_FROM: numpy
+
+
+def test_the_kernels_run_where_no_cache_folder_can_be_written(monkeypatch):
+    """numba refuses ``cache=True`` when no cache folder is writable (a read-only install and home): the kernels
+    are then compiled in the process, and give the cached kernels' bits."""
+    import importlib.util
+
+    from numba.core import caching
+
+    def refuse(self):
+        raise PermissionError("read-only")
+    monkeypatch.setattr(caching._CacheLocator, "ensure_cache_path", refuse)
+    spec = importlib.util.spec_from_file_location("kernels_without_cache", measure.__file__.replace("measure.py", "kernels.py"))
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    assert module.area_sums._cache.__class__.__name__ == "NullCache"
+    points = _sample_groups(("cube",))[0]
+    t, w = gauss_rule(5)
+    bases = [np.ascontiguousarray(b) for b in (measure.bernstein_basis(2, t), measure.bernstein_basis(2, t, 1))] * 2
+    out = np.empty(len(points))
+    module.area_sums(points, *bases, w, w, out)
+    assert np.array_equal(out, measure._integrate_fixed(points, None, measure.area_integrand, None, (t, w),
+                                                        (t, w), compiled=True)[:, 0])

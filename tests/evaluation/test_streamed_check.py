@@ -67,6 +67,69 @@ def test_check_and_measure_by_blocks_equal_the_whole_surface_on_every_sample_mes
                               for b in TINY), mass_properties(source, adjacency.edges, adjacency.reversed, block=5))
 
 
+@pytest.mark.parametrize("name", ["cube", "high_valence", "twisted"])
+def test_compiled_measure_by_blocks_equals_the_whole_surface(monkeypatch, name):
+    """The compiled integrals (``evaluation.kernels``, from ``measure.COMPILED_FROM`` patches on: here from 0),
+    by blocks and from a streamed Surface, equal the in-memory ones with ``==`` too."""
+    from c1surf.evaluation import measure
+
+    monkeypatch.setattr(measure, "COMPILED_FROM", 0)
+    surface, lazy = _lazy_and_whole(SAMPLES / f"{name}.obj")
+    patch_set = surface_patch_set(surface)
+    groups, adjacency = patch_set.groups, patch_set.adjacency
+    assert measure.compiled_loops(ArrayPatches(groups))
+    mass = mass_properties(groups, adjacency.edges, adjacency.reversed)
+    source = SourcePatches(lazy.patch_source())
+    _assert_same_mass(mass, *(mass_properties(ArrayPatches(groups), adjacency.edges, adjacency.reversed, block=b)
+                              for b in TINY), mass_properties(source, adjacency.edges, adjacency.reversed, block=5))
+    monkeypatch.setattr(measure, "COMPILED_FROM", 10**9)
+    numpy = mass_properties(groups, adjacency.edges, adjacency.reversed)
+    assert abs(numpy.area - mass.area) <= 1e-14 * mass.area and abs(numpy.volume - mass.volume) <= 1e-14 * mass.volume
+
+
+@pytest.mark.parametrize("name", ["cube", "high_valence", "twisted", "torus", "octahedron"])
+def test_compiled_check_by_blocks_equals_the_whole_surface_and_the_numpy_check(monkeypatch, name):
+    """The compiled check (``evaluation.kernels``: side keys, shortest side, side frames and jumps; from
+    ``measure.COMPILED_FROM`` patches on, here from 0) by blocks and from a streamed Surface equals the in-memory
+    one with ``==``; against the numpy check: the same pairs, boundary and counts and bounding box (``==``), the
+    gap and the normal jump at the same samples to rounding (1e-15 of the diagonal, 1e-13 rad)."""
+    from c1surf.evaluation import measure
+
+    surface, lazy = _lazy_and_whole(SAMPLES / f"{name}.obj")
+    groups = surface_patch_set(surface).groups
+    numpy = measure_smoothness(groups, samples=7)
+    monkeypatch.setattr(measure, "COMPILED_FROM", 0)
+    whole = measure_smoothness(groups, samples=7)
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(groups), samples=7, block=b) for b in TINY),
+                            measure_smoothness(SourcePatches(lazy.patch_source()), samples=7, block=5))
+    for field in ("shared_edges", "boundary_edges", "overshared_edges", "bbox_diagonal", "crease_edges",
+                  "unpaired_crease_sides"):
+        assert getattr(whole, field) == getattr(numpy, field)
+    assert abs(whole.max_gap - numpy.max_gap) <= 1e-15 * whole.bbox_diagonal
+    assert abs(whole.max_normal_jump - numpy.max_normal_jump) <= 1e-13
+    assert whole.is_g1(1e-9, 1e-9)
+
+
+@pytest.mark.parametrize("name", ["catmark_single_crease", "catmark_fan"])
+def test_compiled_check_of_crease_pieces(monkeypatch, name):
+    """Listed crease pieces (and non-manifold sheets) through the compiled check: the counts of the numpy check,
+    the crease gap to rounding, by blocks equal."""
+    from c1surf.api import surface_from_file
+    from c1surf.evaluation import measure
+
+    surface, _ = surface_from_file(shared_mesh(f"opensubdiv/{name}.obj"), exact_creases=True)
+    patch_set = surface_patch_set(surface)
+    numpy = measure_smoothness(patch_set.groups, crease_sides=patch_set.crease_sides)
+    monkeypatch.setattr(measure, "COMPILED_FROM", 0)
+    whole = measure_smoothness(patch_set.groups, crease_sides=patch_set.crease_sides)
+    _assert_same_smoothness(whole, *(measure_smoothness(ArrayPatches(patch_set.groups), block=b,
+                                                        crease_sides=patch_set.crease_sides) for b in TINY))
+    for field in ("shared_edges", "boundary_edges", "overshared_edges", "crease_edges", "unpaired_crease_sides"):
+        assert getattr(whole, field) == getattr(numpy, field)
+    assert abs(whole.max_crease_gap - numpy.max_crease_gap) <= 1e-15 * whole.bbox_diagonal
+    assert whole.is_g1(1e-9, 1e-9)
+
+
 def test_a_rational_surface_by_blocks(tmp_path):
     from c1surf.api import surface_from_file
 
@@ -207,3 +270,36 @@ def test_geometric_adjacency_unchanged_by_the_cell_clustering():
         surface, _ = _lazy_and_whole(SAMPLES / f"{name}.obj")
         patch_set = surface_patch_set(surface)
         assert adjacency_from_geometry(patch_set.groups) == patch_set.adjacency
+
+
+@pytest.mark.parametrize("tolerance", [1e-4, 5e-4, 2e-3])
+def test_compiled_components_label_as_scipy(tolerance):
+    """``cluster_points`` with the compiled union-find (``smoothness._compiled_components``, the large check's)
+    gives the labels of scipy's connected components of the same pairs, ``==``: points with partners at about a
+    tolerance, exact duplicates, a crowded cell (many equal points: the duplicates' path)."""
+    from c1surf.evaluation.smoothness import _compiled_components
+
+    rng = np.random.default_rng(3)
+    x = rng.random((6000, 3))
+    crowd = np.repeat(x[:1], 200, axis=0)
+    points = np.concatenate([x, x + rng.normal(scale=tolerance / 2, size=x.shape), x[:1500], crowd])
+    assert np.array_equal(cluster_points(points, tolerance, _compiled_components), cluster_points(points, tolerance))
+
+
+def test_compiled_same_curves_as_numpy():
+    """``sides.matching._same_curves`` pair by pair (compiled) and by blocks (numpy): the same answers on side
+    points equal, within, and beyond the tolerance, forwards and backwards."""
+    from c1surf.evaluation.sides.matching import _same_curves
+
+    rng = np.random.default_rng(4)
+    a_points = rng.random((3000, 3, 3))
+    shift = rng.choice([0.0, 0.5e-6, 2e-6], size=(3000, 1, 1)) * rng.normal(size=(3000, 1, 3))
+    backwards = rng.random(3000) < 0.5
+    b_points = np.where(backwards[:, None, None], (a_points + shift)[:, ::-1], a_points + shift)
+    points = np.concatenate([a_points, b_points])
+    ends = np.zeros((6000, 2), dtype=np.int32)
+    ends[3000:, 0] = np.where(backwards, 1, 0)
+    a, b = np.arange(3000), np.arange(3000, 6000)
+    numpy = _same_curves(points, ends, a, b, 1e-6)
+    assert 0 < numpy.sum() < 3000
+    assert np.array_equal(_same_curves(points, ends, a, b, 1e-6, compiled=True), numpy)

@@ -30,9 +30,14 @@ _HASH = np.array([0x9E3779B97F4A7C15 - (1 << 64), 0xC2B2AE3D27D4EB4F - (1 << 64)
                  dtype=np.int64)  # odd multipliers: cells of one hash are rare (and checked by distance anyway)
 
 
-def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
+def cluster_points(points: np.ndarray, tolerance: float, components=None) -> np.ndarray:
     """(k,) int64 label per point of (k, 3) ``points``: points closer than ``tolerance`` (a chain of such
-    pairs) share one; labels 0, 1, 2, ... in order of each cluster's first point."""
+    pairs) share one; labels 0, 1, 2, ... in order of each cluster's first point.
+
+    components : None, or callable(points, key, order, tolerance, pairs) -> labels: the pairs of one cell hash
+        checked and the components labelled by the caller (``evaluation.kernels.cell_components``, compiled),
+        given the hashes sorted (key, order, as ``_same_cell_pairs`` takes them) and the other pairs (m, 2)
+    """
     from scipy.sparse import coo_matrix
     from scipy.sparse.csgraph import connected_components
 
@@ -45,6 +50,9 @@ def cluster_points(points: np.ndarray, tolerance: float) -> np.ndarray:
     order = np.argsort(key).astype(index)  # the order within a hash does not matter: every pair of it is tried
     key = key[order]
     duplicates, key, order, near = _without_exact_duplicates(points, key, order, near)
+    if components is not None:
+        others = np.concatenate([duplicates, _near_face_pairs(points, near, tolerance).astype(index)])
+        return components(points, key, order, tolerance, others)
     pairs = np.concatenate([duplicates, _same_cell_pairs(points, key, order, tolerance),
                             _near_face_pairs(points, near, tolerance).astype(index)])
     del key, near, order
