@@ -177,19 +177,19 @@ def _compiled_fixed(points: np.ndarray, moments: bool, origin, rule_u, rule_v) -
 
     points : (p, du+1, dv+1, 3) float; origin : (3,) float; rule_u, rule_v : (nodes, weights) of ``gauss_rule``
     """
-    from . import kernels  # numba: imported by the commands that integrate, and only on their first block
+    from .compiled import kernels  # numba: imported by the commands that integrate, and only on their first block
 
     points = np.ascontiguousarray(points, dtype=np.float64)
     (u, wu), (v, wv) = rule_u, rule_v
     du, dv = points.shape[1] - 1, points.shape[2] - 1
-    bases = [np.ascontiguousarray(b) for b in (bernstein_basis(du, u), bernstein_basis(du, u, 1),
-                                               bernstein_basis(dv, v), bernstein_basis(dv, v, 1), wu, wv)]
+    bases = tuple(np.ascontiguousarray(b) for b in (bernstein_basis(du, u), bernstein_basis(du, u, 1),
+                                               bernstein_basis(dv, v), bernstein_basis(dv, v, 1), wu, wv))
     out = np.empty((len(points), 13 if moments else 1))
     if moments:
         origin = np.ascontiguousarray(origin, dtype=np.float64)
-        work = lambda a, z: kernels.moment_sums(points[a:z], *bases, origin, out[a:z])
+        work = lambda a, z: kernels.moment_sums(points[a:z], bases, origin, out[a:z])
     else:
-        work = lambda a, z: kernels.area_sums(points[a:z], *bases, out[a:z, 0])
+        work = lambda a, z: kernels.area_sums(points[a:z], bases, out[a:z, 0])
     for_each_range(len(points), work, minimum=1 << 11)
     return out
 

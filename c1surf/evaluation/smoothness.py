@@ -227,7 +227,7 @@ def _compact(sides: np.ndarray) -> np.ndarray:
 def _compiled_components(points, key, order, tolerance, pairs) -> np.ndarray:
     """``cluster_points``' components by ``kernels.cell_components`` (a union-find over the pairs of one cell
     hash and the other pairs: the labels of scipy's connected components of the same pairs)."""
-    from . import kernels  # numba: imported where the loops run
+    from .compiled import kernels  # numba: imported where the loops run
 
     labels = np.empty(points.shape[0], dtype=np.int64)
     kernels.cell_components(points, key, order, float(tolerance), pairs.reshape(-1, 2), labels)
@@ -241,7 +241,7 @@ def _side_keys(patches, block: int, progress):
     corners, points = np.empty((n, 4, 3)), np.empty((n, 4, len(SIDE_SAMPLES), 3))
     low, high = np.full(3, np.inf), np.full(3, -np.inf)
     if compiled_loops(patches):
-        from . import kernels  # numba: imported where the loops run
+        from .compiled import kernels  # numba: imported where the loops run
 
         boxes = []
         for start, k, a, z in patch_blocks(patches, block):
@@ -319,7 +319,7 @@ def _compiled_edge_samples(patches, first, second, reversed_, t, unoriented: boo
     """``_edge_samples`` of polynomial patches by ``kernels.side_frames`` and ``kernels.frame_jumps``: the same
     values as numpy's to rounding (each side's sums in their own order), a side at a time (the same bits in any
     block)."""
-    from . import kernels  # numba: imported where the loops run
+    from .compiled import kernels  # numba: imported where the loops run
 
     k, m = first.size, t.size
     frames = [np.empty((k, m, 3)) for _ in range(4)]
@@ -334,9 +334,10 @@ def _compiled_edge_samples(patches, first, second, reversed_, t, unoriented: boo
             part, ids = (whole, ids) if whole is not None else (
                 np.ascontiguousarray(patches.take(int(g), ids)[0], dtype=np.float64), np.arange(ids.size))
             d = part.shape[1] - 1
-            kernels.side_frames(part.reshape(part.shape[0], (d + 1) ** 2, part.shape[-1]), ids, mine, curves[mine] % 4,
-                                np.asarray(reverse[mine], dtype=bool), side_offsets(d).astype(np.int64), bernstein_basis(d, t), bernstein_basis(d, t, 1),
-                                np.array([d, -d, -d, d], dtype=np.float64), x, n)
+            edges = (ids, mine, curves[mine] % 4, np.asarray(reverse[mine], dtype=bool))
+            layout = (side_offsets(d).astype(np.int64), bernstein_basis(d, t), bernstein_basis(d, t, 1),
+                      np.array([d, -d, -d, d], dtype=np.float64))
+            kernels.side_frames(part.reshape(part.shape[0], (d + 1) ** 2, part.shape[-1]), edges, layout, (x, n))
     gap, angle = np.empty(k * m), np.empty(k * m)
     kernels.frame_jumps(*frames, bool(unoriented), gap, angle)
     return gap, angle

@@ -203,7 +203,7 @@ def test_inconsistent_orientation_and_inward_normals():
     assert volume == pytest.approx(-1.0)
 
 
-# --- the compiled loops (evaluation.kernels) and the area's screen (issue 36) -------------------------------------
+# --- the compiled loops (evaluation.compiled.kernels) and the area's screen (issue 36) -------------------------------------
 
 
 def _sample_groups(names=("cube", "twisted", "high_valence", "torus")):
@@ -274,7 +274,7 @@ def test_the_kernels_run_where_no_cache_folder_can_be_written(monkeypatch):
     def refuse(self):
         raise PermissionError("read-only")
     monkeypatch.setattr(caching._CacheLocator, "ensure_cache_path", refuse)
-    spec = importlib.util.spec_from_file_location("kernels_without_cache", measure.__file__.replace("measure.py", "kernels.py"))
+    spec = importlib.util.spec_from_file_location("kernels_without_cache", measure.__file__.replace("measure.py", "compiled/kernels.py"))
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     assert module.area_sums._cache.__class__.__name__ == "NullCache"
@@ -282,6 +282,6 @@ def test_the_kernels_run_where_no_cache_folder_can_be_written(monkeypatch):
     t, w = gauss_rule(5)
     bases = [np.ascontiguousarray(b) for b in (measure.bernstein_basis(2, t), measure.bernstein_basis(2, t, 1))] * 2
     out = np.empty(len(points))
-    module.area_sums(points, *bases, w, w, out)
+    module.area_sums(points, tuple(bases) + (w, w), out)
     assert np.array_equal(out, measure._integrate_fixed(points, None, measure.area_integrand, None, (t, w),
                                                         (t, w), compiled=True)[:, 0])

@@ -69,7 +69,7 @@ def test_check_and_measure_by_blocks_equal_the_whole_surface_on_every_sample_mes
 
 @pytest.mark.parametrize("name", ["cube", "high_valence", "twisted"])
 def test_compiled_measure_by_blocks_equals_the_whole_surface(monkeypatch, name):
-    """The compiled integrals (``evaluation.kernels``, from ``measure.COMPILED_FROM`` patches on: here from 0),
+    """The compiled integrals (``evaluation.compiled.kernels``, from ``measure.COMPILED_FROM`` patches on: here from 0),
     by blocks and from a streamed Surface, equal the in-memory ones with ``==`` too."""
     from c1surf.evaluation import measure
 
@@ -89,7 +89,7 @@ def test_compiled_measure_by_blocks_equals_the_whole_surface(monkeypatch, name):
 
 @pytest.mark.parametrize("name", ["cube", "high_valence", "twisted", "torus", "octahedron"])
 def test_compiled_check_by_blocks_equals_the_whole_surface_and_the_numpy_check(monkeypatch, name):
-    """The compiled check (``evaluation.kernels``: side keys, shortest side, side frames and jumps; from
+    """The compiled check (``evaluation.compiled.kernels``: side keys, shortest side, side frames and jumps; from
     ``measure.COMPILED_FROM`` patches on, here from 0) by blocks and from a streamed Surface equals the in-memory
     one with ``==``; against the numpy check: the same pairs, boundary and counts and bounding box (``==``), the
     gap and the normal jump at the same samples to rounding (1e-15 of the diagonal, 1e-13 rad)."""

@@ -101,14 +101,14 @@ def matching_tolerance(corners: np.ndarray, tolerance: float, compiled: bool = F
     splits a point. On every other surface it is ``tolerance`` unchanged.
 
     corners : (P, 4, 3) float, the patches' corner points; tolerance : float, absolute; compiled : bool, the
-    shortest side found by ``evaluation.kernels.shortest_side`` (no (P, 4, 3) temporaries: 0.9 s -> 0.05 s on
+    shortest side found by ``evaluation.compiled.kernels.shortest_side`` (no (P, 4, 3) temporaries: 0.9 s -> 0.05 s on
     1.2 M patches), the same lengths to rounding
     """
     if corners.size == 0 or not tolerance > 0:
         return tolerance
     floor = float(np.abs(corners).max()) * 2.0**-40
     if compiled:
-        from .. import kernels  # numba: imported where the loops run
+        from ..compiled import kernels  # numba: imported where the loops run
 
         shortest = float(kernels.shortest_side(np.ascontiguousarray(corners, dtype=np.float64), SIDE_CORNERS,
                                                8 * floor))
@@ -175,10 +175,10 @@ def _same_curves(points: np.ndarray, ends: np.ndarray, a: np.ndarray, b: np.ndar
                  compiled: bool = False) -> np.ndarray:
     """(k,) bool: sides a and b (flat ids, with the same two end points) have their side points within
     ``tolerance`` of each other, b's taken backwards where it starts at a's end; by blocks of pairs, or pair by
-    pair in ``evaluation.kernels.same_curves`` (``compiled``: no (2^20, 3, 3) copies, 216 MB of a large check)."""
+    pair in ``evaluation.compiled.kernels.same_curves`` (``compiled``: no (2^20, 3, 3) copies, 216 MB of a large check)."""
     out = np.empty(a.size, dtype=bool)
     if compiled:
-        from .. import kernels  # numba: imported where the loops run
+        from ..compiled import kernels  # numba: imported where the loops run
 
         kernels.same_curves(np.ascontiguousarray(points), np.ascontiguousarray(ends), np.ascontiguousarray(a),
                             np.ascontiguousarray(b), float(tolerance), out)

@@ -35,7 +35,7 @@ def cluster_points(points: np.ndarray, tolerance: float, components=None) -> np.
     pairs) share one; labels 0, 1, 2, ... in order of each cluster's first point.
 
     components : None, or callable(points, key, order, tolerance, pairs) -> labels: the pairs of one cell hash
-        checked and the components labelled by the caller (``evaluation.kernels.cell_components``, compiled),
+        checked and the components labelled by the caller (``evaluation.compiled.kernels.cell_components``, compiled),
         given the hashes sorted (key, order, as ``_same_cell_pairs`` takes them) and the other pairs (m, 2)
     """
     from scipy.sparse import coo_matrix

@@ -74,12 +74,14 @@ def _combine(q, t1, basis, a, out):  # pragma: no cover - compiled
 
 
 @compiled
-def area_sums(points, bu, bu1, bv, bv1, wu, wv, out):  # pragma: no cover - compiled (tests call it compiled)
+def area_sums(points, rule, out):  # pragma: no cover - compiled (tests call it compiled)
     """``out[k] = sum_b wv[b] sum_a wu[a] |x_u x x_v|(u_a, v_b)`` of patch ``k``: the area by one tensor rule.
 
-    points : (p, du+1, dv+1, 3) float64; bu, bu1 : (mu, du+1) float, the Bernstein basis and its derivative at
-    the u nodes; bv, bv1 : (mv, dv+1) the same in v; wu, wv : (mu,), (mv,) float; out : (p,) float
+    points : (p, du+1, dv+1, 3) float64; rule : (bu, bu1, bv, bv1, wu, wv): bu, bu1 : (mu, du+1) float, the
+    Bernstein basis and its derivative at the u nodes; bv, bv1 : (mv, dv+1) the same in v; wu, wv : (mu,), (mv,)
+    float; out : (p,) float
     """
+    bu, bu1, bv, bv1, wu, wv = rule
     p, m, n = points.shape[0], points.shape[1], points.shape[2]
     cp = np.empty((m, n, 3, LANES))
     q, qv = np.empty((m, 3, LANES)), np.empty((m, 3, LANES))
@@ -108,13 +110,14 @@ def area_sums(points, bu, bu1, bv, bv1, wu, wv, out):  # pragma: no cover - comp
 
 
 @compiled
-def moment_sums(points, bu, bu1, bv, bv1, wu, wv, origin, out):  # pragma: no cover - compiled
+def moment_sums(points, rule, origin, out):  # pragma: no cover - compiled
     """The divergence theorem's moments of patch ``k`` by one tensor rule, in ``measure.moment_integrand``'s
     columns: ``out[k] = (V, int_V y (3), int_V y y^T (9, row-major))`` with ``y = x - origin``: the sums over the
     nodes of ``w y.N``, ``w y (y.N)``, ``w y y^T (y.N)`` (``N = x_u x x_v``, ``w = wu[a] wv[b]``) over 3, 4, 5.
 
-    points, bu, bu1, bv, bv1, wu, wv : as ``area_sums``'; origin : (3,) float; out : (p, 13) float
+    points, rule : as ``area_sums``'; origin : (3,) float; out : (p, 13) float
     """
+    bu, bu1, bv, bv1, wu, wv = rule
     p, m, n = points.shape[0], points.shape[1], points.shape[2]
     cp = np.empty((m, n, 3, LANES))
     q, qv = np.empty((m, 3, LANES)), np.empty((m, 3, LANES))
@@ -161,17 +164,21 @@ def moment_sums(points, bu, bu1, bv, bv1, wu, wv, origin, out):  # pragma: no co
 
 
 @compiled
-def side_frames(points, ids, slots, sides, reverse, offsets, basis, dbasis, across, x_out, n_out):  # pragma: no cover
+def side_frames(points, edges, layout, out):  # pragma: no cover - compiled
     """Points and unit normals along patch sides (``smoothness.side_frames``' values, one side at a time).
 
     points : (P, (d+1)^2, >= 3) float64, patches flattened (a group's whole array: only the sides' two rows are
     read);
-    ids : (c,) int, the patch of each side; slots : (c,) int, the row of ``x_out`` and
-    ``n_out`` each side fills; sides : (c,) int, 0..3; reverse : (c,) bool, run the side from 1 to 0;
-    offsets : (4, 2, d+1) int, ``adjacency.side_offsets(d)``; basis, dbasis : (m, d+1) float, the Bernstein basis
-    and its derivative at the parameters along the side; across : (4,) float, d or -d, the sign and factor of the
-    derivative across side s from its two rows; x_out, n_out : (K, m, 3) float, NaN normals where x_u x x_v = 0
+    edges : (ids, slots, sides, reverse): ids : (c,) int, the patch of each side; slots : (c,) int, the row of
+    ``x_out`` and ``n_out`` each side fills; sides : (c,) int, 0..3; reverse : (c,) bool, run the side from 1 to 0;
+    layout : (offsets, basis, dbasis, across): offsets : (4, 2, d+1) int, ``adjacency.side_offsets(d)``; basis,
+    dbasis : (m, d+1) float, the Bernstein basis and its derivative at the parameters along the side; across :
+    (4,) float, d or -d, the sign and factor of the derivative across side s from its two rows;
+    out : (x_out, n_out), (K, m, 3) float each, NaN normals where x_u x x_v = 0
     """
+    ids, slots, sides, reverse = edges
+    offsets, basis, dbasis, across = layout
+    x_out, n_out = out
     n1 = offsets.shape[2]
     rows = np.empty((n1, 3))  # the side's control points, in the side's direction
     steps = np.empty((n1, 3))  # the next row inwards minus the side's
