@@ -143,7 +143,7 @@ def read_patch_set_step(path) -> PatchSet:
     """
     by_shape: dict = {(3, 3): ([], [])}  # (du + 1, dv + 1) -> (patches, weights), in face order
     pieces = []
-    for number, (knots_u, knots_v, weights, points) in enumerate(_face_nets(path), 1):
+    for number, (knots_u, knots_v, weights, points) in enumerate(_outward_nets(list(_face_nets(path))), 1):
         if _single_span(knots_u, points.shape[0]) and _single_span(knots_v, points.shape[1]):
             patches, patch_weights = by_shape.setdefault(points.shape[:2], ([], []))
             patches.append(points)
@@ -163,6 +163,58 @@ def read_patch_set_step(path) -> PatchSet:
         quad.extend(cut)
         quad_weights.extend(cut_weights)
     return _patch_set(path, by_shape, pieces)
+
+
+def _outward_nets(faces: list) -> list:
+    """The faces' (knots_u, knots_v, weights, points) with every solid turned outwards by c1surf's own volume.
+
+    ``faces``: (knots_u, knots_v, weights (nu, nv), points (nu, nv, 3), solid) per face, ``solid`` the index of
+    the solid it bounds (-1: none). Open CASCADE's STEP reader heals every solid
+    (``ShapeFix_Solid::SolidFromShell``) and reverses its shell where its ray
+    classifier (``BRepClass3d_SolidClassifier::PerformInfinitePoint``) finds the
+    point at infinity inside; that classifier errs on some closed B-reps (boot
+    fitted at 300 faces, written in strips: every face came back transposed).
+    Here a solid whose faces, as read, enclose a negative volume (Gauss rules
+    exact for polynomial nets, :func:`_face_volumes`) has every face's u and v
+    swapped back, so each solid's normals point out as the file's shell says.
+    """
+    solid = np.array([f[4] for f in faces], dtype=np.int64)
+    if not np.any(solid >= 0):
+        return [f[:4] for f in faces]
+    volume = np.bincount(solid[solid >= 0], _face_volumes(faces)[solid >= 0])
+    flipped = np.r_[volume < 0, False][solid].tolist()  # solid -1 is the appended False
+    return [(kv, ku, w.T.copy(), p.transpose(1, 0, 2).copy()) if flip else (ku, kv, w, p)
+            for (ku, kv, w, p, _), flip in zip(faces, flipped)]
+
+
+def _face_volumes(faces: list) -> np.ndarray:
+    """(F,) float: each face's share of its solid's signed volume, 1/3 of the integral of (x - o) . (x_u x x_v)
+    over its Bezier spans (a B-spline face cut at its knots), o the centre of the nets' bounding box."""
+    from ...evaluation.measure import gauss_rule, patch_frames
+
+    nets = {}  # (nu, nv) -> (face numbers, nets, weights)
+    for k, (knots_u, knots_v, weights, points, _) in enumerate(faces):
+        if _single_span(knots_u, points.shape[0]) and _single_span(knots_v, points.shape[1]):
+            cut, cut_weights = [points], [weights]
+        elif points.shape[0] >= 3 and is_piece_knots(knots_u) and is_piece_knots(knots_v):
+            m, n = points.shape[0] - 2, points.shape[1] - 2
+            cut, cut_weights = piece_patches(MergedPiece(points, weights, knots_u, knots_v, np.arange(m * n).reshape(m, n),
+                                                         np.zeros((m, n), dtype=np.int64)))
+        else:
+            continue  # refused with its own line afterwards
+        entry = nets.setdefault(np.shape(cut[0])[:2], ([], [], []))
+        entry[0].extend([k] * len(cut))
+        entry[1].extend(cut)
+        entry[2].extend(cut_weights)
+    flat = np.concatenate([np.reshape(f[3], (-1, 3)) for f in faces])
+    origin = 0.5 * (flat.min(axis=0) + flat.max(axis=0))
+    volume = np.zeros(len(faces))
+    for (nu, nv), (owner, points, weights) in nets.items():
+        u, w = gauss_rule((3 * (max(nu, nv) - 1) + 1) // 2)
+        x, xu, xv = patch_frames(np.stack(points), np.stack(weights), u, u)
+        flux = np.einsum("pabi,pabi->pab", x - origin, np.cross(xu, xv))
+        volume += np.bincount(owner, np.einsum("pab,a,b->p", flux, w, w) / 3.0, minlength=len(faces))
+    return volume
 
 
 def _single_span(knots: np.ndarray, n_poles: int) -> bool:
@@ -186,7 +238,8 @@ def _patch_set(path, by_shape: dict, pieces: list) -> PatchSet:
 
 
 def _face_nets(path):
-    """(knots_u, knots_v, weights (nu, nv), points (nu, nv, 3)) of every face of a STEP file, in explorer order.
+    """(knots_u, knots_v, weights (nu, nv), points (nu, nv, 3), solid) of every face of a STEP file: the faces of
+    each solid in explorer order (``solid`` its index), then those in no solid (``solid`` -1).
 
     Knots are the full sequences (each value repeated by its multiplicity);
     a reversed face comes with u and v swapped.
@@ -194,27 +247,40 @@ def _face_nets(path):
     shape, reader = _read_shape(path)
     transfer = reader.WS().TransferReader()
     from OCP.BRep import BRep_Tool
-    from OCP.TopAbs import TopAbs_FACE, TopAbs_REVERSED
-    from OCP.TopExp import TopExp_Explorer
+    from OCP.TopAbs import TopAbs_REVERSED
     from OCP.TopoDS import TopoDS
 
     to_face = TopoDS.Face_s if hasattr(TopoDS, "Face_s") else TopoDS.Face
-    explorer = TopExp_Explorer(shape, TopAbs_FACE)
     number = 0
-    while explorer.More():
-        number += 1
-        face = to_face(explorer.Current())
-        knots_u, knots_v, weights, points = _surface_net(path, number, BRep_Tool.Surface_s(face),
-                                                         lambda: _file_net(transfer, face))
-        _check_untrimmed(path, number, face, knots_u, knots_v)
-        if face.Orientation() == TopAbs_REVERSED:
-            knots_u, knots_v, weights, points = knots_v, knots_u, weights.T, points.transpose(1, 0, 2)
-        yield knots_u, knots_v, np.ascontiguousarray(weights), np.ascontiguousarray(points)
-        explorer.Next()
+    for solid, explorer in _face_explorers(shape):
+        while explorer.More():
+            number += 1
+            face = to_face(explorer.Current())
+            knots_u, knots_v, weights, points = _surface_net(path, number, BRep_Tool.Surface_s(face),
+                                                             lambda: _file_net(transfer, face))
+            _check_untrimmed(path, number, face, knots_u, knots_v)
+            if face.Orientation() == TopAbs_REVERSED:
+                knots_u, knots_v, weights, points = knots_v, knots_u, weights.T, points.transpose(1, 0, 2)
+            yield knots_u, knots_v, np.ascontiguousarray(weights), np.ascontiguousarray(points), solid
+            explorer.Next()
     declared = _declared_faces(path)
     if number < declared:  # Open CASCADE drops what it cannot translate, without failing
         raise MeshInputError(str(path), f"Open CASCADE read only {number} of the file's {declared} faces: some face or "
                              "its surface is damaged; c1surf refuses an incomplete surface (re-export the file)")
+
+
+def _face_explorers(shape):
+    """(solid index, face explorer) of every solid of ``shape``, then (-1, explorer of the faces in no solid)."""
+    from OCP.TopAbs import TopAbs_FACE, TopAbs_SOLID
+    from OCP.TopExp import TopExp_Explorer
+
+    solids = TopExp_Explorer(shape, TopAbs_SOLID)
+    k = 0
+    while solids.More():
+        yield k, TopExp_Explorer(solids.Current(), TopAbs_FACE)
+        k += 1
+        solids.Next()
+    yield -1, TopExp_Explorer(shape, TopAbs_FACE, TopAbs_SOLID)
 
 
 def _read_shape(path):
