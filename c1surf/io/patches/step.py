@@ -198,8 +198,8 @@ def _face_volumes(faces: list) -> np.ndarray:
             cut, cut_weights = [points], [weights]
         elif points.shape[0] >= 3 and is_piece_knots(knots_u) and is_piece_knots(knots_v):
             m, n = points.shape[0] - 2, points.shape[1] - 2
-            cut, cut_weights = piece_patches(MergedPiece(points, weights, knots_u, knots_v, np.arange(m * n).reshape(m, n),
-                                                         np.zeros((m, n), dtype=np.int64)))
+            numbers, turns = np.arange(m * n).reshape(m, n), np.zeros((m, n), dtype=np.int64)
+            cut, cut_weights = piece_patches(MergedPiece(points, weights, knots_u, knots_v, numbers, turns))
         else:
             continue  # refused with its own line afterwards
         entry = nets.setdefault(np.shape(cut[0])[:2], ([], [], []))
@@ -211,10 +211,16 @@ def _face_volumes(faces: list) -> np.ndarray:
     volume = np.zeros(len(faces))
     for (nu, nv), (owner, points, weights) in nets.items():
         u, w = gauss_rule((3 * (max(nu, nv) - 1) + 1) // 2)
-        x, xu, xv = patch_frames(np.stack(points), np.stack(weights), u, u)
-        flux = np.einsum("pabi,pabi->pab", x - origin, np.cross(xu, xv))
-        volume += np.bincount(owner, np.einsum("pab,a,b->p", flux, w, w) / 3.0, minlength=len(faces))
+        for a in range(0, len(owner), _VOLUME_CHUNK):  # chunks of patches: bounded memory
+            chunk = slice(a, a + _VOLUME_CHUNK)
+            x, xu, xv = patch_frames(np.stack(points[chunk]), np.stack(weights[chunk]), u, u)
+            flux = np.einsum("pabi,pabi->pab", x - origin, np.cross(xu, xv))
+            volume += np.bincount(owner[chunk], np.einsum("pab,a,b->p", flux, w, w) / 3.0,
+                                  minlength=len(faces))
     return volume
+
+
+_VOLUME_CHUNK = 1 << 14  # patches per Gauss evaluation in _face_volumes
 
 
 def _single_span(knots: np.ndarray, n_poles: int) -> bool:
