@@ -149,8 +149,7 @@ def read_patch_set_step(path) -> PatchSet:
             patches.append(points)
             patch_weights.append(weights)
             continue
-        if not (points.shape[0] >= 3 and is_piece_knots(knots_u) and is_piece_knots(knots_v)
-                and knots_u.size == points.shape[0] + 3 and knots_v.size == points.shape[1] + 3):
+        if not _is_piece(knots_u, knots_v, points):
             raise MeshInputError(str(path), f"face {number}: the B-spline surface has interior knots and is not a merged "
                                  "c1surf surface (degree (2, 2), knots 0 0 0 1 ... m m m): c1surf reads only such "
                                  "surfaces and single Bezier patches")
@@ -163,6 +162,12 @@ def read_patch_set_step(path) -> PatchSet:
         quad.extend(cut)
         quad_weights.extend(cut_weights)
     return _patch_set(path, by_shape, pieces)
+
+
+def _is_piece(knots_u: np.ndarray, knots_v: np.ndarray, points: np.ndarray) -> bool:
+    """Whether knots and net (nu, nv, 3) are those of a c1surf merged piece (degree (2, 2), knots 0 0 0 1 ... m m m)."""
+    return (points.shape[0] >= 3 and is_piece_knots(knots_u) and is_piece_knots(knots_v)
+            and knots_u.size == points.shape[0] + 3 and knots_v.size == points.shape[1] + 3)
 
 
 def _outward_nets(faces: list) -> list:
@@ -196,7 +201,7 @@ def _face_volumes(faces: list) -> np.ndarray:
     for k, (knots_u, knots_v, weights, points, _) in enumerate(faces):
         if _single_span(knots_u, points.shape[0]) and _single_span(knots_v, points.shape[1]):
             cut, cut_weights = [points], [weights]
-        elif points.shape[0] >= 3 and is_piece_knots(knots_u) and is_piece_knots(knots_v):
+        elif _is_piece(knots_u, knots_v, points):
             m, n = points.shape[0] - 2, points.shape[1] - 2
             numbers, turns = np.arange(m * n).reshape(m, n), np.zeros((m, n), dtype=np.int64)
             cut, cut_weights = piece_patches(MergedPiece(points, weights, knots_u, knots_v, numbers, turns))
