@@ -176,9 +176,9 @@ def surface_ripple(npz: str, radius: float) -> float:
     return sampler_ripple(PatchSampler(patches.groups) if hasattr(patches, "groups") else patches, radius)
 
 
-def sampler_ripple(sampler, radius: float) -> float:
-    """rho of the patches of a ``PatchSampler`` (exact H on a grid of cell centres per patch)."""
-    n = RIPPLE_GRID
+def sampler_samples(sampler, n: int = RIPPLE_GRID):
+    """(points, H, area weights) of the patches of a ``PatchSampler`` on an n x n grid of cell centres per patch
+    (exact mean curvature H; weight |x_u x x_v| / n^2)."""
     t = (np.arange(n) + 0.5) / n
     u, v = np.meshgrid(t, t, indexing="ij")
     patch = np.repeat(np.arange(sampler.n_patches), n * n)
@@ -188,7 +188,12 @@ def sampler_ripple(sampler, radius: float) -> float:
     for g, idx in sampler.runs(patch, 1 << 18):
         _, xu, xv = sampler.tangents(g, patch[idx] - sampler.offsets[g], u[idx], v[idx])
         element[idx] = np.linalg.norm(np.cross(xu, xv), axis=1) / (n * n)
-    return ripple(curvature.point, curvature.H, element, radius)
+    return curvature.point, curvature.H, element
+
+
+def sampler_ripple(sampler, radius: float) -> float:
+    """rho of the patches of a ``PatchSampler`` (exact H on a grid of cell centres per patch)."""
+    return ripple(*sampler_samples(sampler), radius)
 
 
 def median_edge(face_sizes: np.ndarray, corners: np.ndarray, points: np.ndarray) -> float:

@@ -25,25 +25,15 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT), str(ROOT / "tests" / "construction"), str(ROOT / "bench")]
 
 from dart_meshes import polar_dart  # noqa: E402
-from fit import cotangent_mean_curvature, ripple  # noqa: E402
+from fit import cotangent_mean_curvature, ripple, sampler_samples  # noqa: E402
 
 from c1surf.construction.surface import Surface, SurfaceOptions  # noqa: E402
 from c1surf.evaluation.curvature import PatchSampler  # noqa: E402
 
 
 def surface_samples(surface: Surface, n: int = 6):
-    """(points, H, area weights) on an n x n grid of cell centres of every patch."""
-    sampler = PatchSampler([surface.biquadratic, surface.bicubic])
-    t = (np.arange(n) + 0.5) / n
-    u, v = np.meshgrid(t, t, indexing="ij")
-    patch = np.repeat(np.arange(sampler.n_patches), n * n)
-    u, v = np.tile(u.ravel(), sampler.n_patches), np.tile(v.ravel(), sampler.n_patches)
-    curvature = sampler.curvature_at(patch, u, v)
-    element = np.zeros(patch.size)
-    for g, idx in sampler.runs(patch, 1 << 18):
-        _, xu, xv = sampler.tangents(g, patch[idx] - sampler.offsets[g], u[idx], v[idx])
-        element[idx] = np.linalg.norm(np.cross(xu, xv), axis=1) / (n * n)
-    return curvature.point, curvature.H, element
+    """(points, H, area weights) on an n x n grid of cell centres of every patch (``bench/fit.py``'s sampling)."""
+    return sampler_samples(PatchSampler([surface.biquadratic, surface.bicubic]), n)
 
 
 def catmull_clark(points, faces, sharp, levels: int):
