@@ -86,7 +86,7 @@ def prepared_input(path, surface_options: SurfaceOptions | None = None, input_op
     input_options = (input_options or InputOptions()).check()
     options = input_options.surface_options(surface_options or SurfaceOptions())
     options.check(vertex_normals=True if input_options.normals else None)  # before reading: OptionError
-    mesh = read_mesh(path, keep_degenerate=keep_degenerate)
+    mesh = read_mesh(path, keep_degenerate=keep_degenerate, usd=input_options.usd)
     sidecars = Sidecars()
     if input_options.creases_file is not None:
         sidecars = Sidecars(creases=read_creases_file(input_options.creases_file, mesh))
@@ -298,15 +298,16 @@ def cage_options(surface: Surface) -> tuple:
 
 
 def write_fit_cage(path, surface: Surface, report: "FitReport", comments=(), name=None) -> list:
-    """Write the fitted control mesh of ``report`` (``fit_surface``) as an OBJ cage with its crease, corner and
-    hole tags (``io.meshes.obj_out.write_cage``), read it back as ``convert`` does with ``cage_options`` and
+    """Write the fitted control mesh of ``report`` (``fit_surface``) as a cage with its crease, corner and hole
+    tags (``io.registry.CAGE_WRITERS``: OBJ ``t`` lines, USD mesh attributes), read it back as ``convert`` does with ``cage_options`` and
     compare the patches with ``surface``'s, array by array. ``name``: the file the notes name (default ``path``).
 
     Returns a list of notes: empty when the cage gives the very same bits, else one line saying what differs (and
     the cage is written again with a first line that says so instead of ``comments``' first).
     """
-    from .io.meshes.obj_out import write_cage
+    from .io.registry import CAGE_WRITERS, suffix_of
 
+    write_cage = CAGE_WRITERS[suffix_of(path, CAGE_WRITERS)].function  # OBJ with `t` lines, or USD
     control = report.fit.control
     write_cage(path, control.points, control.face_sizes, control.face_vertices, surface.features, comments)
     again, _ = load_surface(path, *cage_options(surface))

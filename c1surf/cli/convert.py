@@ -235,7 +235,9 @@ def write_mesh(path, suffix: str, tess, extra: dict, attribute_data, float32: bo
                              attribute_data.attribute_names, colour_scale=attribute_data.colour_scale, suffix=suffix,
                              float32=float32)
     else:
-        write_triangle_mesh(path, tess.points, tess.triangles, tess.normals, suffix=suffix, float32=float32, **extra)
+        patches = tess.triangle_patch if suffix in MESH_WRITERS.holding("patch ids") else None
+        write_triangle_mesh(path, tess.points, tess.triangles, tess.normals, suffix=suffix, float32=float32,
+                            triangle_patch=patches, **extra)
 
 
 def write_patch_files(targets, surface: Surface, input_path, patch_options: dict, progress: Progress,

@@ -21,7 +21,8 @@ from ..io.atomic import atomic_output
 from ..io.images.png import write_png
 from ..io.meshes.write import write_triangle_mesh
 from ..io.patches.merged import cad_patch_set
-from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list
+from ..io.meshes.usd.stage import POINTS_PRIMVAR, USD_SUFFIXES, require_usd
+from ..io.registry import CAGE_WRITERS, MESH_WRITERS, PATCH_WRITERS, suffix_list
 from ..render.deviation import deviation_picture
 from ..render.pictures import colormap, rgb8
 from .common import Progress, UsageFailure, echo_notes, friendly_errors, output_suffix, with_formats
@@ -62,10 +63,11 @@ def output_options(command):
                      help="The scan coloured by its distance to the surface: a .png picture with a colour bar, or a "
                           ".ply of the scan with per-vertex 'quality' (the distance) and colours; repeat for both."),
         click.option("--cage", "cage_path", type=click.Path(dir_okay=False), default=None,
-                     help="The fitted control mesh as an OBJ SubD cage (moved control points, faces, crease tags as "
-                          "OpenSubdiv 't crease' lines) to edit in Blender or Rhino; 'c1surf convert CAGE.obj' with "
-                          "the options its first line names gives the fitted surface bit for bit (checked: a note "
-                          "says when not)."),
+                     help="The fitted control mesh as a SubD cage (moved control points, faces, creases) to edit: "
+                          ".usda/.usd/.usdc (USD creaseIndices, which Blender, Houdini and Maya import) or .obj "
+                          "(OpenSubdiv 't crease' lines); 'c1surf convert CAGE' with the options its first comment "
+                          "(USD: the layer's doc) names gives the fitted surface bit for bit (checked: a note says "
+                          "when not)."),
     ], lambda output, patches_paths, report_path, deviation_paths, cage_path: FitOutputs(
         output, tuple(patches_paths), report_path, tuple(deviation_paths), cage_path))
 
@@ -160,7 +162,8 @@ def check_outputs(outputs: FitOutputs) -> dict:
     for path in outputs.deviation:
         suffixes[path] = output_suffix(path, dict.fromkeys(DEVIATION_SUFFIXES), "--deviation")
     if outputs.cage:
-        suffixes[outputs.cage] = output_suffix(outputs.cage, {".obj": None}, "--cage")
+        suffixes[outputs.cage] = output_suffix(outputs.cage, CAGE_WRITERS, "--cage")
+    require_usd([p for p, suffix in suffixes.items() if suffix in USD_SUFFIXES])  # before the fit, not after
     paths = [os.path.abspath(p) for p in outputs.paths()]
     if len(set(paths)) != len(paths):
         raise UsageFailure("-o, --patches, --report, --deviation and --cage must name different files")
@@ -284,10 +287,12 @@ def convert_flags(surface: Surface) -> str:
 
 def cage_comments(surface: Surface, path: str) -> list[str]:
     """The comment lines that open a ``--cage`` file: what it is and the command that rebuilds the fit."""
+    tags = ("tags as OpenSubdiv writes them (t crease 2/1/0 a b sharpness, indices from 0)" if path.lower().endswith(
+        ".obj") else "creases as USD creaseIndices, creaseLengths 2 and creaseSharpnesses, one crease an edge; float64 "
+                     f"points in primvars:{POINTS_PRIMVAR}")
     return [f"c1surf fit cage: the fitted control mesh; c1surf convert {os.path.basename(path)} "
             f"{convert_flags(surface)} gives the fitted surface bit for bit",
-            "tags as OpenSubdiv writes them (t crease 2/1/0 a b sharpness, indices from 0); sharpness 10: "
-            "infinitely sharp"]
+            f"{tags}; sharpness 10: infinitely sharp"]
 
 
 def write_deviation(path, suffix: str, report: FitReport) -> None:

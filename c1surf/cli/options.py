@@ -15,6 +15,7 @@ from click.core import ParameterSource
 
 from ..api import NON_MANIFOLD_RULES, InputOptions, SurfaceOptions
 from ..construction.surface import TANGENT_RULES, TRIANGLE_RULES
+from ..io.meshes.usd.stage import UsdReadOptions
 from ..io.patches.iges_writer import DEFAULT_UNITS, UNITS
 from .common import UsageFailure
 
@@ -129,13 +130,20 @@ def input_options(command):
                           "G1 crease: crease ends inside the surface) or, with --g1-creases, all as the sharpest G1 "
                           "crease (a narrow fillet). Patch files list the crease sides; check measures their gap "
                           "(docs/sharp-features.md). --interpolate-vertices/--interpolate-normals imply --g1-creases."),
+        click.option("--usd-prim", default=None, metavar="PATH",
+                     help="USD input: read the UsdGeom.Mesh prims at or below this prim path (one mesh, or the "
+                          "meshes of one Xform) instead of every mesh of the stage as one surface."),
+        click.option("--usd-local", is_flag=True,
+                     help="USD input: the points as each mesh prim stores them, without its local-to-world transform "
+                          "(by default the meshes sit where the scene places them)."),
         click.option("--non-manifold", type=click.Choice(NON_MANIFOLD_RULES), default="sheets", show_default=True,
                      help="Edges in more than two faces: cut into manifold sheets that meet along one C0 crease "
                           "(a note names the edges), or refuse the mesh with the one-line error."),
     ]
 
-    def build(weld, no_weld, interpolate_normals, **values):
-        return InputOptions(weld=weld_tolerance(weld, no_weld), normals=interpolate_normals, **values)
+    def build(weld, no_weld, interpolate_normals, usd_prim, usd_local, **values):
+        usd = UsdReadOptions(usd_prim, not usd_local) if usd_prim is not None or usd_local else None
+        return InputOptions(weld=weld_tolerance(weld, no_weld), normals=interpolate_normals, usd=usd, **values)
 
     return grouped(command, "inputs", options, build)
 

@@ -22,6 +22,8 @@ Signatures, by table:
 - ``PATCH_READERS``: ``read(path) -> evaluation.patch_set.PatchSet``
 - ``PATCH_WRITERS``: ``write(path, patch_set, *, file_name=None, units="mm", group=True)``
   (options a format has no use for are ignored)
+- ``CAGE_WRITERS``: ``write(path, points, face_sizes, face_vertices, features=None, comments=())``, the fit's
+  control mesh with its tags (``fit --cage``)
 - ``IMAGE_WRITERS``: the image files of ``c1surf render`` (each writer takes its own picture type)
 """
 from __future__ import annotations
@@ -35,7 +37,7 @@ from pathlib import Path
 from .errors import C1SurfFileError
 
 __all__ = ["Format", "FormatTable", "UnsupportedFormat", "suffix_of", "suffix_list", "MESH_READERS", "MESH_WRITERS",
-           "PATCH_READERS", "PATCH_WRITERS", "IMAGE_WRITERS"]
+           "PATCH_READERS", "PATCH_WRITERS", "IMAGE_WRITERS", "CAGE_WRITERS"]
 
 
 @dataclass(frozen=True)
@@ -181,6 +183,8 @@ MESH_READERS = FormatTable("mesh format", "reads", [
     Format((".ply",), _MESHES + "ply:read_ply", "PLY (ASCII or binary): polygons, normals, uv, weight, blend, colours"),
     Format((".stl",), _MESHES + "formats.stl:read_stl", "STL (ASCII or binary, through trimesh): triangles, welded"),
     Format((".off",), _MESHES + "formats.off:read_off", "OFF text (also COFF, NOFF): polygons of any size"),
+    Format((".usd", ".usda", ".usdc", ".usdz"), _MESHES + "usd.read:read_usd",
+           "USD (usd-core, the usd extra): UsdGeom.Mesh prims with creases, corners, holes"),
 ])
 
 # file_bytes measured on twisted.obj (15,682 vertices, 31,360 triangles at -r 8; 3,636 coefficient rows), a little
@@ -195,6 +199,18 @@ MESH_WRITERS = FormatTable("mesh format", "writes", [
     Format((".glb",), _MESHES + "write:write_glb", "binary glTF (float32, through trimesh)",
            streamed=_MESHES + "formats.glb_out:write_glb_stream", file_bytes=(24, 12), scratch_bytes=48),
     Format((".off",), _MESHES + "write:write_off", "OFF text (through trimesh)", file_bytes=(45, 20)),
+    Format((".usd", ".usdc"), _MESHES + "usd.write:write_usd", "USD crate (usd-core): points, normals, patch of each "
+           "triangle, float64 points", frozenset({"patch ids"}), file_bytes=(56, 20), float32=True),
+    Format((".usda",), _MESHES + "usd.write:write_usd", "USD text (usd-core): points, normals, patch of each triangle, "
+           "float64 points", frozenset({"patch ids"}), file_bytes=(150, 40), float32=True),
+])
+
+# The fit's control mesh with its sharp features (``fit --cage``):
+# ``write(path, points, face_sizes, face_vertices, features=None, comments=())``.
+CAGE_WRITERS = FormatTable("cage format", "writes", [
+    Format((".obj",), _MESHES + "obj_out:write_cage", "OBJ with OpenSubdiv `t` crease, corner and hole lines"),
+    Format((".usda", ".usd", ".usdc"), _MESHES + "usd.write:write_usd_cage",
+           "USD UsdGeom.Mesh (usd-core) with its creases, corners and holes, float64 points kept"),
 ])
 
 PATCH_READERS = FormatTable("patch format", "reads", [

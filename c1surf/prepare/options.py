@@ -31,6 +31,8 @@ class InputOptions:
     exact_creases : True (infinitely sharp creases as C0 seams), False (the sharpest G1 crease), or None, the
         one default: C0 seams unless vertices are interpolated (A1a takes no C0 seams yet). ``surface_options``
         resolves it into ``SurfaceOptions.exact_creases``, the construction's own switch.
+    usd : ``io.meshes.usd.stage.UsdReadOptions`` or None (the reader's defaults): which meshes of a USD file, and
+        where (passed to the reader as it is)
     """
 
     weld: float | None = 0.0
@@ -43,6 +45,7 @@ class InputOptions:
     ignore_tags: bool = False
     non_manifold: str = "sheets"
     exact_creases: bool | None = None
+    usd: object = None
 
     def check(self) -> "InputOptions":
         """Raise OptionError (a ValueError) for a value the preparation cannot take; else return self."""

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import inspect
 import os
 from pathlib import Path
 
@@ -12,8 +13,8 @@ from .mesh_file import MeshFile
 __all__ = ["read_mesh"]
 
 
-def read_mesh(path, *, keep_degenerate: bool = False) -> MeshFile:
-    """Read a polygon mesh of a format in ``MESH_READERS`` (OBJ, PLY, STL, OFF; suffix decides, any letter case).
+def read_mesh(path, *, keep_degenerate: bool = False, usd=None) -> MeshFile:
+    """Read a polygon mesh of a format in ``MESH_READERS`` (OBJ, PLY, STL, OFF, USD; suffix decides, any letter case).
 
     The vertices are as in the file; welding is a separate step of the input preparation (``prepare.mesh_edits.weld_mesh_file``).
 
@@ -22,6 +23,8 @@ def read_mesh(path, *, keep_degenerate: bool = False) -> MeshFile:
     path : str or os.PathLike, a mesh file whose suffix names its format
     keep_degenerate : keep faces that repeat a vertex as written: no collapse of repeated
         corners and no refusal (``c1surf inspect`` counts them; every other caller refuses)
+    usd : io.meshes.usd.stage.UsdReadOptions or None (the reader's defaults): which meshes of a USD stage, and where;
+        refused for a file of another format
 
     Returns
     -------
@@ -53,4 +56,10 @@ def read_mesh(path, *, keep_degenerate: bool = False) -> MeshFile:
         raise MeshInputError(
             path_str, "cannot read the file (permission denied): check its "
             "permissions")
-    return MESH_READERS[suffix].function(path_str, keep_degenerate=keep_degenerate)
+    reader = MESH_READERS[suffix].function
+    if usd is None:
+        return reader(path_str, keep_degenerate=keep_degenerate)
+    if "usd" not in inspect.signature(reader).parameters:
+        raise MeshInputError(path_str, "the USD options (--usd-prim, --usd-local) apply to .usd, .usda, .usdc and "
+                                       ".usdz files only: drop them for this file")
+    return reader(path_str, keep_degenerate=keep_degenerate, usd=usd)

@@ -1,0 +1,80 @@
+"""What the USD reader and writers share: usd-core imported on first use (one line saying what to install when it
+is missing), a stage opened with usd-core's errors as one line, the reader's options and c1surf's own primvars."""
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+from ...errors import MeshInputError, OutputError
+
+__all__ = ["UsdReadOptions", "pxr_modules", "require_usd", "open_stage", "POINTS_PRIMVAR", "PATCH_PRIMVAR", "INSTALL",
+           "USD_SUFFIXES"]
+
+USD_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")
+
+# The positions as float64 (USD's points are float32): ``c1surf convert`` of a cage or tessellation written by c1surf
+# reads these bits wherever they round to the file's float points (a point moved in another tool does not).
+POINTS_PRIMVAR = "c1surf:points"
+# The patch of each triangle of a tessellation (uniform interpolation: one value a face).
+PATCH_PRIMVAR = "c1surf:patch"
+INSTALL = "USD files need usd-core: pip install 'c1surf[usd]' (or pip install usd-core)"
+
+
+@dataclass(frozen=True)
+class UsdReadOptions:
+    """Which meshes of a USD stage become the polygon mesh, and where.
+
+    prim : str or None, a prim path: the ``UsdGeom.Mesh`` prims at or below it (one mesh, or the meshes of one
+        Xform); None: every mesh of the stage, as one surface (as an OBJ file's objects are)
+    world : True: each mesh's points through its local-to-world transform (where the meshes sit in the scene, as a
+        DCC shows them and as several meshes must be to form one surface); False: the points as the prim stores them
+    """
+
+    prim: str | None = None
+    world: bool = True
+
+
+def pxr_modules(path, writing: bool = False):
+    """(Usd, UsdGeom, Sdf, Vt, Tf) of usd-core; MeshInputError (OutputError when ``writing``) saying what to install."""
+    try:
+        from pxr import Sdf, Tf, Usd, UsdGeom, Vt
+    except ImportError:
+        raise (OutputError(path, INSTALL) if writing else MeshInputError(path, INSTALL)) from None
+    return Usd, UsdGeom, Sdf, Vt, Tf
+
+
+def require_usd(outputs) -> None:
+    """OutputError naming the first of ``outputs`` (paths to be written as USD) when usd-core is missing."""
+    for path in outputs:
+        pxr_modules(path, writing=True)
+        return
+
+
+def usd_message(error) -> str:
+    """The first of usd-core's error lines (``Error in 'Class::Method' at line N in file F : 'message'``)."""
+    found = re.findall(r": '(.*?)'\s*(?:\n|$)", str(error))
+    text = found[0] if found else " ".join(str(error).split())
+    return text.rstrip(".")
+
+
+def open_stage(path: str):
+    """The USD stage of ``path``, read afresh (a layer usd-core still holds is reloaded from the disk).
+
+    Raises
+    ------
+    MeshInputError
+        The file is not USD (usd-core's own reason, one line), or names no stage.
+    """
+    Usd, _, Sdf, _, Tf = pxr_modules(path)
+    try:
+        held = Sdf.Layer.Find(path)
+        if held:
+            held.Reload(force=True)
+        stage = Usd.Stage.Open(path, Usd.Stage.LoadAll)
+    except Tf.ErrorException as error:
+        raise MeshInputError(path, f"not a USD file usd-core can read ({usd_message(error)}): export the scene as "
+                                   ".usd, .usda, .usdc or .usdz") from None
+    if stage is None:
+        raise MeshInputError(path, "usd-core opened no stage from this file: export the scene as .usd, .usda, .usdc "
+                                   "or .usdz")
+    return stage
