@@ -130,7 +130,14 @@ class FormatTable(Mapping):
 
     def names(self) -> str:
         """The formats for help texts, one name each (the longest suffix), in table order: "OBJ, PLY, STL, OFF"."""
-        return ", ".join(dict.fromkeys(max(f.suffixes, key=len).lstrip(".").upper() for f in self._formats.values()))
+        return ", ".join(dict.fromkeys(_name(f.suffixes).lstrip(".").upper() for f in self._formats.values()))
+
+
+def _name(suffixes: tuple) -> str:
+    """The suffix that names a format: the longest (IGES, STEP), or the first where it begins every other (USD)."""
+    if all(s.startswith(suffixes[0]) for s in suffixes):
+        return suffixes[0]
+    return max(suffixes, key=len)
 
 
 class UnsupportedFormat(C1SurfFileError, ValueError):

@@ -43,6 +43,15 @@ def write_cube(path):
     elif suffix == ".stl":
         triangles = [[q[0], q[1], q[2]] for q in QUADS] + [[q[0], q[2], q[3]] for q in QUADS]
         trimesh.Trimesh(CORNERS, triangles, process=False).export(path)
+    elif suffix == ".usd":  # written by usd-core's own API: a UsdGeom.Mesh of the quads
+        from pxr import Usd, UsdGeom
+
+        stage = Usd.Stage.CreateNew(str(path))
+        cube = UsdGeom.Mesh.Define(stage, "/cube")
+        cube.CreatePointsAttr(CORNERS)
+        cube.CreateFaceVertexCountsAttr([4] * len(QUADS))
+        cube.CreateFaceVertexIndicesAttr([i for q in QUADS for i in q])
+        stage.Save()
     else:
         raise AssertionError(f"no tiny file for {suffix}: add one for the new format")
 
@@ -101,11 +110,13 @@ def test_every_patch_command_reads_every_patch_format(tmp_path, patch_files, ind
 
 
 def test_help_names_exactly_the_formats_a_command_reads():
-    mesh, patches = "OBJ, PLY, STL, OFF", "JSON, NPZ, IGES, STEP"
+    mesh, patches = "OBJ, PLY, STL, OFF, USD", "JSON, NPZ, IGES, STEP"
     assert MESH_READERS.names() == mesh and PATCH_READERS.names() == patches
     reads = {"convert": [mesh], "check": [mesh, patches], "measure": [mesh, patches], "render": [mesh, patches],
              "inspect": [mesh], "batch": [mesh], "tessellate": [patches, MESH_WRITERS.names()], "diff": [mesh, patches]}
     for command, names in reads.items():
         text = " ".join(run(command, "--help").stdout.split())
         assert all(name in text for name in names), command
-    assert np.all([MESH_READERS[s].function.__kwdefaults__ == {"keep_degenerate": False} for s in MESH_READERS])
+    # every reader takes keep_degenerate; the USD reader also its own options (io.meshes.read.read_mesh's usd=)
+    defaults = [dict(MESH_READERS[s].function.__kwdefaults__) for s in MESH_READERS]
+    assert np.all([d.pop("keep_degenerate") is False and d in ({}, {"usd": None}) for d in defaults])

@@ -6,10 +6,10 @@ from click.testing import CliRunner
 
 from c1surf.cli.main import main
 from c1surf.io.errors import C1SurfFileError
-from c1surf.io.registry import (IMAGE_WRITERS, MESH_READERS, MESH_WRITERS, PATCH_READERS, PATCH_WRITERS,
+from c1surf.io.registry import (CAGE_WRITERS, IMAGE_WRITERS, MESH_READERS, MESH_WRITERS, PATCH_READERS, PATCH_WRITERS,
                                 UnsupportedFormat, suffix_list, suffix_of)
 
-TABLES = [MESH_READERS, MESH_WRITERS, PATCH_READERS, PATCH_WRITERS, IMAGE_WRITERS]
+TABLES = [MESH_READERS, MESH_WRITERS, PATCH_READERS, PATCH_WRITERS, IMAGE_WRITERS, CAGE_WRITERS]
 
 
 @pytest.mark.parametrize("table", TABLES, ids=lambda t: f"{t.noun} {t.verb}")
@@ -27,7 +27,8 @@ def test_suffix_of_is_the_one_check():
     assert suffix_of("a/B.PLY", MESH_READERS) == ".ply" and suffix_of("x.IGES", PATCH_READERS) == ".iges"
     with pytest.raises(UnsupportedFormat) as info:
         suffix_of("dir/mesh.glb", MESH_READERS)
-    assert str(info.value) == "dir/mesh.glb: unsupported mesh format (suffix '.glb'): c1surf reads .obj, .off, .ply, .stl files"
+    assert str(info.value) == ("dir/mesh.glb: unsupported mesh format (suffix '.glb'): c1surf reads .obj, .off, .ply, "
+                               ".stl, .usd, .usda, .usdc, .usdz files")
     assert isinstance(info.value, C1SurfFileError) and isinstance(info.value, ValueError)
     with pytest.raises(UnsupportedFormat, match=r"\(no suffix\): c1surf writes .iges, .igs, .json, .npz, .step, .stp"):
         suffix_of("surface", PATCH_WRITERS)
@@ -36,7 +37,8 @@ def test_suffix_of_is_the_one_check():
 def test_what_the_formats_keep():
     assert MESH_WRITERS.holding("attributes") == (".obj", ".ply")
     assert MESH_WRITERS.holding("properties") == (".ply",)
-    assert suffix_list(MESH_WRITERS) == ".glb, .obj, .off, .ply, .stl"
+    assert suffix_list(MESH_WRITERS) == ".glb, .obj, .off, .ply, .stl, .usd, .usda, .usdc"
+    assert MESH_WRITERS.holding("patch ids") == (".usd", ".usdc", ".usda")
 
 
 def test_commands_take_suffixes_and_help_from_the_registry(tmp_path):
