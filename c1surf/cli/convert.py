@@ -10,6 +10,7 @@ from ..api import InputOptions, Surface, SurfaceOptions, load_surface
 from ..evaluation.stream import StreamedSurface, StreamedTessellation, UndefinedNormals
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
+from ..io.meshes.usd.stage import USD_SUFFIXES, require_usd
 from ..io.meshes.write import write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
 from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list, suffix_of
 from ..io.patches.formats import check_patch_files_memory, write_patch_stream, write_surface_patches
@@ -207,6 +208,7 @@ def read_and_build(input_path, surface_options: SurfaceOptions, input_options: I
 def output_formats(output, patches_paths, curvature: bool, attributes: bool) -> tuple[str, list[str]]:
     """The suffixes of ``--output`` and of each ``--patches``; usage errors for what cannot be written."""
     mesh_suffix = output_suffix(output, MESH_WRITERS, "--output")
+    require_usd([output] if mesh_suffix in USD_SUFFIXES else [])  # before the surface is built
     patch_suffixes = [output_suffix(p, PATCH_WRITERS, "--patches") for p in patches_paths]
     targets = [os.path.abspath(p) for p in (output, *patches_paths)]
     if len(set(targets)) != len(targets):

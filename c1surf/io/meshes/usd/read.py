@@ -23,7 +23,8 @@ import numpy as np
 from ...errors import MeshInputError
 from ..mesh_file import MeshFile, collapse_repeated_corners_or_refuse, refuse_repeated_vertex
 from ..tags.record import SharpTags, check_tags
-from .stage import POINTS_PRIMVAR, UsdReadOptions, open_stage, pxr_modules
+from .stage import (POINTS_PRIMVAR, SHARPNESS_ATTRIBUTES, UsdReadOptions, exact_where_rounded, open_stage,
+                    pxr_modules)
 
 __all__ = ["read_usd", "UsdReadOptions"]
 
@@ -148,23 +149,16 @@ def _points(mesh, path: str, where: str, time, xforms):
     value = mesh.GetPointsAttr().Get(time)
     if value is None or len(value) == 0:
         raise MeshInputError(path, f"{where} has no points: author its points attribute (point3f[])")
-    floats = np.asarray(value)
-    points = floats.astype(np.float64).reshape(-1, 3)
-    notes = []
     primvar = mesh.GetPrim().GetAttribute("primvars:" + POINTS_PRIMVAR)
     doubles = primvar.Get(time) if primvar and primvar.HasAuthoredValue() else None
-    if doubles is not None:
-        doubles = np.asarray(doubles, dtype=np.float64)
-        if doubles.shape == points.shape:
-            same = (doubles.astype(floats.dtype) == floats).all(axis=1)
-            points[same] = doubles[same]
-            if not same.all():
-                notes.append(f"{path}: {where}: {int(np.count_nonzero(~same))} of {len(same)} points differ from "
-                             f"c1surf's float64 copy (primvars:{POINTS_PRIMVAR}; moved in another tool): their "
-                             "float32 points are read")
-        else:
-            notes.append(f"{path}: {where}: primvars:{POINTS_PRIMVAR} holds {len(doubles)} points for "
-                         f"{len(points)}: ignored, the float32 points are read")
+    points, same = exact_where_rounded(np.asarray(value).reshape(-1, 3), None if doubles is None else np.asarray(doubles))
+    notes = []
+    if doubles is not None and same is None:
+        notes.append(f"{path}: {where}: primvars:{POINTS_PRIMVAR} holds {len(doubles)} points for {len(points)}: "
+                     "ignored, the float32 points are read")
+    elif same is not None and not same.all():
+        notes.append(f"{path}: {where}: {int(np.count_nonzero(~same))} of {len(same)} points differ from c1surf's "
+                     f"float64 copy (primvars:{POINTS_PRIMVAR}; moved in another tool): their float32 points are read")
     finite = np.isfinite(points).all(axis=1)
     if not finite.all():
         raise MeshInputError(path, f"{where}: point {int(np.argmin(finite))} has a NaN or infinite coordinate: fix "
@@ -205,9 +199,14 @@ def _ints(attr, time) -> np.ndarray:
     return np.zeros(0, dtype=np.int64) if value is None else np.asarray(value, dtype=np.int64).ravel()
 
 
-def _floats(attr, time) -> np.ndarray:
+def _sharpness(mesh, attr, kind: str, time) -> np.ndarray:
+    """(N,) float64 sharpness of ``attr``, c1surf's float64 copy (``SHARPNESS_ATTRIBUTES``) where it rounds to it."""
     value = attr.Get(time) if attr else None
-    return np.zeros(0) if value is None else np.asarray(value, dtype=np.float64).ravel()
+    if value is None:
+        return np.zeros(0)
+    exact = mesh.GetPrim().GetAttribute(SHARPNESS_ATTRIBUTES[kind])
+    doubles = exact.Get(time) if exact and exact.HasAuthoredValue() else None
+    return exact_where_rounded(np.asarray(value).ravel(), None if doubles is None else np.asarray(doubles).ravel())[0]
 
 
 def _animated(attr) -> bool:
@@ -228,7 +227,8 @@ def _tags(mesh, path: str, where: str, time) -> SharpTags:
     """The subdivision tags of one mesh prim as a SharpTags (not yet checked against the mesh)."""
     tags = SharpTags()
     tags.crease_edges, tags.crease_sharpness = _creases(mesh, path, where, time)
-    corners, corner_sharpness = _ints(mesh.GetCornerIndicesAttr(), time), _floats(mesh.GetCornerSharpnessesAttr(), time)
+    corners = _ints(mesh.GetCornerIndicesAttr(), time)
+    corner_sharpness = _sharpness(mesh, mesh.GetCornerSharpnessesAttr(), "corner", time)
     if corners.size != corner_sharpness.size:
         raise MeshInputError(path, f"{where}: {corners.size} cornerIndices but {corner_sharpness.size} "
                                    "cornerSharpnesses: give one sharpness a corner")
@@ -247,7 +247,7 @@ def _creases(mesh, path: str, where: str, time):
     """(edges (E, 2) int64, sharpness (E,)) of the crease chains: ``creaseLengths`` vertices each, one sharpness a
     crease (repeated along its edges) or one an edge."""
     indices, lengths = _ints(mesh.GetCreaseIndicesAttr(), time), _ints(mesh.GetCreaseLengthsAttr(), time)
-    sharpness = _floats(mesh.GetCreaseSharpnessesAttr(), time)
+    sharpness = _sharpness(mesh, mesh.GetCreaseSharpnessesAttr(), "crease", time)
     if (lengths < 2).any():
         raise MeshInputError(path, f"{where}: crease {int(np.argmax(lengths < 2))} has creaseLengths "
                                    f"{int(lengths[np.argmax(lengths < 2)])}: a crease chain needs 2 vertices or more")

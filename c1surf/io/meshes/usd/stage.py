@@ -5,16 +5,20 @@ from __future__ import annotations
 import re
 from dataclasses import dataclass
 
+import numpy as np
+
 from ...errors import MeshInputError, OutputError
 
 __all__ = ["UsdReadOptions", "pxr_modules", "require_usd", "open_stage", "POINTS_PRIMVAR", "PATCH_PRIMVAR", "INSTALL",
-           "USD_SUFFIXES"]
+           "USD_SUFFIXES", "SHARPNESS_ATTRIBUTES", "exact_where_rounded"]
 
 USD_SUFFIXES = (".usd", ".usda", ".usdc", ".usdz")
 
 # The positions as float64 (USD's points are float32): ``c1surf convert`` of a cage or tessellation written by c1surf
 # reads these bits wherever they round to the file's float points (a point moved in another tool does not).
 POINTS_PRIMVAR = "c1surf:points"
+# The sharpness as float64 (USD's creaseSharpnesses and cornerSharpnesses are float32), read likewise.
+SHARPNESS_ATTRIBUTES = {"crease": "c1surf:creaseSharpnesses", "corner": "c1surf:cornerSharpnesses"}
 # The patch of each triangle of a tessellation (uniform interpolation: one value a face).
 PATCH_PRIMVAR = "c1surf:patch"
 INSTALL = "USD files need usd-core: pip install 'c1surf[usd]' (or pip install usd-core)"
@@ -41,6 +45,18 @@ def pxr_modules(path, writing: bool = False):
     except ImportError:
         raise (OutputError(path, INSTALL) if writing else MeshInputError(path, INSTALL)) from None
     return Usd, UsdGeom, Sdf, Vt, Tf
+
+
+def exact_where_rounded(floats, doubles):
+    """``floats`` (N, ...) as float64, with the rows of ``doubles`` whose rounding to ``floats``' type gives them:
+    (values, rows taken from ``doubles``); ``doubles`` of another shape, or None, are not used."""
+    values = np.asarray(floats).astype(np.float64)
+    if doubles is None or np.shape(doubles) != values.shape:
+        return values, None
+    doubles = np.asarray(doubles, dtype=np.float64)
+    same = (doubles.astype(np.asarray(floats).dtype) == np.asarray(floats)).reshape(len(values), -1).all(axis=1)
+    values[same] = doubles[same]
+    return values, same
 
 
 def require_usd(outputs) -> None:

@@ -12,7 +12,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...finite import refuse_non_finite, refuse_non_finite_mesh
-from .stage import PATCH_PRIMVAR, POINTS_PRIMVAR, pxr_modules
+from .stage import PATCH_PRIMVAR, POINTS_PRIMVAR, SHARPNESS_ATTRIBUTES, pxr_modules
 
 __all__ = ["write_usd_cage", "write_usd"]
 
@@ -104,11 +104,23 @@ def _tags(mesh, features, path) -> None:
         mesh.CreateCreaseIndicesAttr(Vt.IntArray.FromNumpy(edges.ravel().astype(np.int32)))
         mesh.CreateCreaseLengthsAttr(Vt.IntArray.FromNumpy(np.full(len(edges), 2, dtype=np.int32)))
         mesh.CreateCreaseSharpnessesAttr(Vt.FloatArray.FromNumpy(sharpness.astype(np.float32)))
+        _exact_sharpness(mesh, "crease", sharpness)
     if len(corners):
         mesh.CreateCornerIndicesAttr(Vt.IntArray.FromNumpy(corners.astype(np.int32)))
         mesh.CreateCornerSharpnessesAttr(Vt.FloatArray.FromNumpy(corner_sharpness.astype(np.float32)))
+        _exact_sharpness(mesh, "corner", corner_sharpness)
     if holes.size:
         mesh.CreateHoleIndicesAttr(Vt.IntArray.FromNumpy(holes.astype(np.int32)))
+
+
+def _exact_sharpness(mesh, kind: str, values: np.ndarray) -> None:
+    """The float64 sharpness in c1surf's own attribute (``SHARPNESS_ATTRIBUTES``) where float32 does not hold it."""
+    values = np.asarray(values, dtype=np.float64)
+    if np.array_equal(values.astype(np.float32).astype(np.float64), values):
+        return  # 10 (infinitely sharp), 2.5, ...: the float attribute holds them
+    _, _, Sdf, Vt, _ = pxr_modules("", writing=True)
+    attr = mesh.GetPrim().CreateAttribute(SHARPNESS_ATTRIBUTES[kind], Sdf.ValueTypeNames.DoubleArray, custom=True)
+    attr.Set(Vt.DoubleArray.FromNumpy(values))
 
 
 def _export(stage, path) -> None:
