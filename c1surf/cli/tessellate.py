@@ -5,10 +5,10 @@ import click
 
 from ..evaluation.tessellate import tessellate_patches
 from ..io.atomic import atomic_output
-from ..io.meshes.write import write_triangle_mesh
+from ..io.meshes.usd.stage import USD_SUFFIXES, require_usd
 from ..io.registry import MESH_WRITERS, PATCH_READERS, suffix_list
 from .common import Failure, Progress, friendly_errors, output_suffix, with_formats
-from .convert import check_tessellation_size, tessellate_within
+from .convert import check_tessellation_size, tessellate_within, write_mesh
 from .options import tolerance_option, tolerance_value
 
 
@@ -34,6 +34,7 @@ def tessellate(patches_path, output, resolution, tolerance, force, quiet):
     c1surf surface gives the same welding.
     """
     mesh_suffix = output_suffix(output, MESH_WRITERS, "--output")
+    require_usd([output] if mesh_suffix in USD_SUFFIXES else [])
     patch_suffix = output_suffix(patches_path, PATCH_READERS, "PATCHES")
     tolerance = tolerance_value(tolerance)
     progress = Progress(quiet)
@@ -51,7 +52,7 @@ def tessellate(patches_path, output, resolution, tolerance, force, quiet):
         tess = tessellate_patches(patch_set.groups, adjacency, resolution, patch_set.weights)  # weights: rational (A2a)
     progress.phase(f"writing {output}")
     with atomic_output(output, inputs=[patches_path]) as mesh_tmp:
-        write_triangle_mesh(mesh_tmp, tess.points, tess.triangles, tess.normals, suffix=mesh_suffix)
+        write_mesh(mesh_tmp, mesh_suffix, tess, {}, None, False)  # convert's: the patch of each triangle in USD
     progress.done()
 
 

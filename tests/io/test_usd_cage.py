@@ -67,6 +67,9 @@ def test_the_usd_cage_converts_to_the_fitted_surface_bit_for_bit(fitted):
         if key != "header":  # the header names the source file
             assert fit[key].dtype == converted[key].dtype and np.array_equal(fit[key], converted[key]), key
     assert (fitted / "fit.usdc").read_bytes() == (fitted / "convert.usdc").read_bytes()
+    again = fitted / "tessellate.usdc"  # from the patch file: the same bytes, patch ids included
+    assert run("tessellate", fitted / "fit.npz", "-r", 4, "-o", again, "-q").exit_code == 0
+    assert again.read_bytes() == (fitted / "fit.usdc").read_bytes()
 
 
 def test_usd_core_reads_the_cage_creases(fitted):

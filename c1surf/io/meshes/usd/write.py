@@ -1,7 +1,8 @@
 """Write USD: the fit's control mesh as a SubD cage with its creases, corners and holes (``write_usd_cage``,
 ``fit --cage cage.usda``) and a tessellation (``write_usd``, ``-o smooth.usd``), through usd-core.
 
-Both are one ``UsdGeom.Mesh`` prim, the stage's default prim, Z up. USD stores points as float32 (``point3f[]``): the
+Both are one ``UsdGeom.Mesh`` prim, the stage's default prim, Z up, ``metersPerUnit`` 1 (the numbers as they are:
+a stage without it is in centimetres, which Blender imports scaled by 0.01). USD stores points as float32 (``point3f[]``): the
 float64 positions ride along in ``primvars:c1surf:points`` (``double3[]``, vertex interpolation), which c1surf's
 reader takes wherever they round to the float points, so that ``c1surf convert cage.usda`` rebuilds the fitted
 surface bit for bit while any other reader sees the float points. ``.usda`` is text, ``.usd`` and ``.usdc`` crate
@@ -70,6 +71,7 @@ def _stage_with_mesh(path, name: str, comments):
     Usd, UsdGeom, _, _, _ = pxr_modules(path, writing=True)
     stage = Usd.Stage.CreateInMemory()
     UsdGeom.SetStageUpAxis(stage, UsdGeom.Tokens.z)
+    UsdGeom.SetStageMetersPerUnit(stage, 1.0)  # unset, USD means centimetres: Blender would scale the mesh by 0.01
     mesh = UsdGeom.Mesh.Define(stage, "/" + name)
     stage.SetDefaultPrim(mesh.GetPrim())
     if comments:
