@@ -84,6 +84,10 @@ def test_a_usd_file_converts_to_the_surface_of_the_equivalent_obj(tmp_path):
     usd, obj = np.load(tmp_path / "usd.npz"), np.load(tmp_path / "obj.npz")
     assert all(np.array_equal(usd[k], obj[k]) for k in obj.files if k != "header")
     assert run("diff", tmp_path / "cube.usdc", tmp_path / "cube.obj").exit_code == 0  # as meshes too
+    from pxr import Sdf, UsdUtils
+
+    assert UsdUtils.CreateNewUsdzPackage(Sdf.AssetPath(str(tmp_path / "cube.usdc")), str(tmp_path / "cube.usdz"))
+    assert run("diff", tmp_path / "cube.usdz", tmp_path / "cube.obj").exit_code == 0  # and packaged as .usdz
 
 
 def opensubdiv_shapes():

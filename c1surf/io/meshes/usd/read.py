@@ -283,7 +283,7 @@ def _ignored_notes(stage, prims, path: str, Usd, UsdGeom) -> list[str]:
     if primvars:
         notes.append(f"{path}: ignored the meshes' primvars {', '.join(primvars)}: c1surf builds the surface from "
                      "the points, faces and subdivision tags")
-    if stage.HasAuthoredTimeCodeRange():
+    if stage.HasAuthoredTimeCodeRange() and not any(_animated(UsdGeom.Mesh(p).GetPointsAttr()) for p in prims):
         notes.append(f"{path}: the stage is animated (time codes {stage.GetStartTimeCode():g} to "
                      f"{stage.GetEndTimeCode():g}): read at the first time sample of each value")
     return notes
