@@ -11,7 +11,8 @@ from ..evaluation.stream import StreamedSurface, StreamedTessellation, Undefined
 from ..evaluation.tessellate import patch_adjacency, tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.usd.stage import USD_SUFFIXES, require_usd
-from ..io.meshes.write import write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
+from ..io.meshes.write import TriangleMesh, write_attribute_mesh, write_streamed_mesh, write_triangle_mesh
+from ..io.meshes.write import write_mesh as write_mesh_file
 from ..io.registry import MESH_WRITERS, PATCH_WRITERS, suffix_list, suffix_of
 from ..io.patches.formats import check_patch_files_memory, write_patch_stream, write_surface_patches
 from ..resources import (BYTES_PER_PATCH, STREAMED_BYTES_PER_SAMPLE, WRITER_HEADROOM, check_disk_space, check_memory,
@@ -236,10 +237,11 @@ def write_mesh(path, suffix: str, tess, extra: dict, attribute_data, float32: bo
         write_attribute_mesh(path, tess.points[:, :3], tess.triangles, tess.normals, tess.points[:, 3:],
                              attribute_data.attribute_names, colour_scale=attribute_data.colour_scale, suffix=suffix,
                              float32=float32)
+    elif suffix in MESH_WRITERS.holding("patch ids"):  # USD: the patch of each triangle rides along
+        write_mesh_file(path, TriangleMesh(tess.points[:, :3], tess.triangles, tess.normals,
+                                           triangle_patch=tess.triangle_patch), suffix, float32)
     else:
-        patches = tess.triangle_patch if suffix in MESH_WRITERS.holding("patch ids") else None
-        write_triangle_mesh(path, tess.points, tess.triangles, tess.normals, suffix=suffix, float32=float32,
-                            triangle_patch=patches, **extra)
+        write_triangle_mesh(path, tess.points, tess.triangles, tess.normals, suffix=suffix, float32=float32, **extra)
 
 
 def write_patch_files(targets, surface: Surface, input_path, patch_options: dict, progress: Progress,

@@ -59,7 +59,7 @@ def test_batch_shards_and_formats(tmp_path):
 
 def test_batch_usage_errors(tmp_path):
     r = _batch(str(tmp_path / "*.obj"), "-o", str(tmp_path / "out"))
-    assert r.returncode == 2 and "no mesh file (.obj, .off, .ply, .stl) matches" in r.stderr
+    assert r.returncode == 2 and "no mesh file (.obj, .off, .ply, .stl, .usd, .usda, .usdc, .usdz) matches" in r.stderr
     src = _inputs(tmp_path)
     r = _batch(str(src / "*.obj"), "-o", str(tmp_path / "out"), "--shard", "2/2")
     assert r.returncode == 2 and "--shard" in r.stderr

@@ -90,8 +90,7 @@ def write_streamed_mesh(path, tessellation, suffix: str | None = None, float32: 
 
 def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals: np.ndarray | None = None,
                         suffix: str | None = None, vertex_properties: dict | None = None,
-                        vertex_colors: np.ndarray | None = None, float32: bool = False,
-                        triangle_patch: np.ndarray | None = None) -> None:
+                        vertex_colors: np.ndarray | None = None, float32: bool = False) -> None:
     """Write a triangle mesh; the format comes from ``suffix`` (default: the path's).
 
     Parameters
@@ -102,13 +101,11 @@ def write_triangle_mesh(path, points: np.ndarray, triangles: np.ndarray, normals
     vertex_properties : dict name -> (V,) float, or None: extra per-vertex scalars (PLY only)
     vertex_colors : (V, 3) uint8 or None, written as ``red green blue`` after them (PLY only)
     float32 : write coordinates and normals as float32 (PLY ``float``, fewer OBJ digits)
-    triangle_patch : (T,) int or None, the patch of each triangle (kept by the formats that hold "patch ids")
     """
     properties = dict(vertex_properties or {})
     if vertex_colors is not None:
         properties.update(zip(("red", "green", "blue"), np.asarray(vertex_colors, dtype=np.uint8).T))
-    mesh = TriangleMesh(np.asarray(points)[:, :3], np.asarray(triangles), normals, properties=properties,
-                        triangle_patch=triangle_patch)
+    mesh = TriangleMesh(np.asarray(points)[:, :3], np.asarray(triangles), normals, properties=properties)
     write_mesh(path, mesh, suffix, float32)
 
 
