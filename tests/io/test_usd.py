@@ -4,6 +4,7 @@ as one line, and the line saying what to install without usd-core."""
 from __future__ import annotations
 
 import re
+import subprocess
 import sys
 from pathlib import Path
 
@@ -259,3 +260,19 @@ def test_an_animated_mesh_is_read_at_its_first_time_sample(tmp_path):
     mesh = read_mesh(stage_with(tmp_path / "moving.usda", animate))
     assert np.array_equal(mesh.points, CORNERS)
     assert any("mesh /cube is animated: read at its first time sample" in n for n in mesh.reader_notes)
+
+
+def test_usd_core_warnings_are_notes(tmp_path):
+    """A reference to a missing file: usd-core's warning is one note, not a line of its own on stderr."""
+    path = tmp_path / "scene.usda"
+    stage = Usd.Stage.CreateNew(str(path))
+    define_mesh(stage, "/cube")
+    stage.DefinePrim("/other").GetReferences().AddReference("missing.usda")
+    stage.Save()
+    # a process of its own: usd-core would print from C++ straight to the file descriptor
+    result = subprocess.run([sys.executable, "-m", "c1surf", "convert", str(path), "-o", str(tmp_path / "out.ply")],
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    assert all(line.startswith("c1surf: note: ") for line in result.stderr.strip().splitlines()), result.stderr
+    assert f"c1surf: note: {path}: usd-core: In </other>: Could not open asset @missing.usda@ for reference " \
+           f"introduced by @{path}@</other>." in result.stderr.splitlines()

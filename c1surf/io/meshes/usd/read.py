@@ -71,12 +71,13 @@ def read_usd(path, *, keep_degenerate: bool = False, usd: UsdReadOptions | None 
     path = os.fspath(path)
     options = usd or UsdReadOptions()
     Usd, UsdGeom = pxr_modules(path)[:2]
-    stage = open_stage(path)
+    stage, stage_notes = open_stage(path)
     prims = _mesh_prims(stage, options, path, Usd, UsdGeom)
     time = Usd.TimeCode.EarliestTime()
     xforms = UsdGeom.XformCache(time) if options.world else None
     parts = [_read_prim(UsdGeom.Mesh(prim), path, time, xforms, keep_degenerate) for prim in prims]
-    notes = [note for part in parts for note in part.notes] + _ignored_notes(stage, prims, path, Usd, UsdGeom)
+    notes = stage_notes + [note for part in parts for note in part.notes] + _ignored_notes(stage, prims, path, Usd,
+                                                                                           UsdGeom)
     return _combined(path, parts, notes)
 
 

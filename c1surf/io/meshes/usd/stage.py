@@ -74,7 +74,9 @@ def usd_message(error) -> str:
 
 
 def open_stage(path: str):
-    """The USD stage of ``path``, read afresh (a layer usd-core still holds is reloaded from the disk).
+    """(The USD stage of ``path``, read afresh (a layer usd-core still holds is reloaded from the disk), notes):
+    usd-core's warnings while composing it (a reference to a missing file, ...) become ``c1surf: note:`` lines
+    instead of its own stderr lines.
 
     Raises
     ------
@@ -82,6 +84,9 @@ def open_stage(path: str):
         The file is not USD (usd-core's own reason, one line), or names no stage.
     """
     Usd, _, Sdf, _, Tf = pxr_modules(path)
+    from pxr import UsdUtils
+
+    collected = UsdUtils.CoalescingDiagnosticDelegate()  # while it lives, usd-core prints nothing itself
     try:
         held = Sdf.Layer.Find(path)
         if held:
@@ -93,4 +98,7 @@ def open_stage(path: str):
     if stage is None:
         raise MeshInputError(path, "usd-core opened no stage from this file: export the scene as .usd, .usda, .usdc "
                                    "or .usdz")
-    return stage
+    warnings = [re.sub(r"\s*\(instantiating stage on stage .*\)$", "", " ".join(d.commentary.split()))
+                for d in collected.TakeUncoalescedDiagnostics()]  # without the stage's memory address
+    shown = "; ".join(warnings[:3]) + (f" and {len(warnings) - 3} more" if len(warnings) > 3 else "")
+    return stage, [f"{path}: usd-core: {shown}"] if warnings else []
