@@ -61,9 +61,8 @@ def exact_where_rounded(floats, doubles):
 
 def require_usd(outputs) -> None:
     """OutputError naming the first of ``outputs`` (paths to be written as USD) when usd-core is missing."""
-    for path in outputs:
-        pxr_modules(path, writing=True)
-        return
+    if outputs:
+        pxr_modules(outputs[0], writing=True)
 
 
 def usd_message(error) -> str:
