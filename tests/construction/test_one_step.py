@@ -175,3 +175,48 @@ def test_every_edge_of_the_kinds_is_read_once():
     for kind, make in KINDS.items():
         sizes, corners, _, _ = make()
         assert np.all(sizes == 4) and len(all_edges(sizes, corners)) > 0, kind
+
+
+def write_obj(path, sizes, corners, points, features=None):
+    """An OBJ file of the mesh, infinitely sharp creases as OpenSubdiv's ``t crease`` lines."""
+    faces = np.split(corners, np.cumsum(sizes)[:-1])
+    lines = [f"v {float(x)!r} {float(y)!r} {float(z)!r}" for x, y, z in points] + ["f " + " ".join(str(i + 1) for i in f) for f in faces]
+    if features is not None:
+        lines += [f"t crease 2/1/0 {a} {b} 10" for a, b in features.crease_edges]
+    path.write_text("\n".join(lines) + "\n")
+
+
+@pytest.mark.parametrize("kind", ["saddle grid", "half-sharp roof"])
+def test_streamed_and_in_memory_conversions_at_one_step_are_equal(monkeypatch, tmp_path, kind):
+    from click.testing import CliRunner
+
+    from c1surf.cli.main import main
+
+    mesh = tmp_path / "mesh.obj"
+    write_obj(mesh, *KINDS[kind]())
+    files = {}
+    for stream in ("1", "0"):
+        monkeypatch.setenv("C1SURF_STREAM", stream)
+        out, patches = tmp_path / f"s{stream}.ply", tmp_path / f"s{stream}.npz"
+        result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(out), "--patches", str(patches),
+                                           "--refinements", "auto", "-q"])
+        assert result.exit_code == 0, result.output
+        files[stream] = (out.read_bytes(), patches.read_bytes())
+        with np.load(patches) as data:
+            assert all(np.isfinite(data[key]).all() for key in data.files if data[key].dtype.kind == "f")
+    assert files["1"] == files["0"]
+
+
+def test_one_step_refused_in_one_line(tmp_path):
+    from click.testing import CliRunner
+
+    from c1surf.cli.main import main
+
+    mesh = tmp_path / "strip.obj"
+    write_obj(mesh, *strip())
+    result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "x.ply"), "--refinements", "1"])
+    assert result.exit_code == 1 and not (tmp_path / "x.ply").exists()
+    lines = result.output.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("c1surf: error:") and "one refinement step is not enough" in lines[0]
+    result = CliRunner().invoke(main, ["convert", str(mesh), "-o", str(tmp_path / "x.ply"), "--refinements", "auto"])
+    assert result.exit_code == 0 and "two Doo-Sabin steps" in result.output and "R2" in result.output
