@@ -216,8 +216,12 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
 def fewest_refinements(face_sizes, face_vertices, n_vertices: int, features: SharpFeatures | None = None,
                        exact_creases: bool = False) -> int:
     """The Doo-Sabin steps ``refinements="auto"`` takes on this mesh (0, 1 or 2; open meshes, C0 creases and
-    darts included: ``refine.fewer_steps``), from its topology alone."""
-    return build_topology(face_sizes, face_vertices, n_vertices, "auto", False, features, exact_creases).refinements
+    darts included: ``refine.fewer_steps``), from its topology alone; 2 for a mesh the construction refuses as it
+    stands (e.g. an interior vertex of valence 2, which a later cleanup may still dissolve)."""
+    try:
+        return build_topology(face_sizes, face_vertices, n_vertices, "auto", False, features, exact_creases).refinements
+    except TopologyError:
+        return 2
 
 
 def dart_cells(coarse: HalfEdgeMesh, faces1: RefinedFaces, level1: HalfEdgeMesh, refined: HalfEdgeMesh,
