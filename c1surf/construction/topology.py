@@ -191,8 +191,9 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     if not real_face.any():
         raise TopologyError("every face is tagged as a hole: there is no surface to build", hole_faces[:8])
     closed = real_face.all() and not repairs["boundary_edges"]
-    levels, why_two = refinement_count(coarse, refinements, None if closed else real_face, interpolate_vertices)
-    faces1, level1, refined = refine(coarse, levels)
+    levels, why_two, once = refinement_count(coarse, refinements, None if closed else real_face, interpolate_vertices)
+    faces1, level1, refined = refine(coarse, levels, once)
+    del once
     real_vertex = real_refined_vertices(coarse, level1, refined, real_face, levels)
     holes = hole_neighbourhoods(refined, None if real_face.all() else real_vertex)
     if sheets is not None and sheets.dart_vertex is not None and sheets.dart_vertex.size and levels >= 1:
@@ -287,8 +288,9 @@ def pulled_sharpness(coarse: HalfEdgeMesh, vertex_source: np.ndarray, features: 
 
 
 def refinement_count(coarse: HalfEdgeMesh, requested, real_face: np.ndarray | None, interpolate_vertices: bool):
-    """(steps, why): the number of Doo-Sabin steps, ``requested`` or with "auto" the fewest after which A2/A3
-    apply to the kept patches; why: with "auto" and two steps, why one is not enough (else None).
+    """(steps, why, once): the number of Doo-Sabin steps, ``requested`` or with "auto" the fewest after which A2/A3
+    apply to the kept patches; why: with "auto" and two steps, why one is not enough (else None); once: the first
+    step's (faces, mesh) where they were made to decide (``fewer_steps.once_refined_parts``), else None.
 
     ``real_face`` : (Fc,) bool, the faces whose patches are kept, or None for a closed mesh that keeps all.
     No step needs a closed mesh that satisfies R1-R3 (Prop. 1.3.1); one step needs R1-R3 on the cells the kept
@@ -296,17 +298,19 @@ def refinement_count(coarse: HalfEdgeMesh, requested, real_face: np.ndarray | No
     """
     if requested == "auto":
         return refinement_choice(coarse, 1 if interpolate_vertices else 0, real_face)
-    if requested < 2:
-        check_refinements(coarse, requested, real_face)  # fewer steps (Prop. 1.3.1), or a one-line error
-    return requested, None
+    once = check_refinements(coarse, requested, real_face) if requested < 2 else None  # or a one-line error
+    return requested, None, once
 
 
-def refine(coarse: HalfEdgeMesh, levels: int):
-    """(faces1, level1, refined): the first step's faces and mesh (None without refinement), and the last mesh."""
+def refine(coarse: HalfEdgeMesh, levels: int, once=None):
+    """(faces1, level1, refined): the first step's faces and mesh (None without refinement), and the last mesh;
+    ``once``: the first step's (faces, mesh) if already made (``refinement_count``)."""
     if levels == 0:
         return None, None, coarse
-    faces1 = refine_doo_sabin(coarse)
-    level1 = refined_halfedges(coarse, faces1)
+    faces1, level1 = once if once is not None else (None, None)
+    if faces1 is None:
+        faces1 = refine_doo_sabin(coarse)
+        level1 = refined_halfedges(coarse, faces1)
     coarse.release_prev()  # read by the rotations of the refinement only, unless there are creases
     if levels == 1:
         return faces1, level1, level1

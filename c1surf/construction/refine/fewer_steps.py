@@ -81,8 +81,14 @@ def structure_problem(mesh: HalfEdgeMesh, wanted: np.ndarray | None = None) -> s
 
 def once_refined(mesh: HalfEdgeMesh) -> HalfEdgeMesh:
     """The topology after one Doo-Sabin step."""
+    return once_refined_parts(mesh)[1]
+
+
+def once_refined_parts(mesh: HalfEdgeMesh):
+    """(RefinedFaces, HalfEdgeMesh): one Doo-Sabin step's faces (with their sources) and mesh, as
+    ``topology.refine`` makes them (it takes them from here rather than refining twice)."""
     faces = refine_doo_sabin(mesh)
-    return refined_halfedges(mesh, faces)
+    return faces, refined_halfedges(mesh, faces)
 
 
 def kept_after_one_step(mesh: HalfEdgeMesh, real_face: np.ndarray | None) -> np.ndarray | None:
@@ -101,31 +107,38 @@ def refinements_needed(mesh: HalfEdgeMesh, at_least: int = 0, real_face: np.ndar
 
 
 def refinement_choice(mesh: HalfEdgeMesh, at_least: int = 0, real_face: np.ndarray | None = None):
-    """(k, why): ``refinements_needed`` and, when it is 2, why one step is not enough (else None)."""
-    kept = kept_after_one_step(mesh, real_face)
-    if at_least <= 0 and kept is None and structure_problem(mesh) is None:
-        return 0, None
+    """(k, why, once): ``refinements_needed``; when it is 2, why one step is not enough (else None); and the
+    once-refined ``once_refined_parts`` where they were made to decide (else None), for ``topology.refine``."""
+    if at_least <= 0 and kept_after_one_step(mesh, real_face) is None and structure_problem(mesh) is None:
+        return 0, None, None
     if at_least <= 1:
-        problem = structure_problem(once_refined(mesh), kept if kept is not None else
-                                    (None if real_face is None else np.ones(mesh.n_halfedges, dtype=bool)))
-        if problem is None:
-            return 1, None
-        return 2, problem
-    return 2, None
+        once = once_refined_parts(mesh)
+        problem = _one_step_problem(mesh, once[1], real_face)
+        return (1, None, once) if problem is None else (2, problem, once)
+    return 2, None, None
 
 
-def check_refinements(mesh: HalfEdgeMesh, k: int, real_face: np.ndarray | None = None) -> None:
-    """Raise TopologyError when A2/A3 do not apply after ``k`` (0 or 1) refinement steps."""
+def _one_step_problem(mesh: HalfEdgeMesh, level1: HalfEdgeMesh, real_face: np.ndarray | None) -> str | None:
+    """``structure_problem`` of the once-refined ``level1`` of ``mesh``, its kept patches those of ``real_face``."""
     kept = kept_after_one_step(mesh, real_face)
+    return structure_problem(level1, kept if kept is not None else
+                             (None if real_face is None else np.ones(mesh.n_halfedges, dtype=bool)))
+
+
+def check_refinements(mesh: HalfEdgeMesh, k: int, real_face: np.ndarray | None = None):
+    """Raise TopologyError when A2/A3 do not apply after ``k`` (0 or 1) refinement steps; else return the
+    once-refined ``once_refined_parts`` (k = 1) or None, for ``topology.refine``."""
+    once = None
     if k == 0:
         problem = "some faces' patches are not kept (an open mesh, C0 creases or hole faces: no step puts the patches " \
                   "across the faces' borders)" if real_face is not None and not real_face.all() else structure_problem(mesh)
     else:
-        problem = structure_problem(once_refined(mesh), kept if kept is not None else
-                                    (None if real_face is None else np.ones(mesh.n_halfedges, dtype=bool)))
+        once = once_refined_parts(mesh)
+        problem = _one_step_problem(mesh, once[1], real_face)
     if problem is not None:
         raise TopologyError(f"{'one refinement step is' if k == 1 else 'no refinement is'} not enough: {problem}; "
                             "use --refinements 2 (the paper's two steps) or auto")
+    return once
 
 
 def fewer_refinement_sources(topology, centre: np.ndarray):
