@@ -45,9 +45,11 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
 
 
 def refinement_notes(surface) -> list[str]:
-    """With ``--refinements auto`` and the paper's two Doo-Sabin steps taken: why one step is not enough."""
-    why = getattr(getattr(surface, "topology", None), "two_steps_why", None)
-    if getattr(getattr(surface, "options", None), "refinements", None) != "auto" or not why:
+    """With ``--refinements auto`` and the paper's two Doo-Sabin steps taken: why one step is not enough
+    (``SurfaceTopology.two_steps_why``, set by "auto" only). ``surface``: a Surface or its SurfaceTopology."""
+    topology = getattr(surface, "topology", surface)
+    why = getattr(topology, "two_steps_why", None)
+    if not why:
         return []
     return [f"--refinements auto: two Doo-Sabin steps (16 patches a quad), one is not enough here: {why} "
             "(docs/sharp-features.md, \"One Doo-Sabin step\")"]

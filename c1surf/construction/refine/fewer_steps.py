@@ -68,14 +68,13 @@ def structure_problem(mesh: HalfEdgeMesh, wanted: np.ndarray | None = None) -> s
         holes = hole_neighbourhoods(mesh, wanted)
     except TopologyError:
         return "a non-quadrilateral cell is next to another one"
-    pairs = 0
+    near = 0  # kept corners with an edge neighbour (B point) that is another cell's corner
     for g in holes:
-        mine = wanted[g.C]
-        pairs += int(np.sum(mine & wanted[g.B1] & (hole_of[g.B1] >= 0)) + np.sum(mine & wanted[g.B2] & (hole_of[g.B2] >= 0)))
-    if pairs:
-        return (f"non-quadrilateral cells are only one edge apart at {pairs // 2 or 1} places (R2; after one step: two "
+        near += int(np.sum(wanted[g.C] & ((wanted[g.B1] & (hole_of[g.B1] >= 0)) | (wanted[g.B2] & (hole_of[g.B2] >= 0)))))
+    if near:
+        return (f"non-quadrilateral cells are only one edge apart ({near} of their corners; R2: after one step, two "
                 "vertices of valence other than 4 joined by an edge of a kept face, a rim vertex counting the two ghost "
-                "faces of the ghost layer, or a non-quadrilateral face with such a vertex or neighbour)")
+                "faces of the ghost layer, or a non-quadrilateral face next to another)")
     return None
 
 
