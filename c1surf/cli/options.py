@@ -83,8 +83,9 @@ def surface_options(command=None, *, refinements: str = "2"):
                      help="3-sided cells: 'g1' (A3) or 'parametric' (section 1.3.4: parametrically C1 to the "
                           "biquadratic patches around)."),
         click.option("--refinements", type=click.Choice(["0", "1", "2", "auto"]), default=refinements, show_default=True,
-                     help="Doo-Sabin steps before A2/A3: 2 as in the paper; 0 or 1 when a closed input already "
-                          "satisfies R1-R3 after that many (Prop. 1.3.1); auto: the fewest that work."),
+                     help="Doo-Sabin steps before A2/A3: 2 as in the paper; 1 when R1-R3 hold after one step on the "
+                          "cells the kept patches read (open meshes, C0 creases and darts too), 0 when a closed input "
+                          "already satisfies them (Prop. 1.3.1); auto: the fewest that work (a note says why two)."),
     ]
 
     def build(refinements, **values):

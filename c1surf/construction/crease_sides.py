@@ -21,7 +21,7 @@ def crease_side_pairs(topology) -> np.ndarray:
 
     Parameters
     ----------
-    topology : SurfaceTopology with ``crease_sheets`` (two refinements)
+    topology : SurfaceTopology with ``crease_sheets`` (one or two refinements)
 
     Returns
     -------
@@ -39,20 +39,23 @@ def crease_side_pairs(topology) -> np.ndarray:
     crease[topology.quad_frames.shape[0]:] = False  # no A3 hole touches a C0 crease (every crease vertex has 4 faces)
     patch, side = np.nonzero(crease)
     h = crossed[patch, side]
-    near, far = refined.origin[h], refined.dest[h]  # level-2 points = level-1 half-edges (corners of level-1 cells)
+    near, far = refined.origin[h], refined.dest[h]
     # a ghost point of the sheets' ghost quads, not of the ghost layer closing the mesh boundary
-    ours = np.isin(coarse.face[level1.origin[far]], sheets.ghost_faces)
+    ours = np.isin(coarse.face[topology.coarse_corner(far)], sheets.ghost_faces)
     patch, side, near, far = patch[ours], side[ours], near[ours], far[ours]
-    cell = level1.face[near]
-    kind, parent = faces1.kind[cell], faces1.parent[cell]
     source = np.full(coarse.n_vertices, -1, dtype=np.int64)
     source[: sheets.vertex_name.size] = sheets.vertex_name  # copies of one vertex in several sheets: one name
-    near_corner, far_corner = level1.origin[near], level1.origin[far]  # coarse half-edges (corners)
+    near_corner, far_corner = topology.coarse_corner(near), topology.coarse_corner(far)  # coarse half-edges
     vertex = source[coarse.origin[near_corner]]  # the crease vertex the crossing is next to
-    # the crease edge: an E-cell's own edge; in a V-cell, the edge the ghost corner's quad lies across
-    # (a crease ghost quad (B, A, ., .) starts with the crease half-edge B -> A)
+    # the crease edge: the edge the ghost corner's quad lies across (a crease ghost quad (B, A, ., .) starts with
+    # the crease half-edge B -> A); after two steps, in an E-cell that cell's own edge
     ghost_quad_first = coarse.face_offsets[coarse.face[far_corner]]
-    edge_halfedge = np.where(kind == FACE_FROM_EDGE, parent, ghost_quad_first)
+    if topology.refinements == 1:  # one crossing per sheet, crease vertex and crease edge: the E-cell's edge
+        kind, edge_halfedge = np.full(near.size, FACE_FROM_EDGE, dtype=np.int8), ghost_quad_first
+    else:  # level-2 points = level-1 half-edges (corners of level-1 cells): a crossing in an E- or a V-cell
+        cell = level1.face[near]
+        kind, parent = faces1.kind[cell], faces1.parent[cell]
+        edge_halfedge = np.where(kind == FACE_FROM_EDGE, parent, ghost_quad_first)
     a, b = source[coarse.origin[edge_halfedge]], source[coarse.dest[edge_halfedge]]
     if not np.all((kind == FACE_FROM_EDGE) | (kind == FACE_FROM_VERTEX)):
         raise ValueError("internal: a crease crossing in a face cell")

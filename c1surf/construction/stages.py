@@ -311,8 +311,7 @@ def perturbation_stage(topology: SurfaceTopology, inputs: StageInputs):
 
 def _sheet_ghost(topology: SurfaceTopology) -> np.ndarray:
     """(Vr,) bool: the refined points of the crease sheets' ghost quads (``creases.mirror_perturbation``)."""
-    coarse_face = topology.input.face[topology.level1.origin[np.arange(topology.refined.n_vertices)]]
-    return np.isin(coarse_face, topology.crease_sheets.ghost_faces)
+    return np.isin(topology.input.face[topology.coarse_corner()], topology.crease_sheets.ghost_faces)
 
 
 def normal_stage(topology: SurfaceTopology, inputs: StageInputs):

@@ -243,9 +243,11 @@ class Surface:
         The result is that of a fresh Surface on these points: the ghost
         corners of an open mesh are classified again (``PlacementStage.follow``).
         A call signals re-use (animation, optimisation), so the first one readies
-        the stages' faster forms (their ``reuse``): the matrix of the factored second
-        Doo-Sabin step, which then applies ~3x faster (``stencils.doo_sabin.DooSabinStep``),
-        and the whole slot table of the biquadratic patches (``stencils.biquadratic.GridSlots``).
+        the stages' faster forms (their ``reuse``): the matrix of the first Doo-Sabin step
+        (the same bits as its rows) and the whole slot table of the biquadratic patches
+        (``stencils.biquadratic.GridSlots``). The second step stays factored
+        (``stencils.doo_sabin.DooSabinStep``), so the patches equal a fresh Surface's on these
+        points bit for bit.
 
         A rational surface runs every step on the homogeneous points
         ``(w x, w)`` (A2a); ``refined_points`` are then homogeneous and the

@@ -21,7 +21,7 @@ from ..mesh.repair import check_valence, prepare_topology
 from ..mesh.creases.sheets import CreaseSheets, cut_crease_sheets
 from .features import INFINITELY_SHARP, CoarseSharpness, SharpFeatures, coarse_sharpness
 from .refine.doo_sabin import FACE_FROM_EDGE, FACE_FROM_VERTEX, RefinedFaces, refine_doo_sabin, refined_halfedges
-from .refine.fewer_steps import check_refinements, fewer_refinement_sources, refinements_needed
+from .refine.fewer_steps import check_refinements, fewer_refinement_sources, refinement_choice
 from ..memory import return_freed_memory
 from .refine.holes import HoleGroup, hole_neighbourhoods, patch_frames, split_dart_holes
 
@@ -64,6 +64,8 @@ class SurfaceTopology:
     hole_faces : (k,) int, input faces tagged as holes (no patches)
     crease_sheets : CreaseSheets or None, the C0 creases: the mesh cut along them, ghost quads
         across them (``mesh.creases.sheets``; ``exact_creases``)
+    two_steps_why : str or None, with ``refinements="auto"`` and two steps taken: why one is not enough
+        (``refine.fewer_steps.refinement_choice``), for a note
     """
 
     n_input_vertices: int
@@ -87,6 +89,16 @@ class SurfaceTopology:
     sharpness: CoarseSharpness | None = None
     hole_faces: np.ndarray = field(default_factory=lambda: np.zeros(0, dtype=np.int64))
     crease_sheets: CreaseSheets | None = None
+    two_steps_why: str | None = None
+
+    def coarse_corner(self, refined_vertices=None) -> np.ndarray:
+        """(k,) int: the corner of ``input`` (a coarse half-edge) each refined vertex was made at (all: None).
+
+        One step: a refined vertex *is* a coarse corner; two: a corner of a corner (``level1.origin``)."""
+        v = np.arange(self.refined.n_vertices) if refined_vertices is None else np.asarray(refined_vertices)
+        if self.refinements == 0:
+            raise ValueError("internal: no refinement, no corners")
+        return v if self.refinements == 1 else self.level1.origin[v]
 
     @property
     def quad_frames(self) -> np.ndarray:
@@ -179,11 +191,12 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
     if not real_face.any():
         raise TopologyError("every face is tagged as a hole: there is no surface to build", hole_faces[:8])
     closed = real_face.all() and not repairs["boundary_edges"]
-    levels = refinement_count(coarse, refinements, closed, interpolate_vertices)
-    faces1, level1, refined = refine(coarse, levels)
+    levels, why_two, once = refinement_count(coarse, refinements, None if closed else real_face, interpolate_vertices)
+    faces1, level1, refined = refine(coarse, levels, once)
+    del once
     real_vertex = real_refined_vertices(coarse, level1, refined, real_face, levels)
     holes = hole_neighbourhoods(refined, None if real_face.all() else real_vertex)
-    if sheets is not None and sheets.dart_vertex is not None and sheets.dart_vertex.size and levels == 2:
+    if sheets is not None and sheets.dart_vertex is not None and sheets.dart_vertex.size and levels >= 1:
         holes = split_dart_holes(holes, *dart_cells(coarse, faces1, level1, refined, sheets))
     frames, n_quad, real_cubic = patch_frames(refined, holes, real_vertex)  # bicubic patches at real corners only
     if refined.n_halfedges >= RELEASED_TWIN_HALFEDGES:
@@ -197,16 +210,31 @@ def build_topology(face_sizes, face_vertices, n_vertices: int, refinements="auto
         frames=frames, n_quad=n_quad, cubic_keep=None if real_cubic.all() else real_cubic,
         cubic_hole=np.repeat(np.arange(sizes.size), sizes)[real_cubic],
         sharpness=pulled_sharpness(coarse, vertex_source, features, sheets), hole_faces=hole_faces, crease_sheets=sheets,
+        two_steps_why=why_two,
     )
+
+
+def fewest_refinements(face_sizes, face_vertices, n_vertices: int, features: SharpFeatures | None = None,
+                       exact_creases: bool = False) -> int:
+    """The Doo-Sabin steps ``refinements="auto"`` takes on this mesh (0, 1 or 2; open meshes, C0 creases and
+    darts included: ``refine.fewer_steps``), from its topology alone; 2 for a mesh the construction refuses as it
+    stands (e.g. an interior vertex of valence 2, which a later cleanup may still dissolve)."""
+    try:
+        return build_topology(face_sizes, face_vertices, n_vertices, "auto", False, features, exact_creases).refinements
+    except TopologyError:
+        return 2
 
 
 def dart_cells(coarse: HalfEdgeMesh, faces1: RefinedFaces, level1: HalfEdgeMesh, refined: HalfEdgeMesh,
                sheets: CreaseSheets):
     """(refined faces of the darts' holes (k,) int, refined points in the sheets' ghost quads (Vr,) bool).
 
-    A dart's hole is the F-cell (same index) of its vertex's V-cell of the first step."""
+    A dart's hole is its vertex's V-cell of the first step: after one step that cell itself, after two its
+    F-cell (the same index: F-cells come first)."""
     vertex_cell = np.flatnonzero((faces1.kind == FACE_FROM_VERTEX) & np.isin(faces1.parent, sheets.dart_vertex))
-    ghost = np.isin(coarse.face[level1.origin[np.arange(refined.n_vertices)]], sheets.ghost_faces)
+    corner = np.arange(refined.n_vertices)
+    corner = corner if refined is level1 else level1.origin[corner]
+    ghost = np.isin(coarse.face[corner], sheets.ghost_faces)
     return vertex_cell, ghost
 
 
@@ -259,27 +287,30 @@ def pulled_sharpness(coarse: HalfEdgeMesh, vertex_source: np.ndarray, features: 
     return CoarseSharpness(halfedge, vertex) if (halfedge > 0).any() or (vertex > 0).any() else None
 
 
-def refinement_count(coarse: HalfEdgeMesh, requested, closed: bool, interpolate_vertices: bool) -> int:
-    """The number of Doo-Sabin steps: ``requested``, or with "auto" the fewest after which A2/A3 apply.
+def refinement_count(coarse: HalfEdgeMesh, requested, real_face: np.ndarray | None, interpolate_vertices: bool):
+    """(steps, why, once): the number of Doo-Sabin steps, ``requested`` or with "auto" the fewest after which A2/A3
+    apply to the kept patches; why: with "auto" and two steps, why one is not enough (else None); once: the first
+    step's (faces, mesh) where they were made to decide (``fewer_steps.once_refined_parts``), else None.
 
-    Fewer than two steps need a closed, orientable mesh that satisfies R1-R3 after
-    them (Prop. 1.3.1); otherwise a one-line TopologyError.
+    ``real_face`` : (Fc,) bool, the faces whose patches are kept, or None for a closed mesh that keeps all.
+    No step needs a closed mesh that satisfies R1-R3 (Prop. 1.3.1); one step needs R1-R3 on the cells the kept
+    patches read (``refine.fewer_steps``); otherwise a one-line TopologyError.
     """
     if requested == "auto":
-        return refinements_needed(coarse, 1 if interpolate_vertices else 0) if closed else 2
-    if requested < 2:
-        if not closed:
-            raise TopologyError(f"--refinements {requested} needs a closed, orientable mesh: use 2 or auto")
-        check_refinements(coarse, requested)  # fewer steps (Prop. 1.3.1), or a one-line error
-    return requested
+        return refinement_choice(coarse, 1 if interpolate_vertices else 0, real_face)
+    once = check_refinements(coarse, requested, real_face) if requested < 2 else None  # or a one-line error
+    return requested, None, once
 
 
-def refine(coarse: HalfEdgeMesh, levels: int):
-    """(faces1, level1, refined): the first step's faces and mesh (None without refinement), and the last mesh."""
+def refine(coarse: HalfEdgeMesh, levels: int, once=None):
+    """(faces1, level1, refined): the first step's faces and mesh (None without refinement), and the last mesh;
+    ``once``: the first step's (faces, mesh) if already made (``refinement_count``)."""
     if levels == 0:
         return None, None, coarse
-    faces1 = refine_doo_sabin(coarse)
-    level1 = refined_halfedges(coarse, faces1)
+    faces1, level1 = once if once is not None else (None, None)
+    if faces1 is None:
+        faces1 = refine_doo_sabin(coarse)
+        level1 = refined_halfedges(coarse, faces1)
     coarse.release_prev()  # read by the rotations of the refinement only, unless there are creases
     if levels == 1:
         return faces1, level1, level1
@@ -294,10 +325,11 @@ def refine(coarse: HalfEdgeMesh, levels: int):
 def real_refined_vertices(coarse: HalfEdgeMesh, level1, refined: HalfEdgeMesh, real_face: np.ndarray, levels: int) -> np.ndarray:
     """(Vr,) bool: refined vertices inside real (not ghost, first-sheet) faces.
 
-    After two steps a refined vertex is a corner of a corner of a coarse face:
-    real if that face is. Fewer steps are for closed meshes only, where every
-    vertex is real.
+    After one step a refined vertex is a corner of a coarse face, after two a
+    corner of a corner: real if that face is. No step is for closed meshes only,
+    where every vertex is real.
     """
-    if levels < 2 or real_face.all():
+    if levels == 0 or real_face.all():
         return np.ones(refined.n_vertices, dtype=bool)
-    return real_face[coarse.face[level1.origin[: refined.n_vertices]]]
+    corner = np.arange(refined.n_vertices) if levels == 1 else level1.origin[: refined.n_vertices]
+    return real_face[coarse.face[corner]]

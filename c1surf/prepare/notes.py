@@ -8,7 +8,7 @@ import numpy as np
 
 from ..construction.features import INFINITELY_SHARP
 
-__all__ = ["repair_notes", "file_notes", "crease_notes", "seam_notes", "dissolve_notes", "weld_notes", "input_notes"]
+__all__ = ["repair_notes", "refinement_notes", "file_notes", "crease_notes", "seam_notes", "dissolve_notes", "weld_notes", "input_notes"]
 
 
 def file_notes(mesh_file) -> list[str]:
@@ -41,7 +41,18 @@ def repair_notes(surface, mesh_file, data=None) -> list[str]:
         notes.append(f"ignored {unused} vertices used by no face")
     if r.get("boundary_edges"):
         notes.append(f"open mesh: {r['boundary_edges']} boundary edges, closed for the construction by a ghost layer")
-    return notes
+    return notes + refinement_notes(surface)
+
+
+def refinement_notes(surface) -> list[str]:
+    """With ``--refinements auto`` and the paper's two Doo-Sabin steps taken: why one step is not enough
+    (``SurfaceTopology.two_steps_why``, set by "auto" only). ``surface``: a Surface or its SurfaceTopology."""
+    topology = getattr(surface, "topology", surface)
+    why = getattr(topology, "two_steps_why", None)
+    if not why:
+        return []
+    return [f"--refinements auto: two Doo-Sabin steps (16 patches a quad), one is not enough here: {why} "
+            "(docs/sharp-features.md, \"One Doo-Sabin step\")"]
 
 
 def crease_notes(surface) -> list[str]:

@@ -295,15 +295,13 @@ def doo_sabin_factored(mesh: HalfEdgeMesh, ratio: np.ndarray, points: np.ndarray
 
 
 class DooSabinStep:
-    """A Doo-Sabin step as a stage (``construction.stages.Stage``), kept factored until its matrix is asked for.
+    """A Doo-Sabin step as a stage (``construction.stages.Stage``), always applied factored.
 
-    The factored map (``doo_sabin_factored``) is cheapest to set up and needs no
-    memory beyond its output; the matrix is ~3x faster to apply but, for the
-    second step, the largest object of the construction (n entries per fine
-    point, ~0.5 s to build at 180,000 input quads). So: ``apply`` runs the
-    factored map until ``matrix()`` has been called, and the matrix from then
-    on. A Surface applies it once when built and calls ``matrix()`` on its
-    first ``update_points`` (re-use: animation, optimisation), not before.
+    The factored map (``doo_sabin_factored``) is cheapest to set up and needs no memory beyond its output; its
+    matrix (n entries per fine point, ~0.5 s to build at 180,000 input quads) is made only when asked for
+    (``matrix()``: ``Surface.stencil()``). ``apply`` runs the factored map in every case, so a Surface built
+    afresh and one moved by ``update_points`` apply the very same operations and agree bit for bit (the matrix
+    sums the same products in another order: the last bits differ).
 
     Parameters
     ----------
@@ -328,23 +326,15 @@ class DooSabinStep:
         self._matrix = None
 
     def apply(self, points: np.ndarray) -> np.ndarray:
-        """(H, d) fine points from (V, d) coarse ``points``."""
-        if self._matrix is not None:
-            return self._matrix @ points
+        """(H, d) fine points from (V, d) coarse ``points``: the factored map (also once the matrix is made)."""
         out = doo_sabin_factored(self.mesh, self.ratio, points)
         if self.correction is not None:
             out += self.correction @ (points if self.centroids is None else
                                       np.concatenate([points, self.centroids @ points]))
         return out
 
-    def reuse(self) -> None:
-        """Applied again (``Surface.update_points``): the matrix from now on (not with a face of more than
-        ``LARGE_FACE`` sides: n^2 entries a face)."""
-        if not has_large_face(self.mesh):
-            self.matrix()
-
     def matrix(self) -> csr_matrix:
-        """(H, V) csr_matrix, built on the first call and kept (``apply`` uses it from then on)."""
+        """(H, V) csr_matrix, built on the first call and kept (for ``Surface.stencil()``; ``apply`` stays factored)."""
         if self._matrix is None:
             self._matrix = doo_sabin_matrix(self.mesh, self.ratio, per_corner=True)
             if self.correction is not None:

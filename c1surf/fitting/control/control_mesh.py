@@ -10,8 +10,8 @@ by how far it was off. What else there is: pymeshlab (a bench-only dependency he
 triangle remeshing and pairs triangles into quad-dominant meshes, with no field alignment and no
 face-count control; QuadWild and Rhino's QuadRemesh have no maintained Python wheel.
 
-Doo-Sabin steps: a closed mesh whose irregular vertices and non-quad faces lie apart needs one step
-instead of two (``refine.fewer_steps``), a quarter of the patches. A pure-quad remesh has its
+Doo-Sabin steps: a mesh (closed or open, with C0 creases or not) whose irregular vertices and non-quad
+faces lie apart needs one step instead of two (``refine.fewer_steps``), a quarter of the patches. A pure-quad remesh has its
 irregular vertices apart; the cleanup's doublet collapse keeps them so (``cleanup``). When the
 cleaned mesh still needs two (holes the remesher left at thin parts), the remesh is tried again
 with the target 4 % up, then 4 % down (``RETRY_SCALES``), and the mesh needing fewest steps is kept.
@@ -168,12 +168,10 @@ def _check_area(points: np.ndarray, triangles: np.ndarray) -> None:
 
 
 def _doo_sabin_steps(sizes, vertices, n_vertices) -> int:
-    """The fewest Doo-Sabin steps the construction needs on this mesh (``refinements="auto"``; 2 when open)."""
-    from ...construction.refine.fewer_steps import refinements_needed
-    from ...mesh.halfedges import build_halfedges
+    """The fewest Doo-Sabin steps the construction needs on this mesh (``refinements="auto"``, open meshes too)."""
+    from ...construction.topology import fewest_refinements
 
-    mesh = build_halfedges(sizes, vertices, n_vertices)
-    return refinements_needed(mesh) if np.all(mesh.twin >= 0) else 2
+    return fewest_refinements(sizes, vertices, n_vertices)
 
 
 def scan_feature_edges(points: np.ndarray, triangles: np.ndarray, crease_angle: float) -> np.ndarray:
@@ -254,17 +252,11 @@ def _instant_layout(scan, faces: int, crease_angle, check_topology: bool = False
         change = _topology_change(layout, scan) if check_topology else ""
         if best is None or steps < best[0]:
             best = layout
-        if steps <= 1 or change or _has_boundary(sizes, vertices, control_points.shape[0]):
-            break  # an open mesh takes two steps whatever the scale
+        if steps <= 1 or change:
+            break
     info = {"remesher": "instant", "target_vertices": best[-1]["target_vertices"], "remeshes": remeshes,
             "seconds": seconds, "topology_change": change}
     return best[:-1] + (info,)
-
-
-def _has_boundary(sizes, vertices, n_vertices: int) -> bool:
-    """Whether some edge of the mesh is in one face only."""
-    _, _, key, _ = edge_keys(sizes, vertices, n_vertices)
-    return bool(np.any(np.unique(key, return_counts=True)[1] == 1))
 
 
 def _decimated_layout(scan, faces: int):
