@@ -60,7 +60,9 @@ def fitted(tmp_path_factory):
 
 
 def test_the_usd_cage_converts_to_the_fitted_surface_bit_for_bit(fitted):
-    assert convert_flags(fitted / "cage.usda") == ["--refinements", "2"]
+    steps = json.loads((fitted / "fit.json").read_text())["patches"]["refinements"]
+    assert steps == 1  # C0 rims at one Doo-Sabin step (issue 40)
+    assert convert_flags(fitted / "cage.usda") == ["--refinements", str(steps)]
     fit, converted = np.load(fitted / "fit.npz"), np.load(fitted / "convert.npz")
     assert sorted(fit.files) == sorted(converted.files) and fit["biquadratic"].size and fit["bicubic"].size
     for key in fit.files:
