@@ -42,7 +42,7 @@ def convert_flags(cage: Path) -> list:
 
 @pytest.fixture(scope="module")
 def fitted(tmp_path_factory):
-    """A cylinder scan (512 triangles) fitted at 80 faces (90 control faces, 28 crease edges, 1,440 patches) with
+    """A cylinder scan (512 triangles) fitted at 80 faces (90 control faces, 28 crease edges) with
     --crease-angle 45 (its rims: closed crease loops),
     the cage written as USD, then converted with the options its doc names. Returns the folder."""
     folder = tmp_path_factory.mktemp("usd_cage")
