@@ -95,7 +95,8 @@ def plan_options(command):
                      help="The control mesh: 'instant' Instant Meshes' field-aligned quads (few CAD faces; thin parts "
                           "and handles can go), 'decimate' the scan decimated with its topology kept, paired and split "
                           "into quads (finer where it bends, more CAD faces), 'auto' Instant Meshes where it keeps the "
-                          "scan's components, Euler characteristic and rims, else 'decimate'."),
+                          "scan's components, Euler characteristic and rims and covers the scan (every scan vertex "
+                          "within about a control edge, every rim matched), else 'decimate'."),
     ], lambda faces, tolerance, face_cap, fairness, iterations, remesher: ScanFitOptions(
         faces, tolerance, face_cap, None, FitOptions(fairness=fairness, max_iterations=iterations),
         remesher).check())
@@ -223,6 +224,10 @@ def summary_lines(document: dict) -> list[str]:
         scan, surface = (topology[k] for k in ("scan", "surface"))
         lines.append(f"topology:         {_counts_text(surface)}" + (" (the scan's)" if not topology["differences"] else
                                                                       f"; the scan: {_counts_text(scan)}"))
+        read = topology.get("scan_as_read")
+        if read and any(read[k] != scan[k] for k in ("components", "euler_characteristic", "rims")):
+            lines.append(f"scan as read:     {_counts_text(read)} ({read['pinched_vertices']} pinched vertices, "
+                         f"{read['non_manifold_edges']} non-manifold edges; above: as a manifold)")
     return lines
 
 

@@ -28,8 +28,8 @@ import numpy as np
 
 from ..construction.surface import Surface, SurfaceOptions
 from ..mesh.halfedges import component_roots
-from ..mesh.topology_counts import compare_topology, topology_counts
-from .control.control_mesh import REMESHERS, ControlMesh, control_mesh_from_scan
+from ..mesh.topology_counts import compare_topology, counts_as_read, topology_counts
+from .control.control_mesh import REMESHERS, ControlMesh, control_mesh_from_scan, manifold_scan
 from .deviation import bounding_diagonal, distance_stats, two_sided_deviation
 from .iterate import fit_surface_points, project_scan
 from .control.local_refine import next_face_count
@@ -226,6 +226,7 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
     deviation = two_sided_deviation(surface, points, triangles, result.footpoints)
     _clock(timings, "deviation", start)
     topology = fit_topology(triangles, points.shape[0], mesh, surface.features)
+    notes += as_read_note(topology)
     if topology["differences"]:
         notes.append("the surface's topology differs from the scan's: " + "; ".join(topology["differences"]))
     return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings, topology)
@@ -297,20 +298,39 @@ def _cover_components(points, triangles, mesh: ControlMesh, remesh: bool, plan: 
 
 
 def fit_topology(triangles: np.ndarray, n_points: int, control: ControlMesh, features=None) -> dict:
-    """The ``topology`` of the fit report: ``{"scan": counts, "surface": counts, "differences": [phrases]}``
-    (``mesh.topology_counts``), the surface's from its control mesh less the faces ``features`` tags as holes
-    (the construction makes a surface homeomorphic to the mesh it covers).
+    """The ``topology`` of the fit report: ``{"scan": counts, "surface": counts, "differences": [phrases],
+    "scan_as_read": counts}`` (``mesh.topology_counts``): the scan's as a manifold (``control_mesh.manifold_scan``:
+    edges in three or more triangles cut into sheets, pinched vertices split into fans, as ``convert`` prepares a
+    mesh; the control mesh is made of that), its counts as read beside them (``counts_as_read``: vertex-connected
+    components, V - E + F, rims, pinched vertices and non-manifold edges), and the surface's from its control mesh
+    less the faces ``features`` tags as holes (the construction makes a surface homeomorphic to the mesh it covers).
 
     triangles : (t, 3) int, the scan's; n_points : its vertices; control : ControlMesh; features : SharpFeatures
     """
-    scan = topology_counts(np.full(triangles.shape[0], 3), triangles.ravel(), n_points)
+    as_read = counts_as_read(np.full(triangles.shape[0], 3), triangles.ravel(), n_points)
+    _, manifold, _ = manifold_scan(np.zeros((n_points, 3)), triangles)
+    scan = topology_counts(np.full(manifold.shape[0], 3), manifold.ravel(), int(manifold.max(initial=-1)) + 1)
     sizes, vertices = control.face_sizes, control.face_vertices
     if features is not None and features.hole_faces.size:
         kept = np.ones(sizes.size, dtype=bool)
         kept[features.hole_faces] = False
         sizes, vertices = sizes[kept], vertices[np.repeat(kept, sizes)]
     surface = topology_counts(sizes, vertices, control.points.shape[0])
-    return {"scan": scan.as_dict(), "surface": surface.as_dict(), "differences": compare_topology(scan, surface)}
+    return {"scan": scan.as_dict(), "surface": surface.as_dict(), "differences": compare_topology(scan, surface),
+            "scan_as_read": as_read}
+
+
+def as_read_note(topology: dict) -> list:
+    """A note when the scan's counts as read differ from its counts as a manifold (``fit_topology``), else []."""
+    read, manifold = topology["scan_as_read"], topology["scan"]
+    keys = ("components", "euler_characteristic", "rims")
+    if all(read[k] == manifold[k] for k in keys) and not read["pinched_vertices"] and not read["non_manifold_edges"]:
+        return []
+    text = lambda c: f"{c['components']} components, Euler characteristic {c['euler_characteristic']}, {c['rims']} rims"
+    return [f"the scan is not a manifold ({read['pinched_vertices']} pinched vertices, {read['non_manifold_edges']} "
+            f"edges in three or more triangles): as read it has {text(read)}; as a manifold (pinched vertices split "
+            f"into fans, those edges cut into sheets, as convert does) {text(manifold)}, the counts the control mesh "
+            "and the surface keep"]
 
 
 def unfitted_components(points: np.ndarray, triangles: np.ndarray, control_points: np.ndarray, diagonal: float,

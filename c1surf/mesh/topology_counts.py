@@ -16,7 +16,7 @@ import numpy as np
 
 from .statistics import mesh_statistics
 
-__all__ = ["TopologyCounts", "topology_counts", "compare_topology"]
+__all__ = ["TopologyCounts", "topology_counts", "compare_topology", "counts_as_read"]
 
 
 @dataclass(frozen=True)
@@ -65,6 +65,41 @@ def topology_counts(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertice
     rims = tuple(int(x) for x in parts.boundary_loops)
     return TopologyCounts(len(euler), int(sum(euler)), int(sum(rims)), euler, rims,
                           tuple(int(x) for x in parts.faces))
+
+
+def counts_as_read(face_sizes: np.ndarray, face_vertices: np.ndarray, n_vertices: int) -> dict:
+    """A mesh's counts as its faces are, nothing split: ``components`` (vertex-connected: faces meeting at a pinched
+    vertex are one), ``euler_characteristic`` (V - E + F of the used vertices and the distinct edges), ``rims``
+    (components of the edges in one face), ``pinched_vertices`` (in more than one fan of faces) and
+    ``non_manifold_edges`` (in three or more faces). A manifold mesh has ``topology_counts``' counts here too."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+
+    from .halfedges import build_halfedges
+    from .repair import split_pinched_vertices
+
+    sizes = np.asarray(face_sizes, dtype=np.int64)
+    corners = np.asarray(face_vertices, dtype=np.int64)
+    n = int(n_vertices)
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    face = np.repeat(np.arange(sizes.size), sizes)
+    following = corners[offsets[face] + (np.arange(corners.size) - offsets[face] + 1) % np.maximum(sizes[face], 1)]
+    key = np.minimum(corners, following) * n + np.maximum(corners, following)
+    edges, counts = np.unique(key, return_counts=True)
+    used = np.unique(corners)
+
+    def parts(pairs: np.ndarray, nodes: np.ndarray) -> int:
+        graph = coo_matrix((np.ones(pairs.size), (pairs // n, pairs % n)), shape=(n, n))
+        return int(np.unique(connected_components(graph, directed=False)[1][nodes]).size) if nodes.size else 0
+
+    rim = edges[counts == 1]
+    crowded = int(np.count_nonzero(counts > 2))
+    pinched = 0
+    if not crowded and sizes.size:
+        pinched = split_pinched_vertices(build_halfedges(sizes, corners, n))[2]
+    return {"components": parts(edges, used), "euler_characteristic": int(used.size - edges.size + sizes.size),
+            "rims": parts(rim, np.unique(np.r_[rim // n, rim % n])), "pinched_vertices": int(pinched),
+            "non_manifold_edges": crowded}
 
 
 def compare_topology(scan: TopologyCounts, surface: TopologyCounts) -> list[str]:

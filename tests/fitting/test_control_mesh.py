@@ -342,5 +342,9 @@ def test_merged_crease_sectors_leave_no_vertex_in_two_faces():
     surface = Surface(mesh.face_sizes, mesh.face_vertices, mesh.points, SurfaceOptions(exact_creases=True),
                       features=mesh.features())
     sheets = surface.topology.crease_sheets
-    assert len(sheets.cut_edges) == len(mesh.crease_edges) and len(sheets.kept_edges) == 0
+    # every tagged edge is cut but the lone ones whose two ends are loose (a dart chain of one edge, which the
+    # construction keeps uncut by design): the decimated mesh of issue 39 (its uncovered tip redone finer) has 3
+    kept = {tuple(e) for e in np.sort(sheets.kept_edges, axis=1)}
+    assert kept == {tuple(e) for e in np.sort(sheets.dart_edges, axis=1)} and len(kept) <= 3
+    assert len(sheets.cut_edges) + len(kept) == len(mesh.crease_edges)
     assert sheets.dart_vertex.size > 0
