@@ -1,0 +1,137 @@
+"""Compiled passes of the simplification driver (``simplify``): many local operations in one sequential loop.
+
+Each pass walks its candidates in the order the driver gives (cheapest first) and tries each operation
+(``operations``); a face none of whose vertices an earlier operation of the same round touched (``stamp``) is
+still as the driver measured it, so its cost holds, and the others wait for the next round. The loops are
+sequential by nature (an operation changes what its neighbours may do), hence compiled.
+"""
+from __future__ import annotations
+
+import numpy as np
+
+from ...evaluation.compiled.kernels import compiled
+from .links import edge_valence, face_across, is_boundary
+from .operations import collapse_diagonal, collapse_polychord, remove_doublet, rotate_edge
+
+__all__ = ["collapse_pass", "doublet_pass", "rotate_pass", "polychord_pass"]
+
+
+@compiled
+def _fresh(quads, stamp, face, round_id):  # pragma: no cover - compiled
+    """Whether no vertex of ``face`` was touched in this round."""
+    for i in range(4):
+        if stamp[quads[face, i]] == round_id:
+            return False
+    return True
+
+
+@compiled
+def _stamp_ring(quads, vertex_faces, counts, stamp, vertex, round_id):  # pragma: no cover - compiled
+    """Mark ``vertex`` and every vertex of its faces as touched."""
+    stamp[vertex] = round_id
+    for s in range(counts[vertex]):
+        for i in range(4):
+            stamp[quads[vertex_faces[vertex, s], i]] = round_id
+
+
+@compiled
+def collapse_pass(quads, alive, vertex_faces, counts, points, limit, params, marks, order_face, order_corner,
+                  live, target, stamp, round_id):  # pragma: no cover - compiled
+    """Diagonal collapses in the given order until ``live`` faces reach ``target``; the doublets a collapse leaves
+    at the quad's other two corners are removed at once. Returns (live faces, collapses)."""
+    done = 0
+    for t in range(order_face.size):
+        if live <= target:
+            break
+        f = order_face[t]
+        if not alive[f] or not _fresh(quads, stamp, f, round_id):
+            continue
+        k = order_corner[t]
+        a, b, d = quads[f, k], quads[f, (k + 1) % 4], quads[f, (k + 3) % 4]
+        if collapse_diagonal(quads, alive, vertex_faces, counts, points, limit, params, marks, f, k):
+            live -= 1
+            done += 1
+            _stamp_ring(quads, vertex_faces, counts, stamp, a, round_id)
+            for v in (b, d):
+                if remove_doublet(quads, alive, vertex_faces, counts, points, limit, params, marks, v):
+                    live -= 1
+    return live, done
+
+
+@compiled
+def doublet_pass(quads, alive, vertex_faces, counts, points, limit, params, marks):  # pragma: no cover - compiled
+    """Remove every interior vertex of valence 2, until none is left. Returns the faces removed."""
+    removed, changed = 0, True
+    while changed:
+        changed = False
+        for v in range(counts.size):
+            if counts[v] == 2 and remove_doublet(quads, alive, vertex_faces, counts, points, limit, params, marks, v):
+                removed += 1
+                changed = True
+    return removed
+
+
+@compiled
+def _valence_gain(quads, vertex_faces, counts, face, k, other, j):  # pragma: no cover - compiled
+    """(gain of turn +1, gain of turn -1): the drop of the sum of (valence - ideal)^2 over the hexagon of the two
+    quads at the edge (ideal 4 inside, 3 on a rim)."""
+    hexagon = (quads[face, (k + 1) % 4], quads[face, (k + 2) % 4], quads[face, (k + 3) % 4], quads[face, k],
+               quads[other, (j + 2) % 4], quads[other, (j + 3) % 4])
+    dev = np.empty(6)
+    for i in range(6):
+        v = hexagon[i]
+        ideal = 3 if is_boundary(quads, vertex_faces, counts, v) else 4
+        dev[i] = edge_valence(quads, vertex_faces, counts, v) - ideal
+    before = np.sum(dev * dev)
+    plus = np.sum(dev * dev) - dev[0] ** 2 - dev[3] ** 2 - dev[1] ** 2 - dev[4] ** 2 \
+        + (dev[0] - 1) ** 2 + (dev[3] - 1) ** 2 + (dev[1] + 1) ** 2 + (dev[4] + 1) ** 2
+    minus = np.sum(dev * dev) - dev[0] ** 2 - dev[3] ** 2 - dev[2] ** 2 - dev[5] ** 2 \
+        + (dev[0] - 1) ** 2 + (dev[3] - 1) ** 2 + (dev[2] + 1) ** 2 + (dev[5] + 1) ** 2
+    return before - plus, before - minus
+
+
+@compiled
+def rotate_pass(quads, alive, vertex_faces, counts, points, limit, params, marks):  # pragma: no cover - compiled
+    """Turn every interior edge whose turn lowers the valence energy (``_valence_gain``) by 2 or more (the turn
+    of larger gain first). Returns the edges turned."""
+    turned = 0
+    for f in range(quads.shape[0]):
+        for k in range(4):
+            if not alive[f]:
+                break
+            other, j = face_across(quads, vertex_faces, counts, quads[f, (k + 1) % 4], quads[f, k])
+            if other < 0 or other < f:
+                continue
+            plus, minus = _valence_gain(quads, vertex_faces, counts, f, k, other, j)
+            best, turn = (plus, 1) if plus >= minus else (minus, -1)
+            if best >= 2.0 and rotate_edge(quads, alive, vertex_faces, counts, points, limit, params, marks, f, k,
+                                           turn):
+                turned += 1
+    return turned
+
+
+@compiled
+def polychord_pass(quads, alive, vertex_faces, counts, points, limit, params, marks, order_face, order_corner,
+                   live, target, tries, stamp, round_id):  # pragma: no cover - compiled
+    """Polychord collapses in the given order (at most ``tries`` attempts) until ``live`` reaches ``target``.
+    Returns (live faces, strips collapsed)."""
+    faces = np.empty(quads.shape[0], dtype=np.int64)
+    edges = np.empty((quads.shape[0] + 1, 2), dtype=np.int64)
+    remap = np.full(points.shape[0], -1, dtype=np.int64)
+    done = 0
+    for t in range(min(tries, order_face.size)):
+        if live <= target:
+            break
+        f = order_face[t]
+        if not alive[f] or not _fresh(quads, stamp, f, round_id):
+            continue
+        m = collapse_polychord(quads, alive, vertex_faces, counts, points, limit, params, marks, f, order_corner[t],
+                               faces, edges, remap)
+        if m > 0:
+            live = 0
+            for g in range(alive.size):
+                live += 1 if alive[g] else 0
+            done += 1
+            for s in range(m):
+                _stamp_ring(quads, vertex_faces, counts, stamp, edges[s, 0], round_id)
+    return live, done
