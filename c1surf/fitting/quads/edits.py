@@ -58,21 +58,15 @@ def _face_ok(points, row, reference, limit, params):  # pragma: no cover - compi
 
 @compiled
 def _touched_vertices(quads, removed, nr, added, na, moved, nm):  # pragma: no cover - compiled
-    """The distinct vertices of the removed faces (as they are now), the added faces and the moved vertices."""
+    """The distinct vertices (sorted) of the removed faces (as they are now), the added faces and the moved
+    vertices."""
     out = np.empty(4 * (nr + na) + nm, dtype=np.int64)
-    n = 0
-    for k in range(nr + na + nm):
-        for i in range(4 if k < nr + na else 1):
-            v = quads[removed[k], i] if k < nr else (added[k - nr, i] if k < nr + na else moved[k - nr - na])
-            seen = False
-            for j in range(n):
-                if out[j] == v:
-                    seen = True
-                    break
-            if not seen:
-                out[n] = v
-                n += 1
-    return out[:n]
+    for k in range(nr):
+        out[4 * k:4 * k + 4] = quads[removed[k]]
+    for k in range(na):
+        out[4 * (nr + k):4 * (nr + k) + 4] = added[k]
+    out[4 * (nr + na):] = moved[:nm]
+    return np.unique(out)
 
 
 @compiled
@@ -156,41 +150,34 @@ def _contains(sorted_keys, key):  # pragma: no cover - compiled
 def _geometry_ok(quads, vertex_faces, counts, points, limit, params, removed, na, parents, reference_ids,
                  reference_normals, touched, lists, sizes, moved, nm, marks):  # pragma: no cover - compiled
     """The geometry half of ``try_edit``: added faces against their parents' normals, the kept faces at moved
-    vertices against their own old normals (``reference_ids``, ``reference_normals``: the old normals by face)."""
+    vertices against their own old normals (``reference_ids`` sorted, ``reference_normals``: the old normals)."""
     for k in range(na):
         ref = np.zeros(3)
         for j in range(2):
             if parents[k, j] >= 0:
-                for r in range(reference_ids.size):
-                    if reference_ids[r] == parents[k, j]:
-                        ref += reference_normals[r]
+                ref += reference_normals[np.searchsorted(reference_ids, parents[k, j])]
         if not _face_ok(points, quads[removed[k]], ref, limit, params):
             return False
     for m in range(nm):
-        for t in range(touched.size):
-            if touched[t] != moved[m]:
+        t = np.searchsorted(touched, moved[m])
+        for k in range(sizes[t]):
+            g = lists[t, k]
+            if marks[g]:
                 continue
-            for k in range(sizes[t]):
-                g = lists[t, k]
-                if marks[g]:
-                    continue
-                ref = np.zeros(3)
-                for r in range(reference_ids.size):
-                    if reference_ids[r] == g:
-                        ref = reference_normals[r]
-                if not _face_ok(points, quads[g], ref, limit, params):
-                    return False
+            ref = reference_normals[np.searchsorted(reference_ids, g)]
+            if not _face_ok(points, quads[g], ref, limit, params):
+                return False
     return True
 
 
 @compiled
 def _old_normals(quads, vertex_faces, counts, points, removed, nr, moved, nm):  # pragma: no cover - compiled
-    """(ids, (k, 3) normals): the current normals of the removed faces and of the faces at the moved vertices."""
+    """(ids sorted, (k, 3) normals): the current normals of the removed faces and of the faces at the moved
+    vertices."""
     n = nr
     for m in range(nm):
         n += counts[moved[m]]
     ids = np.empty(n, dtype=np.int64)
-    normals = np.empty((n, 3))
     for k in range(nr):
         ids[k] = removed[k]
     n = nr
@@ -198,7 +185,9 @@ def _old_normals(quads, vertex_faces, counts, points, removed, nr, moved, nm):  
         for k in range(counts[moved[m]]):
             ids[n] = vertex_faces[moved[m], k]
             n += 1
-    for k in range(n):
+    ids = np.unique(ids)
+    normals = np.empty((ids.size, 3))
+    for k in range(ids.size):
         normals[k] = quad_normal(points, quads[ids[k]])
     return ids, normals
 

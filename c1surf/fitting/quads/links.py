@@ -5,7 +5,8 @@ The mesh is four arrays (``quad_mesh.QuadMesh``): ``quads`` (F, 4) int64 counter
 (v, x, y, z) puts the directed path x -> y -> z into the *link* of v; v is a manifold vertex, its faces
 consistently oriented, exactly when its link is one simple cycle (interior) or one simple path (on a rim). Every
 local operation (``edits.try_edit``) checks the links of the vertices it touches: that is the link condition
-(Dey et al. 1999 for triangles; for quads it also refuses two faces meeting at a diagonal vertex twice).
+(Dey et al. 1999 for triangles). A link that visits a vertex twice is refused too: two faces meeting at two vertices
+that are not an edge, as at a doublet (an interior vertex of valence 2), so no operation ever makes one.
 """
 from __future__ import annotations
 

@@ -10,7 +10,7 @@ from __future__ import annotations
 import numpy as np
 
 from ...evaluation.compiled.kernels import compiled
-from .links import edge_valence, face_across, is_boundary
+from .links import face_across
 from .operations import collapse_diagonal, collapse_polychord, remove_doublet, rotate_edge
 
 __all__ = ["collapse_pass", "doublet_pass", "rotate_pass", "polychord_pass"]
@@ -72,28 +72,26 @@ def doublet_pass(quads, alive, vertex_faces, counts, points, limit, params, mark
 
 
 @compiled
-def _valence_gain(quads, vertex_faces, counts, face, k, other, j):  # pragma: no cover - compiled
-    """(gain of turn +1, gain of turn -1): the drop of the sum of (valence - ideal)^2 over the hexagon of the two
-    quads at the edge (ideal 4 inside, 3 on a rim)."""
-    hexagon = (quads[face, (k + 1) % 4], quads[face, (k + 2) % 4], quads[face, (k + 3) % 4], quads[face, k],
-               quads[other, (j + 2) % 4], quads[other, (j + 3) % 4])
+def _valence_gain(quads, valence, ideal, face, k, other, j):  # pragma: no cover - compiled
+    """(gain of turn +1, gain of turn -1, the hexagon): the drop of the sum of (valence - ideal)^2 over the hexagon
+    of the two quads at the edge (``ideal`` 4 inside, 3 on a rim)."""
+    hexagon = np.array([quads[face, (k + 1) % 4], quads[face, (k + 2) % 4], quads[face, (k + 3) % 4], quads[face, k],
+                        quads[other, (j + 2) % 4], quads[other, (j + 3) % 4]])
     dev = np.empty(6)
     for i in range(6):
-        v = hexagon[i]
-        ideal = 3 if is_boundary(quads, vertex_faces, counts, v) else 4
-        dev[i] = edge_valence(quads, vertex_faces, counts, v) - ideal
-    before = np.sum(dev * dev)
-    plus = np.sum(dev * dev) - dev[0] ** 2 - dev[3] ** 2 - dev[1] ** 2 - dev[4] ** 2 \
-        + (dev[0] - 1) ** 2 + (dev[3] - 1) ** 2 + (dev[1] + 1) ** 2 + (dev[4] + 1) ** 2
-    minus = np.sum(dev * dev) - dev[0] ** 2 - dev[3] ** 2 - dev[2] ** 2 - dev[5] ** 2 \
-        + (dev[0] - 1) ** 2 + (dev[3] - 1) ** 2 + (dev[2] + 1) ** 2 + (dev[5] + 1) ** 2
-    return before - plus, before - minus
+        dev[i] = valence[hexagon[i]] - ideal[hexagon[i]]
+    base = (dev[0] - 1) ** 2 + (dev[3] - 1) ** 2 - dev[0] ** 2 - dev[3] ** 2
+    plus = base + (dev[1] + 1) ** 2 + (dev[4] + 1) ** 2 - dev[1] ** 2 - dev[4] ** 2
+    minus = base + (dev[2] + 1) ** 2 + (dev[5] + 1) ** 2 - dev[2] ** 2 - dev[5] ** 2
+    return -plus, -minus, hexagon
 
 
 @compiled
-def rotate_pass(quads, alive, vertex_faces, counts, points, limit, params, marks):  # pragma: no cover - compiled
+def rotate_pass(quads, alive, vertex_faces, counts, points, limit, params, marks, valence,
+                ideal):  # pragma: no cover - compiled
     """Turn every interior edge whose turn lowers the valence energy (``_valence_gain``) by 2 or more (the turn
-    of larger gain first). Returns the edges turned."""
+    of larger gain first); ``valence`` (V,) edges at each vertex, kept up to date, ``ideal`` (V,) 4 or 3 (rim).
+    Returns the edges turned."""
     turned = 0
     for f in range(quads.shape[0]):
         for k in range(4):
@@ -102,32 +100,40 @@ def rotate_pass(quads, alive, vertex_faces, counts, points, limit, params, marks
             other, j = face_across(quads, vertex_faces, counts, quads[f, (k + 1) % 4], quads[f, k])
             if other < 0 or other < f:
                 continue
-            plus, minus = _valence_gain(quads, vertex_faces, counts, f, k, other, j)
+            plus, minus, hexagon = _valence_gain(quads, valence, ideal, f, k, other, j)
             best, turn = (plus, 1) if plus >= minus else (minus, -1)
             if best >= 2.0 and rotate_edge(quads, alive, vertex_faces, counts, points, limit, params, marks, f, k,
                                            turn):
                 turned += 1
+                valence[hexagon[0]] -= 1
+                valence[hexagon[3]] -= 1
+                s = 1 if turn > 0 else 2
+                valence[hexagon[s]] += 1
+                valence[hexagon[s + 3]] += 1
     return turned
 
 
 @compiled
 def polychord_pass(quads, alive, vertex_faces, counts, points, limit, params, marks, order_face, order_corner,
                    live, target, tries, stamp, round_id):  # pragma: no cover - compiled
-    """Polychord collapses in the given order (at most ``tries`` attempts) until ``live`` reaches ``target``.
+    """Polychord collapses in the given order until ``live`` reaches ``target`` or ``tries`` attempts in a row
+    fail.
     Returns (live faces, strips collapsed)."""
     faces = np.empty(quads.shape[0], dtype=np.int64)
     edges = np.empty((quads.shape[0] + 1, 2), dtype=np.int64)
     remap = np.full(points.shape[0], -1, dtype=np.int64)
-    done = 0
-    for t in range(min(tries, order_face.size)):
-        if live <= target:
+    done, misses = 0, 0
+    for t in range(order_face.size):
+        if live <= target or misses >= tries:
             break
         f = order_face[t]
         if not alive[f] or not _fresh(quads, stamp, f, round_id):
             continue
         m = collapse_polychord(quads, alive, vertex_faces, counts, points, limit, params, marks, f, order_corner[t],
                                faces, edges, remap)
+        misses += 1
         if m > 0:
+            misses = 0
             live = 0
             for g in range(alive.size):
                 live += 1 if alive[g] else 0

@@ -45,7 +45,7 @@ class SimplifyOptions:
     patience : int, the slow rounds of strips alone before diagonal collapses join (strips keep valences)
     rounds : int, the most rounds
     smoothing : int, smoothing steps a round
-    chord_tries : int, polychord attempts a round
+    chord_tries : int, failed polychord attempts in a row that end a round's strips
     """
 
     faces: int | None = None
@@ -56,9 +56,9 @@ class SimplifyOptions:
     grow: float = 1.3
     slow: float = 0.02
     patience: int = 2
-    rounds: int = 80
+    rounds: int = 250
     smoothing: int = 2
-    chord_tries: int = 400
+    chord_tries: int = 40
 
 
 def simplify_scan(points: np.ndarray, triangles: np.ndarray, options: SimplifyOptions = SimplifyOptions()):
@@ -167,7 +167,7 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
             live, collapses = collapse_pass(*state, limit, params, marks, faces, corners.astype(np.int64), live,
                                             budget, stamp, 2 * round_id + 1)
         doublets = doublet_pass(*state, limit, params, marks)
-        turns = rotate_pass(*state, limit, params, marks)
+        turns = rotate_pass(*state, limit, params, marks, *_valences(mesh))
         doublets += doublet_pass(*state, limit, params, marks)
         smooth(mesh, target, options.smoothing)
         for key, value in (("rounds", 1), ("collapses", collapses), ("turns", turns), ("strips", strips),
@@ -177,7 +177,8 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
             break
         if options.faces is not None and slow:
             scale *= options.grow
-    totals["turns"] += int(rotate_pass(*state, _limits(mesh, tree, curvature_edge, thin_limit, scale), params, marks))
+    totals["turns"] += int(rotate_pass(*state, _limits(mesh, tree, curvature_edge, thin_limit, scale), params, marks,
+                                       *_valences(mesh)))
     totals["doublets"] += int(doublet_pass(*state, np.full(mesh.points.shape[0], np.inf), params, marks))
     used = np.flatnonzero(mesh.counts > 0)
     inside = used[_valences(mesh)[1][used] == 4]  # not on a rim
