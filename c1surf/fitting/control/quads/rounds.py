@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...evaluation.compiled.kernels import compiled
+from ....evaluation.compiled.kernels import compiled
 from .links import face_across
 from .operations import collapse_diagonal, collapse_polychord, remove_doublet, rotate_edge
 
@@ -35,10 +35,10 @@ def _stamp_ring(quads, vertex_faces, counts, stamp, vertex, round_id):  # pragma
 
 
 @compiled
-def collapse_pass(quads, alive, vertex_faces, counts, points, limit, params, marks, order_face, order_corner,
-                  live, target, stamp, round_id):  # pragma: no cover - compiled
+def collapse_pass(mesh, guard, order_face, order_corner, live, target, stamp, round_id):  # pragma: no cover
     """Diagonal collapses in the given order until ``live`` faces reach ``target``; the doublets a collapse leaves
     at the quad's other two corners are removed at once. Returns (live faces, collapses)."""
+    quads, alive, vertex_faces, counts = mesh[0], mesh[1], mesh[2], mesh[3]
     done = 0
     for t in range(order_face.size):
         if live <= target:
@@ -48,24 +48,25 @@ def collapse_pass(quads, alive, vertex_faces, counts, points, limit, params, mar
             continue
         k = order_corner[t]
         a, b, d = quads[f, k], quads[f, (k + 1) % 4], quads[f, (k + 3) % 4]
-        if collapse_diagonal(quads, alive, vertex_faces, counts, points, limit, params, marks, f, k):
+        if collapse_diagonal(mesh, guard, f, k):
             live -= 1
             done += 1
             _stamp_ring(quads, vertex_faces, counts, stamp, a, round_id)
             for v in (b, d):
-                if remove_doublet(quads, alive, vertex_faces, counts, points, limit, params, marks, v):
+                if remove_doublet(mesh, guard, v):
                     live -= 1
     return live, done
 
 
 @compiled
-def doublet_pass(quads, alive, vertex_faces, counts, points, limit, params, marks):  # pragma: no cover - compiled
+def doublet_pass(mesh, guard):  # pragma: no cover - compiled
     """Remove every interior vertex of valence 2, until none is left. Returns the faces removed."""
+    counts = mesh[3]
     removed, changed = 0, True
     while changed:
         changed = False
         for v in range(counts.size):
-            if counts[v] == 2 and remove_doublet(quads, alive, vertex_faces, counts, points, limit, params, marks, v):
+            if counts[v] == 2 and remove_doublet(mesh, guard, v):
                 removed += 1
                 changed = True
     return removed
@@ -87,11 +88,11 @@ def _valence_gain(quads, valence, ideal, face, k, other, j):  # pragma: no cover
 
 
 @compiled
-def rotate_pass(quads, alive, vertex_faces, counts, points, limit, params, marks, valence,
-                ideal):  # pragma: no cover - compiled
+def rotate_pass(mesh, guard, valence, ideal):  # pragma: no cover - compiled
     """Turn every interior edge whose turn lowers the valence energy (``_valence_gain``) by 2 or more (the turn
     of larger gain first); ``valence`` (V,) edges at each vertex, kept up to date, ``ideal`` (V,) 4 or 3 (rim).
     Returns the edges turned."""
+    quads, alive, vertex_faces, counts = mesh[0], mesh[1], mesh[2], mesh[3]
     turned = 0
     for f in range(quads.shape[0]):
         for k in range(4):
@@ -102,8 +103,7 @@ def rotate_pass(quads, alive, vertex_faces, counts, points, limit, params, marks
                 continue
             plus, minus, hexagon = _valence_gain(quads, valence, ideal, f, k, other, j)
             best, turn = (plus, 1) if plus >= minus else (minus, -1)
-            if best >= 2.0 and rotate_edge(quads, alive, vertex_faces, counts, points, limit, params, marks, f, k,
-                                           turn):
+            if best >= 2.0 and rotate_edge(mesh, guard, f, k, turn):
                 turned += 1
                 valence[hexagon[0]] -= 1
                 valence[hexagon[3]] -= 1
@@ -114,11 +114,12 @@ def rotate_pass(quads, alive, vertex_faces, counts, points, limit, params, marks
 
 
 @compiled
-def polychord_pass(quads, alive, vertex_faces, counts, points, limit, params, marks, order_face, order_corner,
-                   live, target, tries, stamp, round_id):  # pragma: no cover - compiled
-    """Polychord collapses in the given order until ``live`` reaches ``target`` or ``tries`` attempts in a row
-    fail.
+def polychord_pass(mesh, guard, order_face, order_corner, budget, stamp, round_id):  # pragma: no cover - compiled
+    """Polychord collapses in the given order until the live faces reach ``target`` or ``tries`` attempts in a row
+    fail (``budget``: (live, target, tries)).
     Returns (live faces, strips collapsed)."""
+    quads, alive, vertex_faces, counts, points = mesh
+    live, target, tries = budget
     faces = np.empty(quads.shape[0], dtype=np.int64)
     edges = np.empty((quads.shape[0] + 1, 2), dtype=np.int64)
     remap = np.full(points.shape[0], -1, dtype=np.int64)
@@ -129,8 +130,7 @@ def polychord_pass(quads, alive, vertex_faces, counts, points, limit, params, ma
         f = order_face[t]
         if not alive[f] or not _fresh(quads, stamp, f, round_id):
             continue
-        m = collapse_polychord(quads, alive, vertex_faces, counts, points, limit, params, marks, f, order_corner[t],
-                               faces, edges, remap)
+        m = collapse_polychord(mesh, guard, f, order_corner[t], (faces, edges, remap))
         misses += 1
         if m > 0:
             misses = 0

@@ -19,7 +19,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...evaluation.compiled.kernels import compiled
+from ....evaluation.compiled.kernels import compiled
 from .edits import try_edit
 from .links import corner, face_across, is_boundary
 
@@ -40,8 +40,10 @@ def _merged_position(quads, vertex_faces, counts, points, keep, go):  # pragma: 
 
 
 @compiled
-def collapse_diagonal(quads, alive, vertex_faces, counts, points, limit, params, marks, face, k):  # pragma: no cover
-    """Collapse the diagonal of ``face`` from corner k to corner k + 2 (module docstring); True when done."""
+def collapse_diagonal(mesh, guard, face, k):  # pragma: no cover - compiled
+    """Collapse the diagonal of ``face`` from corner k to corner k + 2 (module docstring); True when done.
+    ``mesh``, ``guard``: ``edits.try_edit``'s."""
+    quads, vertex_faces, counts, points = mesh[0], mesh[2], mesh[3], mesh[4]
     a, c = quads[face, k], quads[face, (k + 2) % 4]
     position, rims = _merged_position(quads, vertex_faces, counts, points, a, c)
     if rims == 2:
@@ -61,13 +63,13 @@ def collapse_diagonal(quads, alive, vertex_faces, counts, points, limit, params,
             j += 1
     removed[n - 1] = face
     moved = np.array([a], dtype=np.int64)
-    return try_edit(quads, alive, vertex_faces, counts, points, limit, params, marks, removed, n, added, n - 1,
-                    parents, moved, position.reshape(1, 3), 1, True)
+    return try_edit(mesh, guard, removed, added, parents, moved, position.reshape(1, 3), True)
 
 
 @compiled
-def rotate_edge(quads, alive, vertex_faces, counts, points, limit, params, marks, face, k, turn):  # pragma: no cover
+def rotate_edge(mesh, guard, face, k, turn):  # pragma: no cover - compiled
     """Turn the edge from corner k to k + 1 of ``face`` to the next hexagon diagonal (turn +1 or -1)."""
+    quads, vertex_faces, counts = mesh[0], mesh[2], mesh[3]
     u, v = quads[face, k], quads[face, (k + 1) % 4]
     other, j = face_across(quads, vertex_faces, counts, v, u)
     if other < 0 or other == face:
@@ -81,14 +83,14 @@ def rotate_edge(quads, alive, vertex_faces, counts, points, limit, params, marks
         added[1, i] = hexagon[(s + 3 + i) % 6]
     removed = np.array([face, other], dtype=np.int64)
     parents = np.array([[face, other], [face, other]], dtype=np.int64)
-    return try_edit(quads, alive, vertex_faces, counts, points, limit, params, marks, removed, 2, added, 2, parents,
-                    np.empty(0, dtype=np.int64), np.empty((0, 3)), 0, True)
+    return try_edit(mesh, guard, removed, added, parents, np.empty(0, dtype=np.int64), np.empty((0, 3)), True)
 
 
 @compiled
-def remove_doublet(quads, alive, vertex_faces, counts, points, limit, params, marks, vertex):  # pragma: no cover
+def remove_doublet(mesh, guard, vertex):  # pragma: no cover - compiled
     """Dissolve an interior vertex of two quads (v, a, c, b) and (v, b, d, a) into the quad (a, c, b, d); topology
     checked only (a doublet must go: the construction refuses it), the smoothing straightens the quad."""
+    quads, vertex_faces, counts = mesh[0], mesh[2], mesh[3]
     if counts[vertex] != 2 or is_boundary(quads, vertex_faces, counts, vertex):
         return False
     f, g = vertex_faces[vertex, 0], vertex_faces[vertex, 1]
@@ -97,8 +99,8 @@ def remove_doublet(quads, alive, vertex_faces, counts, points, limit, params, ma
     if quads[g, (j + 1) % 4] != b or quads[g, (j + 3) % 4] != a:
         return False
     added = np.array([[a, c, b, quads[g, (j + 2) % 4]]], dtype=np.int64)
-    return try_edit(quads, alive, vertex_faces, counts, points, limit, params, marks, np.array([f, g]), 2, added, 1,
-                    np.array([[f, g]]), np.empty(0, dtype=np.int64), np.empty((0, 3)), 0, False)
+    return try_edit(mesh, guard, np.array([f, g]), added, np.array([[f, g]]), np.empty(0, dtype=np.int64),
+                    np.empty((0, 3)), False)
 
 
 @compiled
@@ -122,9 +124,11 @@ def rim_at_least(quads, vertex_faces, counts, a, b, edges):  # pragma: no cover 
 
 
 @compiled
-def _strip_step(quads, vertex_faces, counts, g, e, faces, n, edges, m, marks):  # pragma: no cover - compiled
-    """Add face g (entered through its edge e -> e + 1) to the strip and its far edge to the crossed edges:
-    (n, m, the next face, its entry corner, ok), not ok when g is in the strip already or the buffers are full."""
+def _strip_step(quads, vertex_faces, counts, g, e, strip, n, m):  # pragma: no cover - compiled
+    """Add face g (entered through its edge e -> e + 1) to the strip and its far edge to the crossed edges
+    (``strip``: the buffers faces, edges and marks): (n, m, the next face, its entry corner, ok), not ok when g is
+    in the strip already or the buffers are full."""
+    faces, edges, marks = strip
     if marks[g] or n >= faces.size:
         return n, m, -1, -1, False
     marks[g] = True
@@ -143,26 +147,28 @@ def _chord(quads, vertex_faces, counts, face, k, faces, edges, marks):  # pragma
     edges[0, 0], edges[0, 1] = quads[face, k], quads[face, (k + 1) % 4]
     g, e = face, k
     while g >= 0 and ok:
-        n, m, g, e, ok = _strip_step(quads, vertex_faces, counts, g, e, faces, n, edges, m, marks)
+        n, m, g, e, ok = _strip_step(quads, vertex_faces, counts, g, e, (faces, edges, marks), n, m)
         if ok and g == face:  # closed: the last far edge is the first edge
             m, g, closed = m - 1, -1, True
     if ok and not closed:  # open: walk the other way from the first edge
         g, e = face_across(quads, vertex_faces, counts, quads[face, (k + 1) % 4], quads[face, k])
         while g >= 0 and ok:
-            n, m, g, e, ok = _strip_step(quads, vertex_faces, counts, g, e, faces, n, edges, m, marks)
+            n, m, g, e, ok = _strip_step(quads, vertex_faces, counts, g, e, (faces, edges, marks), n, m)
     for s in range(n):
         marks[faces[s]] = False
     return faces, edges, n if ok else -1, m
 
 
 @compiled
-def collapse_polychord(quads, alive, vertex_faces, counts, points, limit, params, marks, face, k, faces, edges,
-                       remap):  # pragma: no cover - compiled
-    """Collapse the polychord through ``face`` across its edge k -> k + 1 (module docstring). ``faces`` (F,),
-    ``edges`` (F + 1, 2): buffers; ``remap`` (V,) all -1 (scratch, left all -1). Returns the edges merged (their
+def collapse_polychord(mesh, guard, face, k, buffers):  # pragma: no cover - compiled
+    """Collapse the polychord through ``face`` across its edge k -> k + 1 (module docstring). ``buffers``: faces
+    (F,), edges (F + 1, 2) and remap (V,) all -1 (scratch, left all -1). Returns the edges merged (their
     kept ends in ``edges[:m, 0]``), 0 when refused.
 
     Long: the walk, the merge map, the renamed faces and the rim guard belong to one transaction."""
+    quads, vertex_faces, counts, points = mesh[0], mesh[2], mesh[3], mesh[4]
+    marks = guard[2]
+    faces, edges, remap = buffers
     faces, edges, n, m = _chord(quads, vertex_faces, counts, face, k, faces, edges, marks)
     if n <= 0:
         return 0
@@ -205,8 +211,7 @@ def collapse_polychord(quads, alive, vertex_faces, counts, points, limit, params
     na = added.shape[0]
     parents = np.full((na, 2), -1, dtype=np.int64)
     parents[:, 0] = removed[:na]
-    kept = try_edit(quads, alive, vertex_faces, counts, points, limit, params, marks, removed, removed.size, added,
-                    na, parents, moved, moved_to, m, True)
+    kept = try_edit(mesh, guard, removed, added, parents, moved[:m], moved_to[:m], True)
     return m if kept else 0
 
 

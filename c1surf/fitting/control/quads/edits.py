@@ -18,7 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...evaluation.compiled.kernels import compiled
+from ....evaluation.compiled.kernels import compiled
 from .links import BROKEN, DEAD, corner, link_status
 
 __all__ = ["try_edit", "quad_normal"]
@@ -122,8 +122,11 @@ def _edge_keys(rows, n, n_vertices):  # pragma: no cover - compiled
 
 
 @compiled
-def _euler_change(quads, vertex_faces, counts, old_rows, nr, added, na, marks, dead):  # pragma: no cover - compiled
-    """V - E + F after the edit minus before, over the touched faces (``dead``: vertices the edit leaves faceless)."""
+def _euler_change(mesh, marks, old_rows, added, dead):  # pragma: no cover - compiled
+    """V - E + F after the edit minus before, over the touched faces (``old_rows`` the removed faces as they were,
+    ``dead``: vertices the edit leaves faceless)."""
+    quads, vertex_faces, counts = mesh[0], mesh[2], mesh[3]
+    nr, na = old_rows.shape[0], added.shape[0]
     nv = vertex_faces.shape[0]
     old_keys = _edge_keys(old_rows, nr, nv)
     new_keys = _edge_keys(added, na, nv)
@@ -147,10 +150,15 @@ def _contains(sorted_keys, key):  # pragma: no cover - compiled
 
 
 @compiled
-def _geometry_ok(quads, vertex_faces, counts, points, limit, params, removed, na, parents, reference_ids,
-                 reference_normals, touched, lists, sizes, moved, nm, marks):  # pragma: no cover - compiled
+def _geometry_ok(mesh, guard, removed, na, parents, reference, local, moved):  # pragma: no cover - compiled
     """The geometry half of ``try_edit``: added faces against their parents' normals, the kept faces at moved
-    vertices against their own old normals (``reference_ids`` sorted, ``reference_normals``: the old normals)."""
+    vertices against their own old normals (``reference``: (face ids sorted, their old normals); ``local``:
+    (touched vertices sorted, their new face lists, their counts))."""
+    quads, points = mesh[0], mesh[4]
+    limit, params, marks = guard
+    reference_ids, reference_normals = reference
+    touched, lists, sizes = local
+    nm = moved.size
     for k in range(na):
         ref = np.zeros(3)
         for j in range(2):
@@ -193,14 +201,17 @@ def _old_normals(quads, vertex_faces, counts, points, removed, nr, moved, nm):  
 
 
 @compiled
-def try_edit(quads, alive, vertex_faces, counts, points, limit, params, marks, removed, nr, added, na, parents,
-             moved, moved_to, nm, check_geometry):  # pragma: no cover - compiled
+def try_edit(mesh, guard, removed, added, parents, moved, moved_to, check_geometry):  # pragma: no cover - compiled
     """Apply the edit (module docstring) and keep it when it passes the checks; True when kept.
 
-    quads (F, 4), alive (F,), vertex_faces (V, cap), counts (V,), points (V, 3), limit (V,) float (the longest edge
-    at each vertex), params (cos_max_corner, min_fold), marks (F,) bool all False (scratch, left all False);
-    removed (nr,) int, added (na, 4) int, parents (na, 2) int (-1: none), moved (nm,) int, moved_to (nm, 3) float
+    mesh: (quads (F, 4), alive (F,), vertex_faces (V, cap), counts (V,), points (V, 3)) (``QuadMesh.state()``);
+    guard: (limit (V,) float, the longest edge at each vertex; params (cos_max_corner, min_fold); marks (F,) bool
+    all False, scratch left all False); removed (nr,) int, added (na, 4) int, parents (na, 2) int (-1: none),
+    moved (nm,) int, moved_to (nm, 3) float
     """
+    quads, alive, vertex_faces, counts, points = mesh
+    marks = guard[2]
+    nr, na, nm = removed.size, added.shape[0], moved.size
     ids, normals = _old_normals(quads, vertex_faces, counts, points, removed, nr, moved, nm)
     touched = _touched_vertices(quads, removed, nr, added, na, moved, nm)
     old_rows = np.empty((nr, 4), dtype=np.int64)
@@ -225,10 +236,9 @@ def try_edit(quads, alive, vertex_faces, counts, points, limit, params, marks, r
         elif status == DEAD and counts[touched[t]] > 0:
             dead += 1
     if ok:
-        ok = _euler_change(quads, vertex_faces, counts, old_rows, nr, added, na, marks, dead) == 0
+        ok = _euler_change(mesh, marks, old_rows, added, dead) == 0
     if ok and check_geometry:
-        ok = _geometry_ok(quads, vertex_faces, counts, points, limit, params, removed, na, parents, ids, normals,
-                          touched, lists, sizes, moved, nm, marks)
+        ok = _geometry_ok(mesh, guard, removed, na, parents, (ids, normals), (touched, lists, sizes), moved)
     if ok:
         for t in range(touched.size):
             counts[touched[t]] = sizes[t]

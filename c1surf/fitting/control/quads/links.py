@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ...evaluation.compiled.kernels import compiled
+from ....evaluation.compiled.kernels import compiled
 
 __all__ = ["corner", "link_status", "is_boundary", "face_across", "edge_valence", "DEAD", "BROKEN", "INTERIOR",
            "RIM"]

@@ -12,7 +12,7 @@ import numpy as np
 from scipy.sparse import coo_matrix
 from scipy.sparse.csgraph import connected_components
 
-from ...mesh.topology_counts import topology_counts
+from ....mesh.topology_counts import topology_counts
 
 __all__ = ["quad_mesh_problems", "quad_topology"]
 

@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 from c1surf.fitting.control.decimated_quads import mesh_topology
-from c1surf.fitting.quads.simplify import SimplifyOptions, simplify_scan
-from c1surf.fitting.quads.validity import quad_mesh_problems, quad_topology
+from c1surf.fitting.control.quads.simplify import SimplifyOptions, simplify_scan
+from c1surf.fitting.control.quads.validity import quad_mesh_problems, quad_topology
 
 from . import shapes
 

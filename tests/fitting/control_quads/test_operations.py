@@ -13,9 +13,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
-from c1surf.fitting.quads import operations
-from c1surf.fitting.quads.quad_mesh import QuadMesh
-from c1surf.fitting.quads.validity import quad_mesh_problems, quad_topology
+from c1surf.fitting.control.quads import operations
+from c1surf.fitting.control.quads.quad_mesh import QuadMesh
+from c1surf.fitting.control.quads.validity import quad_mesh_problems, quad_topology
 
 
 def grid(nu: int, nv: int, wrap_u: bool, wrap_v: bool):
@@ -86,7 +86,7 @@ def _apply(mesh: QuadMesh, step) -> None:
     live = np.flatnonzero(mesh.alive)
     face = int(live[pick % live.size])
     n_faces, n_points = mesh.quads.shape[0], mesh.points.shape[0]
-    common = (*mesh.state(), np.full(n_points, np.inf), np.array([-1.0, -2.0]), np.zeros(n_faces, dtype=bool))
+    common = (mesh.state(), (np.full(n_points, np.inf), np.array([-1.0, -2.0]), np.zeros(n_faces, dtype=bool)))
     if kind == 0:
         operations.collapse_diagonal(*common, face, k % 2)
     elif kind == 1:
@@ -95,8 +95,8 @@ def _apply(mesh: QuadMesh, step) -> None:
         two = np.flatnonzero(mesh.counts == 2)
         operations.remove_doublet(*common, int(two[pick % two.size]) if two.size else int(mesh.quads[face, k]))
     else:
-        operations.collapse_polychord(*common, face, k, np.empty(n_faces, dtype=np.int64),
-                                      np.empty((n_faces + 1, 2), dtype=np.int64), np.full(n_points, -1, np.int64))
+        operations.collapse_polychord(*common, face, k, (np.empty(n_faces, dtype=np.int64),
+                                      np.empty((n_faces + 1, 2), dtype=np.int64), np.full(n_points, -1, np.int64)))
 
 
 STEPS = st.lists(st.tuples(st.integers(0, 3), st.integers(0, 10_000), st.integers(0, 3), st.sampled_from([-1, 1])),
@@ -127,10 +127,10 @@ def test_each_operation_does_something_on_a_torus():
     quads, points = grid(8, 6, True, True)
     mesh = QuadMesh.from_quads(quads, points)
     n_faces, n_points = mesh.quads.shape[0], mesh.points.shape[0]
-    common = (*mesh.state(), np.full(n_points, np.inf), np.array([np.cos(np.radians(179)), -0.5]),
-              np.zeros(n_faces, dtype=bool))
-    assert operations.collapse_polychord(*common, 0, 0, np.empty(n_faces, np.int64),
-                                         np.empty((n_faces + 1, 2), np.int64), np.full(n_points, -1, np.int64)) > 0
+    common = (mesh.state(), (np.full(n_points, np.inf), np.array([np.cos(np.radians(179)), -0.5]),
+                             np.zeros(n_faces, dtype=bool)))
+    assert operations.collapse_polychord(*common, 0, 0, (np.empty(n_faces, np.int64),
+                                         np.empty((n_faces + 1, 2), np.int64), np.full(n_points, -1, np.int64))) > 0
     assert mesh.n_faces == 48 - 8 or mesh.n_faces == 48 - 6
     before = mesh.n_faces
     assert operations.collapse_diagonal(*common, int(np.flatnonzero(mesh.alive)[10]), 0)
@@ -146,7 +146,7 @@ def test_doublets_are_removed_and_never_made():
     quads, points = with_doublets(*grid(8, 6, True, True), [3, 20, 40])
     mesh = QuadMesh.from_quads(quads, points)
     n_faces, n_points = mesh.quads.shape[0], mesh.points.shape[0]
-    common = (*mesh.state(), np.full(n_points, np.inf), np.array([-1.0, -2.0]), np.zeros(n_faces, dtype=bool))
+    common = (mesh.state(), (np.full(n_points, np.inf), np.array([-1.0, -2.0]), np.zeros(n_faces, dtype=bool)))
     doublets = np.flatnonzero(mesh.counts == 2)
     assert doublets.size == 3
     for v in doublets:

@@ -13,7 +13,7 @@ from __future__ import annotations
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..deviation import closest_on_triangles
+from ...deviation import closest_on_triangles
 from .quad_mesh import QuadMesh
 
 __all__ = ["ScanTarget", "smooth"]
@@ -26,7 +26,7 @@ class ScanTarget:
     """The scan's triangles and rim segments, for projecting control points back onto them."""
 
     def __init__(self, points: np.ndarray, triangles: np.ndarray, rim: np.ndarray):
-        from ..system import vertex_normals
+        from ...system import vertex_normals
 
         self.points, self.triangles = points, triangles
         self.tree, self.normals = cKDTree(points), vertex_normals(points, triangles)

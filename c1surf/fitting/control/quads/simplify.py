@@ -22,7 +22,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from ..control.decimated_quads import THIN_EDGE
+from ..decimated_quads import THIN_EDGE
 from .quad_mesh import QuadMesh
 from .rounds import collapse_pass, doublet_pass, polychord_pass, rotate_pass
 from .sizing import edge_sizing, rim_edges
@@ -157,18 +157,18 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
             break
         limit = _limits(mesh, tree, curvature_edge, thin_limit, scale)
         faces, corners = _chord_order(mesh, limit)
-        live, strips = polychord_pass(*state, limit, params, marks, faces, corners, live, budget,
-                                      options.chord_tries, stamp, 2 * round_id)
+        live, strips = polychord_pass(state, (limit, params, marks), faces, corners,
+                                      (live, budget, options.chord_tries), stamp, 2 * round_id)
         collapses = doublets = 0
         slow = mesh.n_faces > live_before * (1 - options.slow)
         stalls = stalls + 1 if slow else 0
         if stalls > options.patience and live > budget:  # the strips alone gain little, even at a larger scale
             faces, corners = _collapse_order(mesh, limit, 1.0)
-            live, collapses = collapse_pass(*state, limit, params, marks, faces, corners.astype(np.int64), live,
-                                            budget, stamp, 2 * round_id + 1)
-        doublets = doublet_pass(*state, limit, params, marks)
-        turns = rotate_pass(*state, limit, params, marks, *_valences(mesh))
-        doublets += doublet_pass(*state, limit, params, marks)
+            live, collapses = collapse_pass(state, (limit, params, marks), faces, corners.astype(np.int64),
+                                            live, budget, stamp, 2 * round_id + 1)
+        doublets = doublet_pass(state, (limit, params, marks))
+        turns = rotate_pass(state, (limit, params, marks), *_valences(mesh))
+        doublets += doublet_pass(state, (limit, params, marks))
         smooth(mesh, target, options.smoothing)
         for key, value in (("rounds", 1), ("collapses", collapses), ("turns", turns), ("strips", strips),
                            ("doublets", doublets)):
@@ -177,9 +177,9 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
             break
         if options.faces is not None and slow:
             scale *= options.grow
-    totals["turns"] += int(rotate_pass(*state, _limits(mesh, tree, curvature_edge, thin_limit, scale), params, marks,
-                                       *_valences(mesh)))
-    totals["doublets"] += int(doublet_pass(*state, np.full(mesh.points.shape[0], np.inf), params, marks))
+    limit = _limits(mesh, tree, curvature_edge, thin_limit, scale)
+    totals["turns"] += int(rotate_pass(state, (limit, params, marks), *_valences(mesh)))
+    totals["doublets"] += int(doublet_pass(state, (np.full(mesh.points.shape[0], np.inf), params, marks)))
     used = np.flatnonzero(mesh.counts > 0)
     inside = used[_valences(mesh)[1][used] == 4]  # not on a rim
     mesh.points[inside] = target.onto_surface(mesh.points[inside])

@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..control.decimated_quads import decimate_scan, mesh_topology, pair_triangles, split_faces
+from ..decimated_quads import decimate_scan, mesh_topology, pair_triangles, split_faces
 from .quad_mesh import QuadMesh
 
 __all__ = ["quads_from_triangles", "start_mesh", "START_TRIANGLES_PER_FACE"]

@@ -11,9 +11,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..control.cleanup import edge_keys
-from ..control.decimated_quads import THIN_EDGE, thickness
-from ..system import vertex_normals
+from ..cleanup import edge_keys
+from ..decimated_quads import THIN_EDGE, thickness
+from ...system import vertex_normals
 
 __all__ = ["edge_sizing", "rim_edges", "FLAT_EDGE"]
 
