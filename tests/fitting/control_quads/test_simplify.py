@@ -84,3 +84,18 @@ def test_limbs_thinner_than_the_control_edge_keep_four_faces_around():
     around = [_faces_around(quads, quad_points, 0, 1.0), _faces_around(quads, quad_points, 1, 1.0),
               _faces_around(quads, quad_points, 2, -1.0)]
     assert min(around) >= 4, around
+
+
+def test_the_fit_s_simplify_remesher_gives_a_cleaned_quad_control_mesh_of_the_scan_s_topology():
+    """``--remesher simplify`` (opt-in): a quarter of the faces simplified, split in four; one Doo-Sabin step on a
+    closed mesh at most, the scan's counts, nothing the cleanup had to repair."""
+    from c1surf.fitting.control.control_mesh import control_mesh_from_scan
+
+    points, triangles = shapes.torus()
+    mesh = control_mesh_from_scan(points, triangles, 800, remesher="simplify")
+    report = mesh.report
+    assert report["remesher"] == "simplify"
+    assert np.all(mesh.face_sizes == 4) and 600 <= report["faces"] <= 800
+    assert report["doo_sabin_steps"] <= 1  # 0: all regular (the torus)
+    assert report["topology"] == report["scan_topology"] == {"components": 1, "euler": 0, "rims": 0}
+    assert not any(report.get(k) for k in ("stray_components", "closed_holes", "split_vertices", "doublets"))
