@@ -71,7 +71,7 @@ def flat_outline(spacing: float = 0.035, lobes: int = 5):
     r, t = np.hypot(centre[:, 0], centre[:, 1]), np.arctan2(centre[:, 1], centre[:, 0])
     triangles = triangles[r < 1 + 0.2 * np.cos(lobes * t)]
     a, b, c = plane[triangles[:, 0]], plane[triangles[:, 1]], plane[triangles[:, 2]]
-    flip = np.cross(b - a, c - a) < 0
+    flip = (b - a)[:, 0] * (c - a)[:, 1] - (b - a)[:, 1] * (c - a)[:, 0] < 0
     triangles[flip] = triangles[flip][:, ::-1]
     points = np.concatenate([plane, np.zeros((plane.shape[0], 1))], axis=1)
     return points, triangles.astype(np.int64)

@@ -35,10 +35,12 @@ def _stamp_ring(quads, vertex_faces, counts, stamp, vertex, round_id):  # pragma
 
 
 @compiled
-def collapse_pass(mesh, guard, order_face, order_corner, live, target, stamp, round_id):  # pragma: no cover
+def collapse_pass(mesh, guard, order_face, order_corner, budget, quadrics, stamp, round_id):  # pragma: no cover
     """Diagonal collapses in the given order until ``live`` faces reach ``target``; the doublets a collapse leaves
-    at the quad's other two corners are removed at once. Returns (live faces, collapses)."""
+    at the quad's other two corners are removed at once; ``budget``: (live, target); ``quadrics`` (V, 4, 4): the
+    merged vertex takes the sum. Returns (live faces, collapses)."""
     quads, alive, vertex_faces, counts = mesh[0], mesh[1], mesh[2], mesh[3]
+    live, target = budget
     done = 0
     for t in range(order_face.size):
         if live <= target:
@@ -47,8 +49,9 @@ def collapse_pass(mesh, guard, order_face, order_corner, live, target, stamp, ro
         if not alive[f] or not _fresh(quads, stamp, f, round_id):
             continue
         k = order_corner[t]
-        a, b, d = quads[f, k], quads[f, (k + 1) % 4], quads[f, (k + 3) % 4]
+        a, b, c, d = quads[f, k], quads[f, (k + 1) % 4], quads[f, (k + 2) % 4], quads[f, (k + 3) % 4]
         if collapse_diagonal(mesh, guard, f, k):
+            quadrics[a] += quadrics[c]
             live -= 1
             done += 1
             _stamp_ring(quads, vertex_faces, counts, stamp, a, round_id)
@@ -114,9 +117,10 @@ def rotate_pass(mesh, guard, valence, ideal):  # pragma: no cover - compiled
 
 
 @compiled
-def polychord_pass(mesh, guard, order_face, order_corner, budget, stamp, round_id):  # pragma: no cover - compiled
+def polychord_pass(mesh, guard, order_face, order_corner, budget, quadrics, stamp,
+                   round_id):  # pragma: no cover - compiled
     """Polychord collapses in the given order until the live faces reach ``target`` or ``tries`` attempts in a row
-    fail (``budget``: (live, target, tries)).
+    fail (``budget``: (live, target, tries); ``quadrics`` as ``collapse_pass``'s).
     Returns (live faces, strips collapsed)."""
     quads, alive, vertex_faces, counts, points = mesh
     live, target, tries = budget
@@ -139,5 +143,6 @@ def polychord_pass(mesh, guard, order_face, order_corner, budget, stamp, round_i
                 live += 1 if alive[g] else 0
             done += 1
             for s in range(m):
+                quadrics[edges[s, 0]] += quadrics[edges[s, 1]]
                 _stamp_ring(quads, vertex_faces, counts, stamp, edges[s, 0], round_id)
     return live, done

@@ -31,6 +31,8 @@ from .start import start_mesh
 
 __all__ = ["SimplifyOptions", "simplify_scan", "simplify_mesh"]
 
+CHEAPEST = 0.5  # a round tries the cheapest half of the faces' collapses (the rest wait: their cost may change)
+
 
 @dataclass(frozen=True)
 class SimplifyOptions:
@@ -79,12 +81,16 @@ def simplify_scan(points: np.ndarray, triangles: np.ndarray, options: SimplifyOp
 
 
 def _limits(mesh: QuadMesh, tree: cKDTree, curvature_edge, thin_limit, scale: float):
-    """(V,) float: the longest edge allowed at each mesh vertex (the sizing at its nearest scan vertex)."""
+    """((V,) float, (V,) float): the longest edge allowed at each mesh vertex (the sizing at its nearest scan
+    vertex, ``scale`` times the curvature edge, at most the thickness limit), and the edge wanted there (scale 1:
+    the order of the collapses)."""
     used = np.flatnonzero(mesh.counts > 0)
     _, near = tree.query(mesh.points[used])
     limit = np.full(mesh.points.shape[0], np.inf)
+    wanted = np.full(mesh.points.shape[0], np.inf)
     limit[used] = np.minimum(scale * curvature_edge[near], thin_limit[near])
-    return limit
+    wanted[used] = np.minimum(curvature_edge[near], thin_limit[near])
+    return limit, wanted
 
 
 def _valences(mesh: QuadMesh):
@@ -98,10 +104,25 @@ def _valences(mesh: QuadMesh):
     return mesh.counts + on_rim, np.where(on_rim, 3, 4)
 
 
-def _collapse_order(mesh: QuadMesh, limit: np.ndarray, scale_ok: float):
-    """(faces, corners): the live faces whose shorter diagonal is below ``scale_ok`` times the limit at its ends,
-    cheapest first, and the corner each collapses from. The cost is that ratio times 2^(dE / 2), dE the change of
-    the sum of (valence - ideal)^2 over the quad's corners: a collapse that makes the valences regular goes first."""
+def start_quadrics(mesh: QuadMesh) -> np.ndarray:
+    """(V, 4, 4) float: each vertex's quadric (Garland and Heckbert 1997), the area-weighted planes of the start's
+    faces at it (the start lies on the scan): x^T Q x is the area times the squared distance to those planes."""
+    q, p = mesh.live_quads(), mesh.points
+    normal = np.cross(p[q[:, 2]] - p[q[:, 0]], p[q[:, 3]] - p[q[:, 1]])
+    area = 0.5 * np.linalg.norm(normal, axis=1)
+    unit = normal / np.maximum(2 * area, 1e-300)[:, None]
+    plane = np.concatenate([unit, -np.einsum("ij,ij->i", unit, p[q].mean(axis=1))[:, None]], axis=1)
+    face = 0.25 * area[:, None, None] * plane[:, :, None] * plane[:, None, :]
+    quadrics = np.zeros((p.shape[0], 4, 4))
+    np.add.at(quadrics, q.ravel(), np.repeat(face, 4, axis=0))
+    return quadrics
+
+
+def _collapse_order(mesh: QuadMesh, limit: np.ndarray, quadrics: np.ndarray):
+    """(faces, corners): the live faces whose diagonal is below the limit at its ends, cheapest first, and the
+    corner each collapses from. The cost: the merged quadric's error at the diagonal's midpoint plus (0.03 d^2)^2
+    (d the diagonal: a tie-break towards even sizes where the scan is flat), times 2^(dE / 2), dE the change of
+    the sum of (valence - ideal)^2 over the quad's corners (a collapse that makes the valences regular first)."""
     live = np.flatnonzero(mesh.alive)
     q = mesh.quads[live]
     p = mesh.points
@@ -110,17 +131,20 @@ def _collapse_order(mesh: QuadMesh, limit: np.ndarray, scale_ok: float):
     cost, ratio = [], []
     for k in range(2):
         a, c = q[:, k], q[:, k + 2]
-        ratio.append(np.linalg.norm(p[c] - p[a], axis=1) / np.minimum(limit[a], limit[c]))
+        length = np.linalg.norm(p[c] - p[a], axis=1)
+        ratio.append(length / np.minimum(limit[a], limit[c]))
+        x = np.concatenate([0.5 * (p[a] + p[c]), np.ones((a.size, 1))], axis=1)
+        error = np.einsum("ij,ijk,ik->i", x, quadrics[a] + quadrics[c], x)
         merged = valence[a] + valence[c] - 2 - np.minimum(ideal[a], ideal[c])
         before = (dev ** 2).sum(axis=1)
         after = merged ** 2 + (dev[:, k + 1] - 1) ** 2 + (dev[:, (k + 3) % 4] - 1) ** 2
-        cost.append(ratio[k] * 2.0 ** (0.5 * (after - before)))
+        cost.append((np.maximum(error, 0) + (0.03 * length ** 2) ** 2) * 2.0 ** (0.5 * (after - before)))
     corner = np.where(cost[0] <= cost[1], 0, 1)
     rows = np.arange(live.size)
     best, fits = np.stack(cost, axis=1)[rows, corner], np.stack(ratio, axis=1)[rows, corner]
-    keep = fits <= scale_ok
-    order = np.argsort(best[keep], kind="stable")
-    return live[keep][order], corner[keep][order]
+    keep = np.flatnonzero(fits <= 1.0)
+    order = keep[np.argsort(best[keep], kind="stable")][:max(1, int(CHEAPEST * live.size))]
+    return live[order], corner[order]
 
 
 def _chord_order(mesh: QuadMesh, limit: np.ndarray):
@@ -147,6 +171,7 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
     params = np.array([np.cos(np.radians(options.max_corner)), options.min_fold])
     marks = np.zeros(mesh.quads.shape[0], dtype=bool)
     stamp = np.full(mesh.points.shape[0], -1, dtype=np.int64)
+    quadrics = start_quadrics(mesh)
     budget = options.faces if options.faces is not None else 0
     scale, stalls = 1.0, 0
     totals = dict(rounds=0, collapses=0, turns=0, strips=0, doublets=0)
@@ -155,17 +180,17 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
         live = live_before = mesh.n_faces
         if live <= budget:
             break
-        limit = _limits(mesh, tree, curvature_edge, thin_limit, scale)
+        limit, _ = _limits(mesh, tree, curvature_edge, thin_limit, scale)
         faces, corners = _chord_order(mesh, limit)
         live, strips = polychord_pass(state, (limit, params, marks), faces, corners,
-                                      (live, budget, options.chord_tries), stamp, 2 * round_id)
+                                      (live, budget, options.chord_tries), quadrics, stamp, 2 * round_id)
         collapses = doublets = 0
         slow = mesh.n_faces > live_before * (1 - options.slow)
         stalls = stalls + 1 if slow else 0
         if stalls > options.patience and live > budget:  # the strips alone gain little, even at a larger scale
-            faces, corners = _collapse_order(mesh, limit, 1.0)
+            faces, corners = _collapse_order(mesh, limit, quadrics)
             live, collapses = collapse_pass(state, (limit, params, marks), faces, corners.astype(np.int64),
-                                            live, budget, stamp, 2 * round_id + 1)
+                                            (live, budget), quadrics, stamp, 2 * round_id + 1)
         doublets = doublet_pass(state, (limit, params, marks))
         turns = rotate_pass(state, (limit, params, marks), *_valences(mesh))
         doublets += doublet_pass(state, (limit, params, marks))
@@ -177,7 +202,7 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
             break
         if options.faces is not None and slow:
             scale *= options.grow
-    limit = _limits(mesh, tree, curvature_edge, thin_limit, scale)
+    limit = _limits(mesh, tree, curvature_edge, thin_limit, scale)[0]
     totals["turns"] += int(rotate_pass(state, (limit, params, marks), *_valences(mesh)))
     totals["doublets"] += int(doublet_pass(state, (np.full(mesh.points.shape[0], np.inf), params, marks)))
     used = np.flatnonzero(mesh.counts > 0)
