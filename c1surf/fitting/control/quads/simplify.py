@@ -81,16 +81,13 @@ def simplify_scan(points: np.ndarray, triangles: np.ndarray, options: SimplifyOp
 
 
 def _limits(mesh: QuadMesh, tree: cKDTree, curvature_edge, thin_limit, scale: float):
-    """((V,) float, (V,) float): the longest edge allowed at each mesh vertex (the sizing at its nearest scan
-    vertex, ``scale`` times the curvature edge, at most the thickness limit), and the edge wanted there (scale 1:
-    the order of the collapses)."""
+    """(V,) float: the longest edge allowed at each mesh vertex (the sizing at its nearest scan vertex: ``scale``
+    times the curvature edge, at most the thickness limit)."""
     used = np.flatnonzero(mesh.counts > 0)
     _, near = tree.query(mesh.points[used])
     limit = np.full(mesh.points.shape[0], np.inf)
-    wanted = np.full(mesh.points.shape[0], np.inf)
     limit[used] = np.minimum(scale * curvature_edge[near], thin_limit[near])
-    wanted[used] = np.minimum(curvature_edge[near], thin_limit[near])
-    return limit, wanted
+    return limit
 
 
 def _valences(mesh: QuadMesh):
@@ -180,7 +177,7 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
         live = live_before = mesh.n_faces
         if live <= budget:
             break
-        limit, _ = _limits(mesh, tree, curvature_edge, thin_limit, scale)
+        limit = _limits(mesh, tree, curvature_edge, thin_limit, scale)
         faces, corners = _chord_order(mesh, limit)
         live, strips = polychord_pass(state, (limit, params, marks), faces, corners,
                                       (live, budget, options.chord_tries), quadrics, stamp, 2 * round_id)
@@ -202,7 +199,7 @@ def simplify_mesh(mesh: QuadMesh, points, triangles, options: SimplifyOptions = 
             break
         if options.faces is not None and slow:
             scale *= options.grow
-    limit = _limits(mesh, tree, curvature_edge, thin_limit, scale)[0]
+    limit = _limits(mesh, tree, curvature_edge, thin_limit, scale)
     totals["turns"] += int(rotate_pass(state, (limit, params, marks), *_valences(mesh)))
     totals["doublets"] += int(doublet_pass(state, (np.full(mesh.points.shape[0], np.inf), params, marks)))
     used = np.flatnonzero(mesh.counts > 0)
