@@ -1,0 +1,59 @@
+"""Foreign code in a child process (io.contained, issue 42): a crash, a signal or a hang there is one line about
+the file, and the next read starts a fresh child."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from c1surf.io.contained import ContainedCrash, ContainedModule
+from c1surf.io.errors import MeshInputError
+
+SAMPLES = Path(__file__).resolve().parents[2] / "sample_meshes"
+
+
+def test_a_crash_is_one_line_and_the_next_call_works():
+    contained = ContainedModule("faulthandler", "the reader")
+    try:
+        with pytest.raises(ContainedCrash, match=r"^x\.step: the reader crashed reading the file \(signal SIGSEGV\)"):
+            contained.call("_sigsegv", [], path="x.step", limit=60)
+        with pytest.raises(ContainedCrash, match="signal SIGSEGV"):  # a fresh child, crashed again
+            contained.call("_sigsegv", [], path="x.step", limit=60)
+    finally:
+        contained.close()
+
+
+def test_a_hang_is_stopped_at_its_limit():
+    contained = ContainedModule("os", "the reader")
+    try:
+        with pytest.raises(ContainedCrash, match=r"took more than 1 s reading the file and was stopped"):
+            contained.call("system", ["sleep 30"], path="x.step", limit=1.0)
+        assert contained._child is None  # killed and forgotten
+    finally:
+        contained.close()
+
+
+def test_a_refusal_in_the_child_is_the_parents_line_and_arrays_come_back(tmp_path):
+    pytest.importorskip("OCP")
+    from click.testing import CliRunner
+
+    from c1surf.cli.main import main
+    from c1surf.io.patches.step_faces import face_nets
+
+    shutil.copy(SAMPLES / "cube.obj", tmp_path / "cube.obj")
+    result = CliRunner().invoke(main, ["convert", str(tmp_path / "cube.obj"), "-o", str(tmp_path / "cube.ply"),
+                                       "--patches", str(tmp_path / "cube.step"), "-q"])
+    assert result.exit_code == 0, result.output
+    contained = ContainedModule("c1surf.io.patches.step_faces", "Open CASCADE")
+    try:
+        header, arrays = contained.call("face_arrays", [str(tmp_path / "cube.step")], path="cube.step", limit=120)
+        faces = face_nets(tmp_path / "cube.step")  # the same reading in this process
+        assert header["faces"] == len(faces) == arrays[0].shape[0]
+        assert np.array_equal(arrays[3], np.concatenate([f[3].reshape(-1, 3) for f in faces]))
+        (tmp_path / "bad.step").write_text("ISO-10303-21;\nnot a STEP file\n")
+        with pytest.raises(MeshInputError, match=r"bad\.step: not a STEP file Open CASCADE can read"):
+            contained.call("face_arrays", [str(tmp_path / "bad.step")], path=tmp_path / "bad.step", limit=120)
+    finally:
+        contained.close()
