@@ -269,7 +269,7 @@ def _header(path, data: dict) -> dict:
         raise MeshInputError(str(path), f'not a c1surf patch file (no "header" member with "format": "{FORMAT_NAME}")')
     try:
         header = json.loads(str(data["header"].item()))
-    except (ValueError, TypeError) as e:
+    except (ValueError, TypeError, OverflowError) as e:
         raise MeshInputError(str(path), f"damaged header ({e})") from None
     except RecursionError:  # json's decoder recurses once per level
         raise MeshInputError(str(path), "damaged header: its JSON is nested too deeply to read") from None

@@ -32,6 +32,7 @@ from ..contained import call_contained
 from ..errors import MeshInputError
 from ..finite import refuse_non_finite_patch_set
 from .brep.step_brep import brep_shape, occ_classes
+from .checks import check_net_range
 from .merged import cad_patch_set, is_piece_knots, piece_patches
 from .step_faces import READ_HINT, face_nets, unpack_faces
 
@@ -146,7 +147,9 @@ def read_patch_set_step(path) -> PatchSet:
     """
     by_shape: dict = {(3, 3): ([], [])}  # (du + 1, dv + 1) -> (patches, weights), in face order
     pieces = []
-    for number, (knots_u, knots_v, weights, points) in enumerate(_outward_nets(_read_faces(path)), 1):
+    faces = _read_faces(path)
+    check_net_range(path, *_nets_by_size(faces))  # before any evaluation: Open CASCADE reads a real of 3e38 as inf
+    for number, (knots_u, knots_v, weights, points) in enumerate(_outward_nets(faces), 1):
         if _single_span(knots_u, points.shape[0]) and _single_span(knots_v, points.shape[1]):
             patches, patch_weights = by_shape.setdefault(points.shape[:2], ([], []))
             patches.append(points)
@@ -182,6 +185,16 @@ def _read_faces(path) -> list:
     limit = base + per_mb * os.path.getsize(path) / 1e6
     _, arrays = call_contained(_FACE_MODULE, "Open CASCADE", "face_arrays", path, limit=limit)
     return unpack_faces(*arrays)
+
+
+def _nets_by_size(faces: list):
+    """The faces' control points and weights stacked by net size: lists of (P, n, 3) and (P, n) arrays."""
+    sizes: dict = {}
+    for _, _, weights, points, _ in faces:
+        entry = sizes.setdefault(weights.size, ([], []))
+        entry[0].append(points.reshape(-1, 3))
+        entry[1].append(weights.ravel())
+    return [np.stack(p) for p, _ in sizes.values()], [np.stack(w) for _, w in sizes.values()]
 
 
 def _has_open_cascade() -> bool:

@@ -7,7 +7,9 @@ triangles into a surface, and ``--no-weld`` leaves them apart.
 """
 from __future__ import annotations
 
+import contextlib
 import io
+import logging
 import os
 import re
 import warnings
@@ -65,9 +67,10 @@ def _triangles(data: bytes, path: str) -> np.ndarray:
 
     data = _as_utf8(data, path)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _quiet_logger("trimesh"):
             warnings.simplefilter("ignore")  # numpy's fromstring on text that is not numbers
-            loaded = load_stl(io.BytesIO(data))
+            loaded = load_stl(io.BytesIO(data))  # logs a traceback when the facet normals are no numbers: c1surf
+            # computes its own normals, so nothing is lost
     except Exception as exc:  # trimesh raises ValueError, HeaderError, ... on malformed files (numpy's words)
         line, what = _ascii_fault(data)
         if line is None and not data.lstrip()[:5].lower().startswith(b"solid"):
@@ -80,6 +83,18 @@ def _triangles(data: bytes, path: str) -> np.ndarray:
         raise MeshInputError(path, "no triangles found: not an STL file, or a binary STL whose length does not match "
                              "the triangle count in its header")
     return np.concatenate(corners)
+
+
+@contextlib.contextmanager
+def _quiet_logger(name: str):
+    """Nothing ``name``'s logger (and its children) logs reaches stderr for the block."""
+    logger = logging.getLogger(name)
+    level = logger.level
+    logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 _VERTEX = re.compile(rb"^[ \t]*vertex\b(.*)$", re.IGNORECASE | re.MULTILINE)
