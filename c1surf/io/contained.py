@@ -65,6 +65,10 @@ class ContainedModule:
                 payload = _read_frame(child.stdout, time.monotonic() + limit)
             except (BrokenPipeError, EOFError, OSError) as error:
                 raise self._failure(path, limit, timed_out=isinstance(error, TimeoutError)) from None
+            except BaseException:  # Ctrl-C, SIGTERM, a caller's alarm: the child may be mid-answer, so it goes
+                self._child.kill()
+                self._forget()
+                raise
         return _decode(path, payload)
 
     def _running(self):

@@ -15,8 +15,22 @@ from ...mesh.points.geometry_checks import GeometryError, check_coordinate_range
 from ..errors import MeshInputError
 from .merged import clamped_knots
 
-__all__ = ["check_header", "checked_adjacency", "checked_weights", "checked_piece", "check_crease_sides", "check_patch_range",
+__all__ = ["whole_numbers", "check_header", "checked_adjacency", "checked_weights", "checked_piece", "check_crease_sides", "check_patch_range",
            "check_net_range", "WEIGHT_RANGE"]
+
+
+def whole_numbers(values) -> np.ndarray:
+    """``values`` (nested lists or an array) as int64; ValueError (OverflowError for Python ints beyond int64)
+    unless every one is a whole number of int64's range: a float array's NaN, 1e308 or 0.5 is no index."""
+    array = np.asarray(values)
+    if array.dtype.kind == "f":
+        if not (np.all(np.abs(array) < 2.0**62) and np.all(array == np.round(array))):  # also refuses NaN
+            raise ValueError("indices must be whole numbers below 2**62")
+    elif array.dtype.kind == "u" and array.size and array.max() >= 2**62:
+        raise ValueError("indices must be below 2**62")
+    elif array.dtype.kind not in "iub" and array.size:
+        array = np.asarray(values, dtype=np.int64)  # nested Python ints (JSON): OverflowError beyond int64
+    return array.astype(np.int64)
 
 
 def check_header(path, header) -> None:
@@ -31,8 +45,7 @@ def check_header(path, header) -> None:
 def checked_adjacency(path, corners, edges, reversed_, n_patches: int) -> PatchAdjacency:
     """The PatchAdjacency of (P, 4) corner ids, edge ids and reversed flags, validated for ``n_patches``."""
     try:
-        adjacency = PatchAdjacency(np.asarray(corners, dtype=np.int64), np.asarray(edges, dtype=np.int64),
-                                   np.asarray(reversed_, dtype=bool))
+        adjacency = PatchAdjacency(whole_numbers(corners), whole_numbers(edges), np.asarray(reversed_, dtype=bool))
         adjacency.validate(n_patches)
     except (TypeError, ValueError, OverflowError) as e:
         raise MeshInputError(str(path), f"malformed patch adjacency ({e})") from None
@@ -63,7 +76,7 @@ def checked_piece(path, k: int, points, weights, knots, patches, rotation, n_biq
     try:
         points = np.asarray(points, dtype=np.float64)
         knots_u, knots_v = (np.asarray(x, dtype=np.float64).ravel() for x in knots)
-        patches, rotation = (np.asarray(x, dtype=np.int64) for x in (patches, rotation))
+        patches, rotation = (whole_numbers(x) for x in (patches, rotation))
     except (TypeError, ValueError, OverflowError) as e:
         raise MeshInputError(str(path), f"{what}: malformed ({e})") from None
     if points.ndim != 3 or points.shape[2] != 3 or min(points.shape[:2]) < 3 or not np.isfinite(points).all():
@@ -90,7 +103,7 @@ def check_crease_sides(path, header: dict, n_patches: int) -> None:
     if "crease_sides" not in header:
         return
     try:
-        rows = np.asarray(header["crease_sides"], dtype=np.int64).reshape(-1, 4)
+        rows = whole_numbers(header["crease_sides"]).reshape(-1, 4)
     except (ValueError, TypeError, OverflowError) as e:
         raise MeshInputError(str(path), f'"crease_sides" must be rows [patch, side, patch, side] ({e})') from None
     patches, sides = rows[:, [0, 2]], rows[:, [1, 3]]

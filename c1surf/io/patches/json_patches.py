@@ -180,7 +180,10 @@ def _sources(path, entries):
         kinds.append(kind)
     if not entries:
         return None, None
-    return np.array(kinds), np.asarray(sources, dtype=np.int64).reshape(-1, 2)
+    try:
+        return np.array(kinds), np.asarray(sources, dtype=np.int64).reshape(-1, 2)
+    except OverflowError:
+        raise MeshInputError(str(path), "a patch's source is an integer beyond any face or edge index") from None
 
 
 def _merged(path, documents, patches) -> list:

@@ -37,7 +37,7 @@ import numpy as np
 from ...evaluation.patch_set import FORMAT_NAME, PatchSet
 from ..errors import MeshInputError
 from ..finite import refuse_non_finite
-from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
+from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights, whole_numbers
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
 _MAX_RATIO = 100  # largest expansion of a compressed member read (float arrays compress 1-3 times)
@@ -295,9 +295,12 @@ def _merged(path, data: dict, n_biquadratic: int) -> list:
     if "merged_spans" not in data:
         return []
     missing = [name for name in _PIECE_MEMBERS if name not in data]
-    spans = np.asarray(data["merged_spans"], dtype=np.int64)
-    if missing or spans.ndim != 2 or spans.shape[1] != 2 or np.any(spans < 1):
-        raise MeshInputError(str(path), f"merged pieces need merged_spans (K, 2) of spans >= 1 and {', '.join(_PIECE_MEMBERS)}")
+    try:
+        spans = whole_numbers(data["merged_spans"])
+    except (ValueError, TypeError, OverflowError):
+        spans = np.zeros(0, dtype=np.int64)  # refused below
+    if missing or spans.ndim != 2 or spans.shape[1] != 2 or np.any(spans < 1) or np.any(spans > 1 << 24):
+        raise MeshInputError(str(path), f"merged pieces need merged_spans (K, 2) of spans in [1, 2**24] and {', '.join(_PIECE_MEMBERS)}")
     m, n = spans[:, 0], spans[:, 1]
     sizes = {"merged_points": (m + 2) * (n + 2), "merged_weights": (m + 2) * (n + 2), "merged_knots_u": m + 5,
              "merged_knots_v": n + 5, "merged_patches": m * n, "merged_rotation": m * n}

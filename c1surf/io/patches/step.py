@@ -34,7 +34,7 @@ from ..finite import refuse_non_finite_patch_set
 from .brep.step_brep import brep_shape, occ_classes
 from .checks import check_net_range
 from .merged import cad_patch_set, is_piece_knots, piece_patches
-from .step_faces import READ_HINT, face_nets, unpack_faces
+from .step_faces import READ_HINT, face_nets, refuse_huge_reals, unpack_faces
 
 _FACE_MODULE = "c1surf.io.patches.step_faces"  # the Open CASCADE side of reading, run in a child (io.contained)
 CONTAINED = True  # read in the child process (False: in this one, for tests that replace step_faces._read_shape)
@@ -181,6 +181,7 @@ def _read_faces(path) -> list:
         return face_nets(path)
     if not _has_open_cascade():  # said here: importing Open CASCADE to find out takes seconds
         raise MeshInputError(str(path), READ_HINT)
+    refuse_huge_reals(path)  # before Open CASCADE sees them: a real of 1e100 keeps it busy for minutes
     base, per_mb = _LIMIT_SECONDS
     limit = base + per_mb * os.path.getsize(path) / 1e6
     _, arrays = call_contained(_FACE_MODULE, "Open CASCADE", "face_arrays", path, limit=limit)

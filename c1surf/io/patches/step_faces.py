@@ -40,6 +40,24 @@ def unpack_faces(table: np.ndarray, knots: np.ndarray, weights: np.ndarray, poin
     return faces
 
 
+_HUGE_REAL = re.compile(rb"(?<![A-Za-z0-9_.])[-+]?(?:\d+\.?\d*|\.\d+)[eE]\+?0*(?:[5-9]\d|[1-9]\d{2,})(?!\d)")
+
+
+def refuse_huge_reals(path) -> None:
+    """Refuse a STEP file with a real of magnitude 1e50 or more (an exponent of 50 or more), naming its line:
+    beyond c1surf's coordinate range (``mesh.points.geometry_checks.MAX_COORDINATE``), and Open CASCADE's reading
+    of a surface with a pole at 1e100 runs for minutes. A regular expression over the memory-mapped text."""
+    with open(path, "rb") as f:
+        if os.fstat(f.fileno()).st_size == 0:
+            return
+        with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as text:
+            match = _HUGE_REAL.search(text)
+            if match is not None:
+                line = text[:match.start()].count(b"\n") + 1
+                raise MeshInputError(str(path), f"the number {match.group().decode()} is beyond 1e50, the largest "
+                                     "coordinate c1surf reads: fix the number or scale the model down", line)
+
+
 def face_nets(path) -> list:
     """Every face of a STEP file as (knots_u, knots_v, weights, points, solid) (``_face_nets``), read here."""
     return list(_face_nets(path))
@@ -260,4 +278,4 @@ def _check_untrimmed(path, number: int, face, knots_u: np.ndarray, knots_v: np.n
                              "reads only untrimmed faces, each on the whole of its surface")
 
 
-__all__ = ["READ_HINT", "face_arrays", "face_nets", "unpack_faces"]
+__all__ = ["READ_HINT", "face_arrays", "face_nets", "refuse_huge_reals", "unpack_faces"]

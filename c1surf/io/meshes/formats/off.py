@@ -14,6 +14,7 @@ keyword on the header line. Every malformed line is refused with its number.
 from __future__ import annotations
 
 import os
+import re
 
 import numpy as np
 
@@ -157,7 +158,7 @@ def _faces(lines: np.ndarray, tokens, n_vertices: int, path: str):
         vertices = vertices.astype(np.int64)
     except (ValueError, OverflowError):
         row = next(k for k, (t, n) in enumerate(zip(tokens, sizes.tolist())) if not all(_is_int(i) for i in t[1:n + 1]))
-        raise MeshInputError(path, "a vertex index is not a whole number below 2**62: fix this face", lines[row]) from None
+        raise MeshInputError(path, "a vertex index is not a whole number below 10**18: fix this face", lines[row]) from None
     face = np.repeat(np.arange(sizes.size), sizes)
     outside = np.flatnonzero((vertices < 0) | (vertices >= n_vertices))
     if outside.size:
@@ -176,6 +177,8 @@ def _all_numbers(tokens) -> bool:
 
 
 def _is_int(token: bytes) -> bool:
-    """A whole number that fits an index (below 2**62 in magnitude: 18446744073709551617 is none)."""
-    digits = token.lstrip(b"+-")
-    return digits.isdigit() and len(digits) < 19
+    """A whole number that fits an index (below 10**18 in magnitude: 18446744073709551617 is none; --1 neither)."""
+    return _WHOLE.fullmatch(token) is not None
+
+
+_WHOLE = re.compile(rb"[+-]?\d{1,18}")
