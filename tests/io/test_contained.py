@@ -57,3 +57,29 @@ def test_a_refusal_in_the_child_is_the_parents_line_and_arrays_come_back(tmp_pat
             contained.call("face_arrays", [str(tmp_path / "bad.step")], path=tmp_path / "bad.step", limit=120)
     finally:
         contained.close()
+
+
+class _Interrupted(BaseException):
+    pass
+
+
+def test_an_interrupted_call_leaves_no_stale_answer():
+    """Ctrl-C (or a caller's alarm) mid-call kills the child: the next call gets its own answer, not the old one."""
+    import signal
+
+    def interrupt(signum, frame):
+        raise _Interrupted
+
+    contained = ContainedModule("os", "the reader")
+    previous = signal.signal(signal.SIGALRM, interrupt)
+    try:
+        signal.setitimer(signal.ITIMER_REAL, 0.5)
+        with pytest.raises(_Interrupted):
+            contained.call("system", ["sleep 2"], path="x", limit=60)  # answers an int: "cannot unpack"
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        with pytest.raises(MeshInputError, match=r"ValueError: too many values to unpack"):
+            contained.call("getcwd", [], path="x", limit=60)  # a path string: its own answer
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, previous)
+        contained.close()
