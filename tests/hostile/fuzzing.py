@@ -212,7 +212,9 @@ def worker(start: int, stop: int, seeds: Path, work: Path) -> None:
 def _run_worker(start: int, stop: int, seeds: Path, work: Path, results: list, progress=lambda: None) -> int:
     """Run cases [start, stop) in one worker process; returns the first case not done (a crash ends a worker)."""
     command = [sys.executable, __file__, "--worker", str(start), str(stop), "--seeds", str(seeds), "--work", str(work)]
-    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    child = subprocess.Popen(command, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                             start_new_session=True)  # its own process group: stopped with its children
+    _WORKERS.append(child)
     current = start
     for line in child.stdout:
         record = json.loads(line)
@@ -234,9 +236,11 @@ def _run_worker(start: int, stop: int, seeds: Path, work: Path, results: list, p
 def long_run(start: int, count: int, jobs: int, folder: Path, progress=None, results=None) -> list:
     """Cases [start, start + count) over ``jobs`` worker processes in ``folder``; the records of all cases
     (appended to ``results`` as they come; ``progress()`` called after each)."""
-    import concurrent.futures
+    import threading
 
     seeds = make_seeds(folder / "seeds")
+    signal.signal(signal.SIGTERM, _interrupt)  # make_seeds ran c1surf, whose handler would outlive it
+    signal.signal(signal.SIGINT, _interrupt)
     bounds = [start + count * k // jobs for k in range(jobs + 1)]
     results = [] if results is None else results
 
@@ -245,9 +249,25 @@ def long_run(start: int, count: int, jobs: int, folder: Path, progress=None, res
         while position < stop:
             position = _run_worker(position, stop, seeds, folder / f"work{k}", results, progress or (lambda: None))
 
-    with concurrent.futures.ThreadPoolExecutor(jobs) as pool:
-        list(pool.map(share, range(jobs)))
+    threads = [threading.Thread(target=share, args=(k,), daemon=True) for k in range(jobs)]
+    for thread in threads:
+        thread.start()
+    try:
+        while any(thread.is_alive() for thread in threads):
+            threads[0].join(0.5) if threads[0].is_alive() else time.sleep(0.5)
+    except KeyboardInterrupt:  # Ctrl-C, SIGTERM: the workers and their children stop, the report says so
+        for child in _WORKERS:
+            with contextlib.suppress(ProcessLookupError):
+                os.killpg(child.pid, signal.SIGKILL)
+        raise
     return sorted(results, key=lambda r: r["case"])
+
+
+_WORKERS: list = []  # the worker processes started by long_run
+
+
+def _interrupt(signum, frame):
+    raise KeyboardInterrupt
 
 
 def main() -> None:
@@ -275,7 +295,12 @@ def main() -> None:
             _report(args, list(running), began, finished=False)
 
     with tempfile.TemporaryDirectory(prefix="c1surf-fuzz-") as folder:
-        results = long_run(args.start, args.cases, args.jobs, Path(folder), progress, running)
+        try:
+            results = long_run(args.start, args.cases, args.jobs, Path(folder), progress, running)
+        except KeyboardInterrupt:
+            summary = _report(args, list(running), began, finished=False)
+            print(f"interrupted after {summary['cases']} cases, {summary['failures']} failures (report: {args.report})")
+            sys.exit(130)
     summary = _report(args, results, began, finished=True)
     failures = summary["failed"]
     print(f"{len(results)} cases, {len(failures)} failures, {summary['seconds']} s (report: {args.report})")
