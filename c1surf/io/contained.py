@@ -96,6 +96,7 @@ class ContainedModule:
                                         "the file is damaged or far larger than it looks; c1surf refuses it")
         ended = f"signal {signal.Signals(-status).name}" if status < 0 and -status in signal.valid_signals() \
             else f"exit status {status}"
+        ended += ", out of memory?" if status == -signal.SIGKILL else ""
         return ContainedCrash(path, f"{self.what} crashed reading the file ({ended}): the file is damaged or holds "
                                     "what it cannot read; c1surf refuses it (nothing was written)")
 

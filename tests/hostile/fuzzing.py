@@ -314,7 +314,7 @@ def _report(args, results: list, began: float, finished: bool) -> dict:
     failures = sorted((r for r in results if r["failure"]), key=lambda r: r["case"])
     summary = {"finished": finished, "cases": len(results), "failures": len(failures),
                "seconds": round(time.perf_counter() - began, 1), "start": args.start, "asked": args.cases,
-               "by_command": _counts(results), "failed": failures}
+               "by_command": _counts(results), "endings": _endings(results), "failed": failures}
     Path(args.report).write_text(json.dumps(summary, indent=1) + "\n")
     return summary
 
@@ -330,6 +330,18 @@ def _write_case(case: int) -> None:
     print("c1surf " + " ".join(map(str, args)))
     print(ended)
     print(failure or "meets the promise")
+
+
+def _endings(results) -> dict:
+    """How the cases ended: exit 0, exit 1 (refused or a verdict), Open CASCADE's crashes and time limits."""
+    kinds = {"exit 0": "exit 0", "exit 1": "exit 1", "Open CASCADE crashed": "Open CASCADE crashed (contained)",
+             "Open CASCADE took more than": "Open CASCADE stopped at its limit"}
+    counts: dict = {}
+    for record in results:
+        for text, kind in kinds.items():
+            if text in (record.get("ended") or ""):
+                counts[kind] = counts.get(kind, 0) + 1
+    return counts
 
 
 def _counts(results) -> dict:

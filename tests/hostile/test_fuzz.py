@@ -7,6 +7,8 @@ import pytest
 
 from fuzzing import case_plan, make_seeds, run_case
 
+pytestmark = pytest.mark.filterwarnings("error")  # pytest would record a warning that stderr shows: make it fail
+
 CASES = 240
 CHUNKS = 8
 

@@ -83,3 +83,31 @@ def test_an_interrupted_call_leaves_no_stale_answer():
         signal.setitimer(signal.ITIMER_REAL, 0)
         signal.signal(signal.SIGALRM, previous)
         contained.close()
+
+
+def test_step_numbers_beyond_the_range_are_one_line(tmp_path):
+    """A real of 1e50 or more is refused before Open CASCADE sees it (a pole at 1e100 kept it busy past a minute),
+    naming its line; 1e49 is not."""
+    pytest.importorskip("OCP")
+    import re
+
+    from c1surf.io.patches.step import read_patch_set_step
+    from c1surf.io.patches.step_faces import refuse_huge_reals
+
+    shutil.copy(SAMPLES / "tetrahedron.obj", tmp_path / "t.obj")
+    from click.testing import CliRunner
+
+    from c1surf.cli.main import main
+
+    result = CliRunner().invoke(main, ["convert", str(tmp_path / "t.obj"), "-o", str(tmp_path / "t.ply"),
+                                       "--patches", str(tmp_path / "t.step"), "-q"])
+    assert result.exit_code == 0, result.output
+    text = (tmp_path / "t.step").read_text()
+    pole = re.search(r"B_SPLINE_SURFACE[^#]*#(\d+)", text).group(1)  # the first pole of the first surface
+    point = re.search(rf"#{pole} = CARTESIAN_POINT\('',\(([-0-9.E+]+),", text)
+    line = text[:point.start(1)].count("\n") + 1
+    (tmp_path / "t2.step").write_text(text[:point.start(1)] + "1.E+100" + text[point.end(1):])
+    with pytest.raises(MeshInputError, match=rf"t2\.step:{line}: the number 1\.E\+100 is beyond 1e50"):
+        read_patch_set_step(tmp_path / "t2.step")
+    (tmp_path / "t3.step").write_text(text[:point.start(1)] + "1.E+49" + text[point.end(1):])
+    refuse_huge_reals(tmp_path / "t3.step")  # within the range: read as any other number
