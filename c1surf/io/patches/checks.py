@@ -28,8 +28,10 @@ def whole_numbers(values) -> np.ndarray:
             raise ValueError("indices must be whole numbers below 2**62")
     elif array.dtype.kind == "u" and array.size and array.max() >= 2**62:
         raise ValueError("indices must be below 2**62")
-    elif array.dtype.kind not in "iub" and array.size:
+    elif array.dtype.kind == "O" and array.size:
         array = np.asarray(values, dtype=np.int64)  # nested Python ints (JSON): OverflowError beyond int64
+    elif array.dtype.kind not in "iub":  # complex numbers, strings, dates
+        raise ValueError(f"indices must be whole numbers, not {array.dtype.name}")
     return array.astype(np.int64)
 
 
