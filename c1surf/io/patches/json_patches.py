@@ -24,7 +24,7 @@ import json
 
 import numpy as np
 
-from ...evaluation.patch_set import KIND_BY_DEGREE, PatchSet, degree_runs, surface_patch_set
+from ...evaluation.patch_set import KIND_BY_DEGREE, SOURCE_KINDS, PatchSet, degree_runs, surface_patch_set
 from ..errors import MeshInputError
 from ..finite import refuse_non_finite, refuse_non_finite_patch_set
 from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
@@ -173,6 +173,9 @@ def _sources(path, entries):
         if not (isinstance(source, dict) and len(source) == 1):
             return None, None
         (kind, value), = source.items()
+        if kind not in SOURCE_KINDS:
+            raise MeshInputError(str(path), f"patch {k}: the source is a {', '.join(SOURCE_KINDS[:-1])} or "
+                                 f"{SOURCE_KINDS[-1]}, not {str(kind)[:40]!r}")
         try:
             sources.append([int(value[0]), int(value[1])] if kind == "edge" else [int(value), -1])
         except (TypeError, ValueError, IndexError):

@@ -30,11 +30,12 @@ import json
 import mmap
 import os
 import struct
+import tokenize
 import zipfile
 
 import numpy as np
 
-from ...evaluation.patch_set import FORMAT_NAME, PatchSet
+from ...evaluation.patch_set import FORMAT_NAME, SOURCE_KINDS, PatchSet
 from ..errors import MeshInputError
 from ..finite import refuse_non_finite
 from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights, whole_numbers
@@ -235,6 +236,8 @@ def read_patch_set_npz(path) -> PatchSet:
         source_kind, source = data["source_kind"], data["source"]
         if source_kind.shape != (p,) or source.shape != (p, 2) or source.dtype.kind != "i":
             raise MeshInputError(str(path), f"source_kind / source must have shapes ({p},) / ({p}, 2)")
+        if not np.isin(source_kind, SOURCE_KINDS).all():
+            raise MeshInputError(str(path), f"source_kind must be one of {', '.join(SOURCE_KINDS)}")
     if {"corners", "edges", "reversed"} <= set(data):
         adjacency = checked_adjacency(path, data["corners"], data["edges"], data["reversed"], p)
     weights = None
@@ -256,6 +259,8 @@ def _open(path) -> dict:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
     except zipfile.BadZipFile as e:
         raise MeshInputError(str(path), f"not an NPZ patch file: not a readable zip archive ({e})") from None
+    except (SyntaxError, tokenize.TokenError):  # numpy parses a member's .npy header as a Python literal
+        raise MeshInputError(str(path), "not an NPZ patch file (the .npy header of a member is damaged)") from None
     except (OSError, ValueError, EOFError, struct.error) as e:
         text = str(e)
         if "header" in text.lower() and ("parse" in text.lower() or "magic" in text.lower()):

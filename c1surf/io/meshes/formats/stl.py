@@ -78,7 +78,8 @@ def _triangles(data: bytes, path: str) -> np.ndarray:
                     f"{int.from_bytes(data[80:84], 'little') if len(data) >= 84 else 0} its header counts")
         raise MeshInputError(path, f"not a valid STL file: {what or type(exc).__name__}: re-export it", line) from None
     solids = list(loaded["geometry"].values()) if "geometry" in loaded else [loaded]
-    corners = [np.asarray(s["vertices"], dtype=np.float64)[np.asarray(s["faces"])] for s in solids]
+    with np.errstate(invalid="ignore"):  # a flipped bit makes a NaN: refused with its triangle by the caller
+        corners = [np.asarray(s["vertices"], dtype=np.float64)[np.asarray(s["faces"])] for s in solids]
     if not corners or sum(len(c) for c in corners) == 0:
         raise MeshInputError(path, "no triangles found: not an STL file, or a binary STL whose length does not match "
                              "the triangle count in its header")
