@@ -178,8 +178,8 @@ def _sources(path, entries):
                                  f"{SOURCE_KINDS[-1]}, not {str(kind)[:40]!r}")
         try:
             sources.append([int(value[0]), int(value[1])] if kind == "edge" else [int(value), -1])
-        except (TypeError, ValueError, IndexError):
-            raise MeshInputError(str(path), f"patch {k}: malformed source {source!r}") from None
+        except (TypeError, ValueError, IndexError, OverflowError):  # OverflowError: int(Infinity)
+            raise MeshInputError(str(path), f"patch {k}: malformed source {str(source)[:80]}") from None
         kinds.append(kind)
     if not entries:
         return None, None
