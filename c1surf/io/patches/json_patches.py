@@ -227,7 +227,7 @@ def _patch_points(path, k: int, patch) -> np.ndarray:
     try:
         du, dv = (int(x) for x in patch["degree"])
         points = np.asarray(patch["points"], dtype=np.float64)
-    except (KeyError, TypeError, ValueError) as e:
+    except (KeyError, TypeError, ValueError, OverflowError) as e:  # OverflowError: a degree of 1e309
         raise MeshInputError(str(path), f"patch {k} is malformed ({e})") from None
     if du < 1 or dv < 1 or points.shape != (du + 1, dv + 1, 3) or not np.all(np.isfinite(points)):
         raise MeshInputError(str(path), f"patch {k}: points must be finite with shape ({du + 1}, {dv + 1}, 3), got {points.shape}")
