@@ -35,7 +35,7 @@ def torus_step(folder: Path) -> Path:
     i, j = np.meshgrid(np.arange(n), np.arange(m), indexing="ij")
     quads = np.stack([i * m + j, (i + 1) % n * m + j, (i + 1) % n * m + (j + 1) % m, i * m + (j + 1) % m], -1)
     obj = folder / "torus2k.obj"
-    obj.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in points)
+    obj.write_text("".join(f"v {x!r} {y!r} {z!r}\n" for x, y, z in points.tolist())
                    + "".join("f " + " ".join(str(k + 1) for k in q) + "\n" for q in quads.reshape(-1, 4)))
     subprocess.run([sys.executable, "-m", "c1surf.cli.main", "convert", str(obj), "-o", str(folder / "torus2k.ply"),
                     "--patches", str(step), "--no-merge", "-q"], check=True)
