@@ -51,7 +51,9 @@ def refuse_huge_reals(path) -> None:
         with mmap.mmap(f.fileno(), 0, access=mmap.ACCESS_READ) as text:
             at = _huge_exponent(np.frombuffer(text, dtype=np.uint8))
             if at is not None:
-                start = max(text.rfind(b"(", 0, at), text.rfind(b",", 0, at), text.rfind(b" ", 0, at)) + 1
+                start = at
+                while start > 0 and text[start - 1:start] in b"+-.0123456789":
+                    start -= 1
                 end = at + 1
                 while end < len(text) and text[end:end + 1] in b"+-0123456789":
                     end += 1
