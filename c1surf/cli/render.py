@@ -54,7 +54,14 @@ def read_patches(input_path, surface, inputs, quiet: bool, progress: Progress) -
         raise Failure(f"{input_path}: there are no patches to render")
     if any(max(g.shape[1:3]) > 4 for g in patches.groups):
         raise Failure(f"{input_path}: patches of degree above 3 are not supported")
+    largest = max(float(np.abs(g[..., :3]).max()) for g in patches.groups if g.size)
+    if largest > RENDER_MAX_COORDINATE:  # the camera and the EXR's attributes are float32 (3.4e38 at most)
+        raise Failure(f"{input_path}: coordinates reach {largest:.3g}, beyond {RENDER_MAX_COORDINATE:.0e} where "
+                      "rendering in single precision overflows: scale the model down to render it")
     return patches
+
+
+RENDER_MAX_COORDINATE = 1e30  # the surface's coordinates render takes (its camera stands a few sizes away, in float32)
 
 
 @dataclass(frozen=True)

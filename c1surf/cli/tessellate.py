@@ -6,6 +6,7 @@ import click
 from ..evaluation.tessellate import tessellate_patches
 from ..io.atomic import atomic_output
 from ..io.meshes.usd.stage import USD_SUFFIXES, require_usd
+from ..io.patches.formats import load_patch_set
 from ..io.registry import MESH_WRITERS, PATCH_READERS, suffix_list
 from .common import Failure, Progress, friendly_errors, output_suffix, with_formats
 from .convert import check_tessellation_size, tessellate_within, write_mesh
@@ -58,7 +59,7 @@ def tessellate(patches_path, output, resolution, tolerance, force, quiet):
 
 def load_tessellable(patches_path, patch_suffix: str):
     """The PatchSet of a patch file; a failure when it holds no patch or one of degree above 3."""
-    patch_set = PATCH_READERS[patch_suffix].function(patches_path)
+    patch_set = load_patch_set(patches_path)  # with the range check every patch reader's result gets
     if patch_set.n_patches == 0:
         raise Failure(f"{patches_path}: the patch file holds no patches")
     dims = {g.shape[1:3] for g in patch_set.groups}

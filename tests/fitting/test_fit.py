@@ -130,17 +130,49 @@ def test_options_refuse_bad_values(change):
         FitOptions(**change).check()
 
 
+def _dense_fit(monkeypatch, sizes, vertices, points, scan_points, scan_triangles):
+    """The fit with every normal-equation solve done by LAPACK on the dense matrix (an independent reference:
+    no sparse factorisation, no iteration); also whether a dense solve ran."""
+    import c1surf.fitting.iterate as iterate
+
+    solved = []
+
+    def dense(N, b, start, method="auto"):
+        solved.append(N.shape[0])
+        return np.linalg.solve(N.toarray(), b)
+
+    with monkeypatch.context() as patched:
+        patched.setattr(iterate, "solve", dense)
+        fitted = fit_surface_points(Surface(sizes, vertices, points), scan_points, scan_triangles,
+                                    FitOptions(max_iterations=2, stop=0.0, solver="superlu")).points
+    return fitted, solved
+
+
 @pytest.mark.parametrize("solver", ["cholesky", "superlu", "cg"])
-def test_solvers_agree(solver):
-    sizes, vertices, points = _control("cube.obj")
-    scan_points, scan_triangles = _sphere_scan(points, 2)
-    reference = fit_surface_points(Surface(sizes, vertices, points), scan_points, scan_triangles,
-                                   FitOptions(max_iterations=2, stop=0.0, solver="superlu")).points
+def test_solvers_agree(solver, monkeypatch):
+    """Each solver's fit equals the fit whose systems are solved densely by LAPACK (the cube: 26 vertices)."""
     if solver == "cholesky":
         pytest.importorskip("cholespy")
+    sizes, vertices, points = _control("cube.obj")
+    scan_points, scan_triangles = _sphere_scan(points, 2)
+    reference, solved = _dense_fit(monkeypatch, sizes, vertices, points, scan_points, scan_triangles)
+    assert solved and max(solved) <= 3 * len(points) and np.abs(reference - points).max() > 1e-3 * _size(points)
     fitted = fit_surface_points(Surface(sizes, vertices, points), scan_points, scan_triangles,
                                 FitOptions(max_iterations=2, stop=0.0, solver=solver)).points
     assert np.abs(fitted - reference).max() < 1e-8 * _size(points)
+
+
+def test_cholesky_without_cholespy_says_what_to_install(monkeypatch):
+    import sys
+
+    import scipy.sparse as sp
+
+    from c1surf.fitting.solve import solve
+
+    monkeypatch.setitem(sys.modules, "cholespy", None)  # import cholespy raises ImportError
+    N = sp.csr_matrix(np.array([[2.0, 1.0], [1.0, 2.0]]))
+    with pytest.raises(ValueError, match=r"^the 'cholesky' solver needs the cholespy package \(pip install cholespy\)$"):
+        solve(N, np.ones(2), np.zeros(2), "cholesky")
 
 
 @pytest.mark.parametrize("scan", [(np.zeros((0, 3)), np.zeros((0, 3), int)), (np.zeros((4, 3)), np.array([[0, 1, 7]])),

@@ -14,6 +14,7 @@ from plyfile import PlyData
 from c1surf.cli.main import main
 
 SAMPLES = Path(__file__).resolve().parents[2] / "sample_meshes"
+_NOT_CHILD_LINE = re.compile(r"\w+(Error|Exception|Warning)\b|the conversion was killed|exit status")
 _NOT_FINITE_TEXT = re.compile(rb"(?i)(?<![a-z])(nan|inf|infinity)(?![a-z])")
 
 
@@ -31,7 +32,8 @@ def assert_outcome(result, folder: Path, outputs=(), refused_status=(1, 2), must
     shown = f"exit {result.exit_code}\nstdout: {result.stdout[-2000:]}\nstderr: {result.stderr[-2000:]}"
     assert result.exception is None or isinstance(result.exception, SystemExit), f"{result.exception!r}\n{shown}"
     assert "Traceback" not in result.stdout + result.stderr, shown
-    lines = [line for line in result.stderr.splitlines() if line.strip() and not line.startswith("c1surf: note:")]
+    lines = [line for line in result.stderr.splitlines()  # notes and batch's summary aside
+             if line.strip() and not line.startswith(("c1surf: note:", "c1surf batch: "))]
     outputs = [Path(o) for o in outputs]
     answered = verdict and result.exit_code == 1 and not lines and result.stdout.strip()
     if must_refuse or (result.exit_code != 0 and not answered):
@@ -46,6 +48,26 @@ def assert_outcome(result, folder: Path, outputs=(), refused_status=(1, 2), must
     left = [p.name for p in folder.iterdir() if p.name.startswith(".tmp-c1surf")]
     assert not left, f"temporary files left: {left}\n{shown}"
     return result.exit_code != 0
+
+
+def assert_batch_outcome(result, path: Path, output: Path) -> None:
+    """``batch`` on one file: its summary line, then (exit 1, no output) one line of the child's refusal naming
+    the file, or (exit 0) the finite output; no traceback, nothing else on stderr. A usage error (exit 2) is
+    one line, as for every command."""
+    if result.exit_code == 2:
+        assert_outcome(result, Path(path).parent, [output], refused_status=(2,), must_refuse=True)
+        return
+    shown = f"exit {result.exit_code}\nstderr: {result.stderr[-2000:]}"
+    lines = [line for line in result.stderr.splitlines() if line.strip() and not line.startswith("c1surf: note:")]
+    assert result.exit_code in (0, 1) and "Traceback" not in result.stderr + result.stdout, shown
+    assert lines and lines[0].startswith("c1surf batch: "), shown
+    if result.exit_code == 0:
+        assert len(lines) == 1, shown
+        assert_finite_file(output)
+    else:
+        assert len(lines) == 2 and lines[1].startswith(f"  {path}: "), shown
+        assert not _NOT_CHILD_LINE.match(lines[1][len(f"  {path}: "):]), shown  # the child's one line, no crash
+        assert not output.exists(), shown
 
 
 def assert_finite_file(path: Path) -> None:

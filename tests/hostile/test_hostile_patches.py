@@ -143,7 +143,19 @@ NPZ_CASES = {
     "corners out of range": lambda m: m["corners"].__setitem__((0, 0), 10 ** 15),
     "corners of the wrong shape": _npz_set("corners", np.zeros((3,), dtype=np.int64)),
     "source of another length": _npz_set("source", np.zeros((5, 2), dtype=np.int64)),
+    "corners as floats with NaN": lambda m: m.__setitem__("corners", np.where(m["corners"] == 0, np.nan, m["corners"])),
+    "edges as floats of 1e308": lambda m: m.__setitem__("edges", np.where(m["edges"] == 1, 1e308, m["edges"])),
+    "weights of 1e300": lambda m: _weights(m, 1e300, 1.0),
+    "weights 1e20 apart": lambda m: _weights(m, 1e10, 1e-10),
 }
+
+
+def _weights(members, high, low):
+    """Weights for every patch: ``high`` at the first control point of each, ``low`` elsewhere (issue 42)."""
+    for group, n in (("biquadratic", 3), ("bicubic", 4)):
+        weights = np.full((len(members[group]), n, n), low)
+        weights[:, 0, 0] = high
+        members[f"{group}_weights"] = weights
 
 
 @pytest.mark.parametrize("command", COMMANDS)

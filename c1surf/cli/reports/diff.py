@@ -6,7 +6,7 @@ from pathlib import Path
 import click
 
 from ...evaluation.compare import compare_meshes, compare_patch_sets
-from ...io.meshes.read import read_mesh
+from ...io.meshes.read import read_mesh_in_range
 from ...io.patches.formats import load_patch_set
 from ...io.registry import MESH_READERS, PATCH_READERS, suffix_list
 from ..common import Failure, Progress, friendly_errors, with_formats
@@ -34,7 +34,7 @@ def diff(first, second, tolerance, quiet):
     if kinds[0] != kinds[1]:
         raise Failure(f"{first} is a {kinds[0]} file and {second} a {kinds[1]} file: give two of one kind")
     progress = Progress(quiet)
-    read = load_patch_set if kinds[0] == "patch" else read_mesh
+    read = load_patch_set if kinds[0] == "patch" else read_mesh_in_range
     progress.phase(f"reading {first}")
     a = read(first)
     progress.phase(f"reading {second}")

@@ -10,7 +10,7 @@ from ..errors import MeshInputError
 from ..registry import MESH_READERS, UnsupportedFormat, suffix_list, suffix_of
 from .mesh_file import MeshFile
 
-__all__ = ["read_mesh"]
+__all__ = ["read_mesh", "read_mesh_in_range"]
 
 
 def read_mesh(path, *, keep_degenerate: bool = False, usd=None) -> MeshFile:
@@ -63,3 +63,19 @@ def read_mesh(path, *, keep_degenerate: bool = False, usd=None) -> MeshFile:
         raise MeshInputError(path_str, "the USD options (--usd-prim, --usd-local) apply to .usd, .usda, .usdc and "
                                        ".usdz files only: drop them for this file")
     return reader(path_str, keep_degenerate=keep_degenerate, usd=usd)
+
+
+def read_mesh_in_range(path) -> MeshFile:
+    """``read_mesh``, then refuse coordinates out of the range c1surf computes with
+    (``mesh.points.geometry_checks.check_coordinate_range``: a vertex at 1e308 would make a comparison's
+    differences overflow): ``c1surf diff`` of two meshes, which builds no surface (the commands that do check
+    it in the input preparation)."""
+    from ...mesh.points.geometry_checks import GeometryError, check_coordinate_range
+
+    mesh = read_mesh(path)
+    if len(mesh.points):
+        try:
+            check_coordinate_range(mesh.points)
+        except GeometryError as error:
+            raise MeshInputError(os.fspath(path), error.message) from None
+    return mesh

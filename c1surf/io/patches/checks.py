@@ -15,7 +15,24 @@ from ...mesh.points.geometry_checks import GeometryError, check_coordinate_range
 from ..errors import MeshInputError
 from .merged import clamped_knots
 
-__all__ = ["check_header", "checked_adjacency", "checked_weights", "checked_piece", "check_crease_sides"]
+__all__ = ["whole_numbers", "check_header", "checked_adjacency", "checked_weights", "checked_piece", "check_crease_sides", "check_patch_range",
+           "check_net_range", "WEIGHT_RANGE"]
+
+
+def whole_numbers(values) -> np.ndarray:
+    """``values`` (nested lists or an array) as int64; ValueError (OverflowError for Python ints beyond int64)
+    unless every one is a whole number of int64's range: a float array's NaN, 1e308 or 0.5 is no index."""
+    array = np.asarray(values)
+    if array.dtype.kind == "f":
+        if not (np.all(np.abs(array) < 2.0**62) and np.all(array == np.round(array))):  # also refuses NaN
+            raise ValueError("indices must be whole numbers below 2**62")
+    elif array.dtype.kind == "u" and array.size and array.max() >= 2**62:
+        raise ValueError("indices must be below 2**62")
+    elif array.dtype.kind == "O" and array.size:
+        array = np.asarray(values, dtype=np.int64)  # nested Python ints (JSON): OverflowError beyond int64
+    elif array.dtype.kind not in "iub":  # complex numbers, strings, dates
+        raise ValueError(f"indices must be whole numbers, not {array.dtype.name}")
+    return array.astype(np.int64)
 
 
 def check_header(path, header) -> None:
@@ -30,10 +47,9 @@ def check_header(path, header) -> None:
 def checked_adjacency(path, corners, edges, reversed_, n_patches: int) -> PatchAdjacency:
     """The PatchAdjacency of (P, 4) corner ids, edge ids and reversed flags, validated for ``n_patches``."""
     try:
-        adjacency = PatchAdjacency(np.asarray(corners, dtype=np.int64), np.asarray(edges, dtype=np.int64),
-                                   np.asarray(reversed_, dtype=bool))
+        adjacency = PatchAdjacency(whole_numbers(corners), whole_numbers(edges), np.asarray(reversed_, dtype=bool))
         adjacency.validate(n_patches)
-    except (TypeError, ValueError) as e:
+    except (TypeError, ValueError, OverflowError) as e:
         raise MeshInputError(str(path), f"malformed patch adjacency ({e})") from None
     return adjacency
 
@@ -42,7 +58,7 @@ def checked_weights(path, what: str, weights, shape: tuple) -> np.ndarray:
     """``weights`` as float64 of ``shape``, all positive and finite; ``what`` names them in the refusal."""
     try:
         w = np.asarray(weights, dtype=np.float64)
-    except (TypeError, ValueError) as e:
+    except (TypeError, ValueError, OverflowError) as e:
         raise MeshInputError(str(path), f"{what}: malformed weights ({e})") from None
     if w.shape != tuple(shape) or not np.all(np.isfinite(w) & (w > 0)):
         raise MeshInputError(str(path), f"{what}: weights must be positive with shape {tuple(shape)}, got {w.shape}")
@@ -62,8 +78,8 @@ def checked_piece(path, k: int, points, weights, knots, patches, rotation, n_biq
     try:
         points = np.asarray(points, dtype=np.float64)
         knots_u, knots_v = (np.asarray(x, dtype=np.float64).ravel() for x in knots)
-        patches, rotation = (np.asarray(x, dtype=np.int64) for x in (patches, rotation))
-    except (TypeError, ValueError) as e:
+        patches, rotation = (whole_numbers(x) for x in (patches, rotation))
+    except (TypeError, ValueError, OverflowError) as e:
         raise MeshInputError(str(path), f"{what}: malformed ({e})") from None
     if points.ndim != 3 or points.shape[2] != 3 or min(points.shape[:2]) < 3 or not np.isfinite(points).all():
         raise MeshInputError(str(path), f"{what}: points must be finite with shape (m + 2, n + 2, 3), m, n >= 1, "
@@ -89,8 +105,8 @@ def check_crease_sides(path, header: dict, n_patches: int) -> None:
     if "crease_sides" not in header:
         return
     try:
-        rows = np.asarray(header["crease_sides"], dtype=np.int64).reshape(-1, 4)
-    except (ValueError, TypeError) as e:
+        rows = whole_numbers(header["crease_sides"]).reshape(-1, 4)
+    except (ValueError, TypeError, OverflowError) as e:
         raise MeshInputError(str(path), f'"crease_sides" must be rows [patch, side, patch, side] ({e})') from None
     patches, sides = rows[:, [0, 2]], rows[:, [1, 3]]
     if np.any((patches < 0) | (patches >= n_patches) | (sides < 0) | (sides > 3)):
@@ -104,13 +120,46 @@ def check_crease_sides(path, header: dict, n_patches: int) -> None:
 
 def check_patch_range(path, patch_set) -> None:
     """Refuse (``MeshInputError``) control points whose bounding box is out of the range c1surf's evaluation
-    takes (``mesh.points.geometry_checks.check_coordinate_range``: products of lengths would overflow or underflow)."""
-    arrays = [np.asarray(g)[..., :3].reshape(-1, 3) for g in patch_set.groups if len(g)]
-    arrays += [np.asarray(p.points)[..., :3].reshape(-1, 3) for p in patch_set.merged or ()]
-    boxes = [np.stack([a.min(axis=0), a.max(axis=0)]) for a in arrays if a.size]
-    if not boxes:
-        return
+    takes (``mesh.points.geometry_checks.check_coordinate_range``: products of lengths would overflow or underflow)
+    and weights out of ``WEIGHT_RANGE`` (``check_net_range``)."""
+    arrays = [np.asarray(g)[..., :3].reshape(len(g), -1, 3) for g in patch_set.groups if len(g)]
+    arrays += [np.asarray(p.points)[..., :3].reshape(1, -1, 3) for p in patch_set.merged or ()]
+    weights = [np.asarray(w).reshape(len(w), -1) for w in patch_set.weights or () if len(w)]
+    weights += [np.asarray(p.weights).reshape(1, -1) for p in patch_set.merged or () if p.weights is not None]
+    check_net_range(path, arrays, weights)
+
+
+WEIGHT_RANGE = (1e-50, 1e50, 1e12)  # a weight's smallest and largest value, the largest ratio within a patch
+
+
+def check_net_range(path, points: list, weights: list = (), what: str = "the surface") -> None:
+    """Refuse control points out of c1surf's range (``check_coordinate_range``) and weights that are not finite,
+    not in ``WEIGHT_RANGE``, or whose ratio within a patch exceeds it (rational evaluation divides by the smallest
+    and multiplies by the largest: beyond these, its products overflow).
+
+    points : list of (P, n, 3) float arrays (P patches of n control points); weights : list of (P, n) float arrays
+    """
+    boxes = [np.stack([a.min(axis=(0, 1)), a.max(axis=(0, 1))]) for a in points if a.size]
     try:
-        check_coordinate_range(np.concatenate(boxes), "the surface")
+        if boxes:
+            check_coordinate_range(np.concatenate(boxes), what)
     except GeometryError as error:
-        raise MeshInputError(str(path), error.message) from None
+        raise MeshInputError(str(path), error.message.replace("a vertex has", "a control point has")) from None
+    low, high, ratio = WEIGHT_RANGE
+    for w in weights:
+        if not w.size:
+            continue
+        smallest, largest = w.min(axis=1), w.max(axis=1)
+        if not (np.all(smallest >= low) and np.all(largest <= high)):  # also refuses NaN
+            raise MeshInputError(str(path), f"weights must be finite numbers in [{low:.0e}, {high:.0e}], found one of "
+                                 f"{_worst(w, low, high):.3g}: re-export the file")
+        if np.any(largest > ratio * smallest):
+            raise MeshInputError(str(path), f"a patch's weights differ by a factor of {np.max(largest / smallest):.3g}, "
+                                 f"beyond {ratio:.0e} where rational evaluation loses every digit: re-export the file")
+
+
+def _worst(w: np.ndarray, low: float, high: float) -> float:
+    """The first weight of ``w`` outside [low, high] (or NaN)."""
+    flat = w.ravel()
+    bad = ~((flat >= low) & (flat <= high))
+    return float(flat[np.argmax(bad)])

@@ -24,7 +24,7 @@ import json
 
 import numpy as np
 
-from ...evaluation.patch_set import KIND_BY_DEGREE, PatchSet, degree_runs, surface_patch_set
+from ...evaluation.patch_set import KIND_BY_DEGREE, SOURCE_KINDS, PatchSet, degree_runs, surface_patch_set
 from ..errors import MeshInputError
 from ..finite import refuse_non_finite, refuse_non_finite_patch_set
 from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
@@ -173,14 +173,20 @@ def _sources(path, entries):
         if not (isinstance(source, dict) and len(source) == 1):
             return None, None
         (kind, value), = source.items()
+        if kind not in SOURCE_KINDS:
+            raise MeshInputError(str(path), f"patch {k}: the source is a {', '.join(SOURCE_KINDS[:-1])} or "
+                                 f"{SOURCE_KINDS[-1]}, not {str(kind)[:40]!r}")
         try:
             sources.append([int(value[0]), int(value[1])] if kind == "edge" else [int(value), -1])
-        except (TypeError, ValueError, IndexError):
-            raise MeshInputError(str(path), f"patch {k}: malformed source {source!r}") from None
+        except (TypeError, ValueError, IndexError, OverflowError):  # OverflowError: int(Infinity)
+            raise MeshInputError(str(path), f"patch {k}: malformed source {str(source)[:80]}") from None
         kinds.append(kind)
     if not entries:
         return None, None
-    return np.array(kinds), np.asarray(sources, dtype=np.int64).reshape(-1, 2)
+    try:
+        return np.array(kinds), np.asarray(sources, dtype=np.int64).reshape(-1, 2)
+    except OverflowError:
+        raise MeshInputError(str(path), "a patch's source is an integer beyond any face or edge index") from None
 
 
 def _merged(path, documents, patches) -> list:
@@ -221,7 +227,7 @@ def _patch_points(path, k: int, patch) -> np.ndarray:
     try:
         du, dv = (int(x) for x in patch["degree"])
         points = np.asarray(patch["points"], dtype=np.float64)
-    except (KeyError, TypeError, ValueError) as e:
+    except (KeyError, TypeError, ValueError, OverflowError) as e:  # OverflowError: a degree of 1e309
         raise MeshInputError(str(path), f"patch {k} is malformed ({e})") from None
     if du < 1 or dv < 1 or points.shape != (du + 1, dv + 1, 3) or not np.all(np.isfinite(points)):
         raise MeshInputError(str(path), f"patch {k}: points must be finite with shape ({du + 1}, {dv + 1}, 3), got {points.shape}")

@@ -30,14 +30,15 @@ import json
 import mmap
 import os
 import struct
+import tokenize
 import zipfile
 
 import numpy as np
 
-from ...evaluation.patch_set import FORMAT_NAME, PatchSet
+from ...evaluation.patch_set import FORMAT_NAME, SOURCE_KINDS, PatchSet
 from ..errors import MeshInputError
 from ..finite import refuse_non_finite
-from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights
+from .checks import check_crease_sides, check_header, checked_adjacency, checked_piece, checked_weights, whole_numbers
 
 _DATE = (1980, 1, 1, 0, 0, 0)  # earliest zip date: no clock in the output
 _MAX_RATIO = 100  # largest expansion of a compressed member read (float arrays compress 1-3 times)
@@ -235,6 +236,8 @@ def read_patch_set_npz(path) -> PatchSet:
         source_kind, source = data["source_kind"], data["source"]
         if source_kind.shape != (p,) or source.shape != (p, 2) or source.dtype.kind != "i":
             raise MeshInputError(str(path), f"source_kind / source must have shapes ({p},) / ({p}, 2)")
+        if not np.isin(source_kind, SOURCE_KINDS).all():
+            raise MeshInputError(str(path), f"source_kind must be one of {', '.join(SOURCE_KINDS)}")
     if {"corners", "edges", "reversed"} <= set(data):
         adjacency = checked_adjacency(path, data["corners"], data["edges"], data["reversed"], p)
     weights = None
@@ -256,6 +259,8 @@ def _open(path) -> dict:
         raise MeshInputError(str(path), "is a directory, not a patch file") from None
     except zipfile.BadZipFile as e:
         raise MeshInputError(str(path), f"not an NPZ patch file: not a readable zip archive ({e})") from None
+    except (SyntaxError, tokenize.TokenError):  # numpy parses a member's .npy header as a Python literal
+        raise MeshInputError(str(path), "not an NPZ patch file (the .npy header of a member is damaged)") from None
     except (OSError, ValueError, EOFError, struct.error) as e:
         text = str(e)
         if "header" in text.lower() and ("parse" in text.lower() or "magic" in text.lower()):
@@ -269,7 +274,7 @@ def _header(path, data: dict) -> dict:
         raise MeshInputError(str(path), f'not a c1surf patch file (no "header" member with "format": "{FORMAT_NAME}")')
     try:
         header = json.loads(str(data["header"].item()))
-    except (ValueError, TypeError) as e:
+    except (ValueError, TypeError, OverflowError) as e:
         raise MeshInputError(str(path), f"damaged header ({e})") from None
     except RecursionError:  # json's decoder recurses once per level
         raise MeshInputError(str(path), "damaged header: its JSON is nested too deeply to read") from None
@@ -295,9 +300,12 @@ def _merged(path, data: dict, n_biquadratic: int) -> list:
     if "merged_spans" not in data:
         return []
     missing = [name for name in _PIECE_MEMBERS if name not in data]
-    spans = np.asarray(data["merged_spans"], dtype=np.int64)
-    if missing or spans.ndim != 2 or spans.shape[1] != 2 or np.any(spans < 1):
-        raise MeshInputError(str(path), f"merged pieces need merged_spans (K, 2) of spans >= 1 and {', '.join(_PIECE_MEMBERS)}")
+    try:
+        spans = whole_numbers(data["merged_spans"])
+    except (ValueError, TypeError, OverflowError):
+        spans = np.zeros(0, dtype=np.int64)  # refused below
+    if missing or spans.ndim != 2 or spans.shape[1] != 2 or np.any(spans < 1) or np.any(spans > 1 << 24):
+        raise MeshInputError(str(path), f"merged pieces need merged_spans (K, 2) of spans in [1, 2**24] and {', '.join(_PIECE_MEMBERS)}")
     m, n = spans[:, 0], spans[:, 1]
     sizes = {"merged_points": (m + 2) * (n + 2), "merged_weights": (m + 2) * (n + 2), "merged_knots_u": m + 5,
              "merged_knots_v": n + 5, "merged_patches": m * n, "merged_rotation": m * n}

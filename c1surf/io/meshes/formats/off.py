@@ -14,6 +14,7 @@ keyword on the header line. Every malformed line is refused with its number.
 from __future__ import annotations
 
 import os
+import re
 
 import numpy as np
 
@@ -142,8 +143,8 @@ def _faces(lines: np.ndarray, tokens, n_vertices: int, path: str):
     """(sizes (F,), vertices (sum(sizes),)) of the face lines ``n i1 .. in [colour]``; refuses the first bad line."""
     try:
         sizes = np.array([int(t[0]) for t in tokens], dtype=np.int64)
-    except ValueError:
-        row = next(k for k, t in enumerate(tokens) if not t[0].lstrip(b"+-").isdigit())
+    except (ValueError, OverflowError):
+        row = next(k for k, t in enumerate(tokens) if not _is_int(t[0]))
         raise MeshInputError(path, "a face line starts with its vertex count, a whole number", lines[row]) from None
     present = np.array([len(t) - 1 for t in tokens], dtype=np.int64)
     bad = np.flatnonzero((sizes < 3) | (present < sizes))
@@ -155,9 +156,9 @@ def _faces(lines: np.ndarray, tokens, n_vertices: int, path: str):
     try:
         vertices = np.array([i for t, n in zip(tokens, sizes.tolist()) for i in t[1:n + 1]], dtype=np.bytes_)
         vertices = vertices.astype(np.int64)
-    except ValueError:
+    except (ValueError, OverflowError):
         row = next(k for k, (t, n) in enumerate(zip(tokens, sizes.tolist())) if not all(_is_int(i) for i in t[1:n + 1]))
-        raise MeshInputError(path, "a vertex index is not a whole number: fix this face", lines[row]) from None
+        raise MeshInputError(path, "a vertex index is not a whole number below 10**18: fix this face", lines[row]) from None
     face = np.repeat(np.arange(sizes.size), sizes)
     outside = np.flatnonzero((vertices < 0) | (vertices >= n_vertices))
     if outside.size:
@@ -176,4 +177,8 @@ def _all_numbers(tokens) -> bool:
 
 
 def _is_int(token: bytes) -> bool:
-    return token.lstrip(b"+-").isdigit()
+    """A whole number that fits an index (below 10**18 in magnitude: 18446744073709551617 is none; --1 neither)."""
+    return _WHOLE.fullmatch(token) is not None
+
+
+_WHOLE = re.compile(rb"[+-]?\d{1,18}")

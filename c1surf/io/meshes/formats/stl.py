@@ -7,7 +7,9 @@ triangles into a surface, and ``--no-weld`` leaves them apart.
 """
 from __future__ import annotations
 
+import contextlib
 import io
+import logging
 import os
 import re
 import warnings
@@ -65,9 +67,10 @@ def _triangles(data: bytes, path: str) -> np.ndarray:
 
     data = _as_utf8(data, path)
     try:
-        with warnings.catch_warnings():
+        with warnings.catch_warnings(), _quiet_logger("trimesh"):
             warnings.simplefilter("ignore")  # numpy's fromstring on text that is not numbers
-            loaded = load_stl(io.BytesIO(data))
+            loaded = load_stl(io.BytesIO(data))  # logs a traceback when the facet normals are no numbers: c1surf
+            # computes its own normals, so nothing is lost
     except Exception as exc:  # trimesh raises ValueError, HeaderError, ... on malformed files (numpy's words)
         line, what = _ascii_fault(data)
         if line is None and not data.lstrip()[:5].lower().startswith(b"solid"):
@@ -75,11 +78,24 @@ def _triangles(data: bytes, path: str) -> np.ndarray:
                     f"{int.from_bytes(data[80:84], 'little') if len(data) >= 84 else 0} its header counts")
         raise MeshInputError(path, f"not a valid STL file: {what or type(exc).__name__}: re-export it", line) from None
     solids = list(loaded["geometry"].values()) if "geometry" in loaded else [loaded]
-    corners = [np.asarray(s["vertices"], dtype=np.float64)[np.asarray(s["faces"])] for s in solids]
+    with np.errstate(invalid="ignore"):  # a flipped bit makes a NaN: refused with its triangle by the caller
+        corners = [np.asarray(s["vertices"], dtype=np.float64)[np.asarray(s["faces"])] for s in solids]
     if not corners or sum(len(c) for c in corners) == 0:
         raise MeshInputError(path, "no triangles found: not an STL file, or a binary STL whose length does not match "
                              "the triangle count in its header")
     return np.concatenate(corners)
+
+
+@contextlib.contextmanager
+def _quiet_logger(name: str):
+    """Nothing ``name``'s logger (and its children) logs reaches stderr for the block."""
+    logger = logging.getLogger(name)
+    level = logger.level
+    logger.setLevel(logging.CRITICAL + 1)
+    try:
+        yield
+    finally:
+        logger.setLevel(level)
 
 
 _VERTEX = re.compile(rb"^[ \t]*vertex\b(.*)$", re.IGNORECASE | re.MULTILINE)

@@ -100,6 +100,10 @@ def _split(tokens, path: str, line: int):
         bad = next(v for v in values[:n_int] if not re.fullmatch(r"[+-]?\d+", v))
         raise MeshInputError(path, f"tag `{tokens[1]}`: cannot read {bad!r} as an integer (the first {n_int} "
                              "values are integers): fix the value or the counts", line) from None
+    huge = next((v for v in ints if abs(v) >= _LARGEST_INDEX), None)
+    if huge is not None:
+        raise MeshInputError(path, f"tag `{tokens[1]}`: the integer {huge} is beyond any vertex or face index: fix the "
+                             "value", line)
     try:
         floats = [float(v) for v in values[n_int:n_int + n_float]]
     except ValueError:
@@ -107,6 +111,9 @@ def _split(tokens, path: str, line: int):
         raise MeshInputError(path, f"tag `{tokens[1]}`: cannot read {bad!r} as a number: fix the value or the "
                              "counts", line) from None
     return tokens[1], ints, floats
+
+
+_LARGEST_INDEX = 2**62  # an index at or beyond it fits no mesh (and no int64 after arithmetic)
 
 
 def _is_float(text: str) -> bool:
