@@ -165,7 +165,8 @@ def _answer(module, request: bytes) -> bytes:
     except MemoryError:
         header, arrays = {"error": "out of memory reading the file", "line": None}, []
     except Exception as error:  # a bug in c1surf's own code around the foreign reader: still one line
-        header, arrays = {"error": f"could not be read ({type(error).__name__}: {error}); please report it",
+        said = " ".join(str(error).split())[:300]  # one line, whatever the foreign code's message holds
+        header, arrays = {"error": f"could not be read ({type(error).__name__}: {said}); please report it",
                           "line": None}, []
     out = io.BytesIO()
     out.write(json.dumps(header).encode() + b"\n")

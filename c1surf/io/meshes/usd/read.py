@@ -23,11 +23,18 @@ import numpy as np
 from ...errors import MeshInputError
 from ..mesh_file import MeshFile, collapse_repeated_corners_or_refuse, refuse_repeated_vertex
 from ..tags.record import SharpTags, check_tags
+from ...contained import call_contained
+from .transfer import mesh_arrays as _transferred, mesh_file
 from .stage import (POINTS_PRIMVAR, SHARPNESS_ATTRIBUTES, UsdReadOptions, exact_where_rounded, open_stage,
-                    pxr_modules)
+                    pxr_modules, usd_message)
 
-__all__ = ["read_usd", "UsdReadOptions"]
+__all__ = ["read_usd", "read_here", "mesh_arrays", "UsdReadOptions"]
 
+# usd-core parses the file in a child process (``io.contained``): a crash or hang in its C++ parser on a damaged file
+# is one line. False: in this process (tests that look inside the reader).
+CONTAINED = True
+_CHILD = "c1surf.io.meshes.usd.read"  # its mesh_arrays, in the child
+_LIMIT_SECONDS = (60.0, 20.0)  # a read's time limit: base and per MB of file, as the STEP reader's
 BOUNDARY_MODES = {"none": 0, "edgeAndCorner": 1, "edgeOnly": 2}
 # prim types that hold no geometry of their own: not named in the note on what was ignored
 _CONTAINERS = {"", "Xform", "Scope", "Mesh", "GeomSubset"}
@@ -70,14 +77,38 @@ def read_usd(path, *, keep_degenerate: bool = False, usd: UsdReadOptions | None 
     """
     path = os.fspath(path)
     options = usd or UsdReadOptions()
-    Usd, UsdGeom = pxr_modules(path)[:2]
+    if not CONTAINED:
+        return read_here(path, keep_degenerate=keep_degenerate, usd=options)
+    pxr_modules(path)  # usd-core missing: said here, in one line
+    if not os.path.isfile(path):
+        raise MeshInputError(path, "no such file")
+    limit = _LIMIT_SECONDS[0] + _LIMIT_SECONDS[1] * os.path.getsize(path) / 1e6
+    header, arrays = call_contained(_CHILD, "usd-core", "mesh_arrays", path, options.prim, options.world,
+                                    keep_degenerate, limit=limit)
+    return mesh_file(path, header, arrays)
+
+
+def mesh_arrays(path: str, prim, world: bool, keep_degenerate: bool):
+    """The child's side of ``read_usd``: (header, arrays) of ``read_here`` (``transfer.mesh_arrays``)."""
+    return _transferred(read_here(path, keep_degenerate=keep_degenerate, usd=UsdReadOptions(prim, world)))
+
+
+def read_here(path, *, keep_degenerate: bool = False, usd: UsdReadOptions | None = None) -> MeshFile:
+    """``read_usd`` in this process (the child's side: ``usd_child.mesh_arrays``)."""
+    path = os.fspath(path)
+    options = usd or UsdReadOptions()
+    Usd, UsdGeom, _, _, Tf = pxr_modules(path)
     stage, stage_notes = open_stage(path)
-    prims = _mesh_prims(stage, options, path, Usd, UsdGeom)
-    time = Usd.TimeCode.EarliestTime()
-    xforms = UsdGeom.XformCache(time) if options.world else None
-    parts = [_read_prim(UsdGeom.Mesh(prim), path, time, xforms, keep_degenerate) for prim in prims]
-    notes = stage_notes + [note for part in parts for note in part.notes] + _ignored_notes(stage, prims, path, Usd,
-                                                                                           UsdGeom)
+    try:
+        prims = _mesh_prims(stage, options, path, Usd, UsdGeom)
+        time = Usd.TimeCode.EarliestTime()
+        xforms = UsdGeom.XformCache(time) if options.world else None
+        parts = [_read_prim(UsdGeom.Mesh(prim), path, time, xforms, keep_degenerate) for prim in prims]
+        ignored = _ignored_notes(stage, prims, path, Usd, UsdGeom)
+    except Tf.ErrorException as error:  # a damaged value usd-core meets only when it is read
+        raise MeshInputError(path, f"usd-core cannot read a value of the file ({usd_message(error)}): the file is "
+                                   "damaged") from None
+    notes = stage_notes + [note for part in parts for note in part.notes] + ignored
     return _combined(path, parts, notes)
 
 

@@ -67,8 +67,12 @@ def require_usd(outputs) -> None:
 
 def usd_message(error) -> str:
     """The first of usd-core's error lines (``Error in 'Class::Method' at line N in file F : 'message'``)."""
-    found = re.findall(r": '(.*?)'\s*(?:\n|$)", str(error))
-    text = found[0] if found else " ".join(str(error).split())
+    try:
+        said = str(error)
+    except UnicodeError:  # usd-core's message quotes the file's damaged bytes
+        return "usd-core's message about it is not text"
+    found = re.findall(r": '(.*?)'\s*(?:\n|$)", said)
+    text = found[0] if found else " ".join(said.split())
     return text.rstrip(".")
 
 
