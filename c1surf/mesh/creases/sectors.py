@@ -27,7 +27,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .sheets import corner_sectors, exact_crease_vertices, seam_corners
+from .sheets import corner_sectors, dart_ends, exact_crease_vertices, seam_corners
 from ..halfedges import HalfEdgeMesh, build_halfedges, component_roots, orbit_labels, vertex_valences
 
 
@@ -161,7 +161,8 @@ def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndar
     size = np.bincount(sector, minlength=mesh.n_halfedges)[sector]
     target = np.where(corner[mesh.origin], 1, 2)
     remove = wanted[mesh.origin] & (size > target) & (successor >= 0)
-    remove &= ~_kept_interior_edges(mesh, remove & (target == 2), sector, size, successor, on_seam,
+    least = _least_faces(mesh, on_seam, dart_ends(mesh, sharp, corner_tag))
+    remove &= ~_kept_interior_edges(mesh, remove & (target == 2), sector, size, successor, least,
                                     remove & (target == 1), dart[mesh.prev])
     remove &= ~dart[mesh.prev] | (target == 1)
     if face_keys is not None:
@@ -171,11 +172,11 @@ def _planned_removals(mesh: HalfEdgeMesh, sharp: np.ndarray, corner_tag: np.ndar
     removed = np.zeros(mesh.n_halfedges, dtype=bool)
     removed[edge] = True
     removed[mesh.twin[edge]] = True
-    return _keep_valences(mesh, removed, on_seam)
+    return _keep_valences(mesh, removed, least)
 
 
 def _kept_interior_edges(mesh: HalfEdgeMesh, candidate: np.ndarray, sector: np.ndarray, size: np.ndarray,
-                         successor: np.ndarray, on_seam: np.ndarray, certain: np.ndarray, prefer: np.ndarray) -> np.ndarray:
+                         successor: np.ndarray, least: np.ndarray, certain: np.ndarray, prefer: np.ndarray) -> np.ndarray:
     """(H,) bool: the one interior edge each smooth seam vertex's large sector keeps (its corner ``h``).
 
     ``candidate``: corners whose following interior edge (``prev[h]``) a two-face target could keep;
@@ -186,7 +187,7 @@ def _kept_interior_edges(mesh: HalfEdgeMesh, candidate: np.ndarray, sector: np.n
     """
     far = mesh.origin[mesh.prev]  # prev[h] runs from the far vertex to h's vertex
     lost = np.bincount(far[certain], minlength=mesh.n_vertices)
-    spare = vertex_valences(mesh) - _least_faces(mesh, on_seam) - lost
+    spare = vertex_valences(mesh) - least - lost
     score = np.where(prefer, -(2**31), spare[far])
     h = np.flatnonzero(candidate)
     rank = _chain_ranks(successor, int(size.max(initial=0)))
@@ -197,20 +198,23 @@ def _kept_interior_edges(mesh: HalfEdgeMesh, candidate: np.ndarray, sector: np.n
     return kept
 
 
-def _least_faces(mesh: HalfEdgeMesh, on_seam: np.ndarray) -> np.ndarray:
+def _least_faces(mesh: HalfEdgeMesh, on_seam: np.ndarray, dart: np.ndarray) -> np.ndarray:
     """(V,) int: the fewest faces a vertex may be left in: 2 inside (an interior vertex left in two faces is
     dissolved next, ``mesh.valence_two``; in one it would be inside the polygon), 1 on the boundary and on a
-    seam (a seam vertex's sectors keep a face each, and its cut copies have four)."""
+    seam (a seam vertex's sectors keep a face each, and its cut copies have four), 3 at a dart (``dart`` (V,)
+    bool, ``sheets.dart_ends``: its one copy, n real faces and two ghost quads, is an (n + 2)-hole,
+    ``construction.stencils.holes.dart``; at n = 2 that cell is a regular quad, folded onto itself)."""
     least = np.full(mesh.n_vertices, 2, dtype=np.int64)
     least[mesh.origin[mesh.twin < 0]] = 1
     least[on_seam] = 1
+    least[dart] = 3
     return least
 
 
-def _keep_valences(mesh: HalfEdgeMesh, removed: np.ndarray, on_seam: np.ndarray) -> np.ndarray:
+def _keep_valences(mesh: HalfEdgeMesh, removed: np.ndarray, least: np.ndarray) -> np.ndarray:
     """``removed`` less the edges at vertices that would be left in fewer faces than ``_least_faces``."""
     lost = np.bincount(mesh.origin[removed], minlength=mesh.n_vertices)  # removed edges at each vertex
-    short = vertex_valences(mesh) - lost < _least_faces(mesh, on_seam)
+    short = vertex_valences(mesh) - lost < least
     return removed & ~short[mesh.origin] & ~short[mesh.dest]
 
 

@@ -43,7 +43,7 @@ def boundary_rows(A, B1, B2, C, a: float):
     P[..., 3, 0, :] = (B2 + B1_next + C + C_next) / 4
     P[..., 0, 1, :] = (5 * B1 + B2 + 5 * C + A) / 12
     P[..., 0, 2, :] = (5 * B1 + B2_prev + 5 * C + C_prev) / 12
-    P[..., 0, 3, :] = (B1 + B2_prev + C + C_prev) / 4
+    P[..., 0, 3, :] = shift(P[..., 3, 0, :], -1)  # P_{03,i} = P_{30,i-1}: the side shared inside the hole, bit for bit
     P[..., 1, 1, :] = (5 * B2 + 5 * B1 + A + 25 * C) / 36 + a / 9 * (C - A)
     P[..., 2, 1, :] = (5 * B2 + 5 * C_next + B1_next + 25 * C) / 36 + a / 18 * (-5 * B2 + B1_next + C_next + 3 * C)
     P[..., 1, 2, :] = (5 * B1 + 5 * C_prev + B2_prev + 25 * C) / 36 + a / 18 * (-5 * B1 + B2_prev + C_prev + 3 * C)
