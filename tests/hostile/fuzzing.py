@@ -7,7 +7,7 @@ render, batch, as the file's kind allows), judged by the promise (``hostile_case
 with finite outputs or one ``c1surf: error:`` line and exit 1 and no output; no traceback, nothing printed
 past click (file descriptors 1 and 2 stay empty: no library's logging, no C++ chatter), within ``TIME_LIMIT``.
 
-``tests/hostile/test_fuzz.py`` runs a few hundred cases in the test process; ``make fuzz`` runs this file
+``tests/hostile/test_mutation_fuzz.py`` runs a few hundred cases in the test process; ``make fuzz`` runs this file
 (20,000 cases by default) in worker processes that a crash cannot take down with the run: each worker says
 which case it starts, and a worker that dies is replaced from the next case, its case a failure::
 

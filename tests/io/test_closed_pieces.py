@@ -4,7 +4,7 @@ A piece (or a strip of one, the default CAD packing) that goes round a tube, a t
 first and last rows of control points equal. c1surf's IGES writer flags it closed (PROP1/PROP2, never periodic);
 the STEP writer (Open CASCADE's ``GeomToStep``) sets ``u_closed``/``v_closed``. Open CASCADE's STEP *reader* makes
 every such B-spline surface periodic whatever the flags say (``ShapeCustom_Surface::ConvertToPeriodic``), so the
-STEP reader gives the clamped net back (``io.patches.step_faces._clamped_seam``). Every format is read back by
+STEP reader gives the clamped net back (``io.patches.brep.step_faces._clamped_seam``). Every format is read back by
 ``diff`` (against the NPZ: exit 0), ``check`` (G1 certified) and ``measure`` (equal to the NPZ's).
 Needs Open CASCADE (cadquery-ocp): skipped without it; the fitted scans run with C1SURF_SLOW_TESTS=1.
 """
@@ -165,7 +165,7 @@ def test_a_solid_the_reader_turns_inside_out_reads_back(tmp_path, monkeypatch, p
     and every face came back with u and v swapped: 10,936 coefficients moved). c1surf goes by the volume its own
     Gauss rules give the faces as read, so the torus read back with its solid reversed is still the NPZ's surface."""
     import c1surf.io.patches.step as step
-    import c1surf.io.patches.step_faces as step_faces
+    import c1surf.io.patches.brep.step_faces as step_faces
     from OCP.BRepGProp import BRepGProp
     from OCP.GProp import GProp_GProps
 

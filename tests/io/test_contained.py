@@ -40,13 +40,13 @@ def test_a_refusal_in_the_child_is_the_parents_line_and_arrays_come_back(tmp_pat
     from click.testing import CliRunner
 
     from c1surf.cli.main import main
-    from c1surf.io.patches.step_faces import face_nets
+    from c1surf.io.patches.brep.step_faces import face_nets
 
     shutil.copy(SAMPLES / "cube.obj", tmp_path / "cube.obj")
     result = CliRunner().invoke(main, ["convert", str(tmp_path / "cube.obj"), "-o", str(tmp_path / "cube.ply"),
                                        "--patches", str(tmp_path / "cube.step"), "-q"])
     assert result.exit_code == 0, result.output
-    contained = ContainedModule("c1surf.io.patches.step_faces", "Open CASCADE")
+    contained = ContainedModule("c1surf.io.patches.brep.step_faces", "Open CASCADE")
     try:
         header, arrays = contained.call("face_arrays", [str(tmp_path / "cube.step")], path="cube.step", limit=120)
         faces = face_nets(tmp_path / "cube.step")  # the same reading in this process
@@ -92,7 +92,7 @@ def test_step_numbers_beyond_the_range_are_one_line(tmp_path):
     import re
 
     from c1surf.io.patches.step import read_patch_set_step
-    from c1surf.io.patches.step_faces import refuse_huge_reals
+    from c1surf.io.patches.brep.step_faces import refuse_huge_reals
 
     shutil.copy(SAMPLES / "tetrahedron.obj", tmp_path / "t.obj")
     from click.testing import CliRunner

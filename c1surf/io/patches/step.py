@@ -34,9 +34,9 @@ from ..finite import refuse_non_finite_patch_set
 from .brep.step_brep import brep_shape, occ_classes
 from .checks import check_net_range
 from .merged import cad_patch_set, is_piece_knots, piece_patches
-from .step_faces import READ_HINT, face_nets, refuse_huge_reals, unpack_faces
+from .brep.step_faces import READ_HINT, face_nets, refuse_huge_reals, unpack_faces
 
-_FACE_MODULE = "c1surf.io.patches.step_faces"  # the Open CASCADE side of reading, run in a child (io.contained)
+_FACE_MODULE = "c1surf.io.patches.brep.step_faces"  # the Open CASCADE side of reading, run in a child (io.contained)
 CONTAINED = True  # read in the child process (False: in this one, for tests that replace step_faces._read_shape)
 _LIMIT_SECONDS = (60.0, 20.0)  # a read's time limit: base and per MB of file (torus2k's 10 MB read in ~6 s)
 

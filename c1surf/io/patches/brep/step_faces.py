@@ -12,8 +12,8 @@ import re
 
 import numpy as np
 
-from ...console import quiet_stdout
-from ..errors import MeshInputError
+from ....console import quiet_stdout
+from ...errors import MeshInputError
 
 _FACE_ENTITY = re.compile(rb"=\s*(?:ADVANCED_FACE|FACE_SURFACE)\s*\(")
 READ_HINT = "reading STEP needs Open CASCADE: pip install 'c1surf[cad]' (cadquery-ocp)"
