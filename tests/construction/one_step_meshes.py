@@ -48,10 +48,9 @@ def windowed_torus(nu=12, nv=8, R=2.0, r=0.7):
     return _quads(renumber[np.array(faces)], points[used])
 
 
-def bowl(k=3):
-    """An open box (a cube without its top, every face k x k) pushed onto a sphere: four valence-3 vertices at
-    the bottom corners; the rim's corners lie in two faces (regular)."""
-    points, index, faces = [], {}, []
+def _welding(points: list):
+    """``vertex(p)``: the index of point ``p`` in ``points`` (appended when new; equal to 1e-9 means the same)."""
+    index = {}
 
     def vertex(p):
         key = tuple(np.round(p, 9))
@@ -59,6 +58,15 @@ def bowl(k=3):
             index[key] = len(points)
             points.append(np.asarray(p, float))
         return index[key]
+
+    return vertex
+
+
+def bowl(k=3):
+    """An open box (a cube without its top, every face k x k) pushed onto a sphere: four valence-3 vertices at
+    the bottom corners; the rim's corners lie in two faces (regular)."""
+    points, faces = [], []
+    vertex = _welding(points)
 
     sides = [((0, 0, -1), (0, 1, 0), (1, 0, 0)),  # bottom, seen from below (outside)
              ((1, 0, 0), (0, 1, 0), (0, 0, 1)), ((-1, 0, 0), (0, 0, 1), (0, 1, 0)),
@@ -81,14 +89,8 @@ def saddle(m=5, n=4):
 
 def _cube_grid(k):
     """A cube [-1, 1]^3 with every face k x k: (faces, points, edges on the cube's 12 edges)."""
-    points, index, faces = [], {}, []
-
-    def vertex(p):
-        key = tuple(np.round(p, 9))
-        if key not in index:
-            index[key] = len(points)
-            points.append(np.asarray(p, float))
-        return index[key]
+    points, faces = [], []
+    vertex = _welding(points)
 
     for axis in range(3):
         for sign in (1, -1):
