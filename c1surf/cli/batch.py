@@ -247,8 +247,8 @@ def summarize(n_inputs: int, n_run: int, failures, seconds: float) -> None:
     """The closing lines on stderr: the counts (``n_run`` conversions tried), then one line per failure; exit status 1 if any file failed."""
     click.echo(f"c1surf batch: {n_run - len(failures)} converted, {n_inputs - n_run} up to date, "
                f"{len(failures)} failed (of {n_inputs} inputs) in {seconds:.1f}s", err=True)
-    for path, message in failures:
-        click.echo(f"  {path}: {message}", err=True)
+    for path, message in failures:  # the child's line names its file already, most often
+        click.echo(f"  {message}" if message.startswith(f"{path}:") else f"  {path}: {message}", err=True)
     if failures:
         raise click.exceptions.Exit(1)
 

@@ -1,7 +1,7 @@
 """Seeded mutation fuzzing of every reader and every command that reads a file (issue 42).
 
-A case is a number: it picks one of ten small valid files (a box with crease tags as OBJ, ASCII and binary PLY,
-ASCII and binary STL, OFF; its surface as JSON, NPZ, IGES and STEP), mutates it once
+A case is a number: it picks one of twelve small valid files (a box with crease tags as OBJ, ASCII and binary
+PLY, ASCII and binary STL, OFF, text and binary USD; its surface as JSON, NPZ, IGES and STEP), mutates it once
 (``mutations.mutate``) and runs one command on it (convert, check, measure --json, tessellate, inspect, diff,
 render, batch, as the file's kind allows), judged by the promise (``hostile_cases.assert_outcome``): exit 0
 with finite outputs or one ``c1surf: error:`` line and exit 1 and no output; no traceback, nothing printed
@@ -34,7 +34,8 @@ from hostile_cases import assert_batch_outcome, assert_outcome, run  # noqa: E40
 from mutations import mutate  # noqa: E402
 
 TIME_LIMIT = 150.0  # seconds a case may take (above c1surf's own limit on Open CASCADE: 60 s + 20 s per MB)
-MESHES = ["box.obj", "box_ascii.ply", "box_binary.ply", "box_ascii.stl", "box_binary.stl", "box.off"]
+MESHES = ["box.obj", "box_ascii.ply", "box_binary.ply", "box_ascii.stl", "box_binary.stl", "box.off", "box.usda",
+          "box.usdc"]
 PATCHES = ["box.json", "box.npz", "box.igs", "box.step"]
 MESH_COMMANDS = ["convert", "convert", "check", "measure", "inspect", "inspect", "diff", "render"]
 BATCH_SHARE = 0.03  # of the mesh cases run by batch (a child c1surf convert each: seconds, where the others take 0.1)
@@ -64,7 +65,7 @@ t corner 1/1/0 0 10
 
 
 def make_seeds(folder: Path) -> Path:
-    """The ten valid files in ``folder``: the box as every mesh format, its surface as every patch format."""
+    """The twelve valid files in ``folder``: the box as every mesh format, its surface as every patch format."""
     import numpy as np
     import trimesh
     from plyfile import PlyData, PlyElement
@@ -85,6 +86,7 @@ def make_seeds(folder: Path) -> Path:
     mesh = trimesh.Trimesh(points, triangles, process=False)
     (folder / "box_ascii.stl").write_bytes(trimesh.exchange.stl.export_stl_ascii(mesh).encode())
     (folder / "box_binary.stl").write_bytes(trimesh.exchange.stl.export_stl(mesh))
+    _write_usd(folder, points, quads)
     (folder / "box.off").write_text("OFF\n8 6 0\n" + "".join(f"{x:g} {y:g} {z:g}\n" for x, y, z in points)
                                     + "".join("4 " + " ".join(map(str, q)) + "\n" for q in quads))
     result = run("convert", folder / "box.obj", "-o", folder / "box_out.ply", "-q",
@@ -92,6 +94,25 @@ def make_seeds(folder: Path) -> Path:
     assert result.exit_code == 0, result.output
     (folder / "box_out.ply").unlink()
     return folder
+
+
+def _write_usd(folder: Path, points, quads) -> None:
+    """The box as ``box.usda`` and ``box.usdc``, written by usd-core's own API with the OBJ's tags (the top rim
+    creased at 10, vertex 0 a corner)."""
+    from pxr import Usd, UsdGeom
+
+    for name in ("box.usda", "box.usdc"):
+        stage = Usd.Stage.CreateNew(str(folder / name))
+        mesh = UsdGeom.Mesh.Define(stage, "/box")
+        mesh.CreatePointsAttr([tuple(p) for p in points.tolist()])
+        mesh.CreateFaceVertexCountsAttr([4] * len(quads))
+        mesh.CreateFaceVertexIndicesAttr(quads.ravel().tolist())
+        mesh.CreateCreaseIndicesAttr([4, 5, 6, 7, 4])
+        mesh.CreateCreaseLengthsAttr([5])
+        mesh.CreateCreaseSharpnessesAttr([10.0])
+        mesh.CreateCornerIndicesAttr([0])
+        mesh.CreateCornerSharpnessesAttr([10.0])
+        stage.GetRootLayer().Save()
 
 
 def case_plan(case: int) -> tuple[str, str]:

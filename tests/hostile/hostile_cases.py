@@ -65,8 +65,10 @@ def assert_batch_outcome(result, path: Path, output: Path) -> None:
         assert len(lines) == 1, shown
         assert_finite_file(output)
     else:
-        assert len(lines) == 2 and lines[1].startswith(f"  {path}: "), shown
-        assert not _NOT_CHILD_LINE.match(lines[1][len(f"  {path}: "):]), shown  # the child's one line, no crash
+        assert len(lines) == 2 and lines[1].startswith(f"  {path}:"), shown  # the path once, then its line
+        message = re.sub(r"^:(\d+:)? ", "", lines[1][len(f"  {path}"):])
+        assert not lines[1].startswith(f"  {path}: {path}"), shown
+        assert not _NOT_CHILD_LINE.match(message), shown  # the child's one line, no crash
         assert not output.exists(), shown
 
 

@@ -34,7 +34,7 @@ def mutate(seed: int, data: bytes, suffix: str) -> tuple[bytes, str]:
     """One seeded mutation of ``data`` (the bytes of a ``suffix`` file): (mutated bytes, what was done)."""
     rng = random.Random(seed)
     kinds = list(BYTE_MUTATIONS)
-    if suffix in (".obj", ".off", ".json", ".igs", ".step", ".ply", ".stl"):
+    if suffix in (".obj", ".off", ".json", ".igs", ".step", ".ply", ".stl", ".usda"):
         kinds += [number_replaced] * 4 + [line_repeated, lines_swapped, line_deleted]
     if suffix in (".ply", ".stl"):
         kinds += [binary_number] * 2

@@ -21,7 +21,8 @@ def seeds(tmp_path_factory):
 def test_the_plan_covers_every_file_and_command():
     plans = {case_plan(case) for case in range(CASES)}
     assert {name for name, _ in plans} >= {"box.obj", "box_ascii.ply", "box_binary.ply", "box_ascii.stl",
-                                            "box_binary.stl", "box.off", "box.json", "box.npz", "box.igs", "box.step"}
+                                            "box_binary.stl", "box.off", "box.usda", "box.usdc", "box.json",
+                                            "box.npz", "box.igs", "box.step"}
     commands = {command for _, command in plans}
     assert commands >= {"convert", "check", "measure", "tessellate", "inspect", "diff", "render", "batch"}
 
