@@ -46,7 +46,9 @@ def tiny_blocks(monkeypatch):
     monkeypatch.setattr(patch_blocks, "DEFAULT_CACHE_BYTES", 1 << 12)  # a few blocks: evicted and made again
     monkeypatch.setattr(json_patches, "_STREAM_BLOCK", 7)
     monkeypatch.setattr(npz, "_STREAM_BLOCK", 5)
-    monkeypatch.setattr(welded, "CORNER_TABLE_BYTES", 48 * 13)  # the corners' table made 13 rows at a time
+    # the corners' table made 47 rows at a time: two passes or more on every mesh here (the tetrahedron's 50
+    # corners at -r 2); 13 rows made the fandisk's 12,200 corners 941 passes, 2 of this file's 5 minutes
+    monkeypatch.setattr(welded, "CORNER_TABLE_BYTES", 48 * 47)
 
 
 def _convert(monkeypatch, tmp_path: Path, mesh: Path, name: str, stream: bool, *options, patches=()) -> list:

@@ -97,6 +97,7 @@ class StreamedTessellation:
         self.starts = np.cumsum([0, *source.counts])
         self.dim = source.dim
         self._bases = None  # (n-2)^2-sized matrices: made by the first vertex block, after the caller's size checks
+        self._spans = None  # the product spans and the corners each covers (``_span_corners``), made on first use
         self.local = grid_triangles(self.n).ravel()
         self.n_vertices, self.dtype = w.n_vertices, w.dtype
         self.n_triangles = w.n_patches * 2 * (self.n - 1) ** 2
@@ -189,14 +190,28 @@ class StreamedTessellation:
         bases = self.bases  # made here, not by two threads at once
         owns = np.zeros(self.welding.corners.size, dtype=bool)  # flat corner (patch * 4 + slot) evaluating its id
         owns[self.welding.corner_owner[lo:hi]] = True
-        tasks = [partial(self._corner_span, k, span, bases[k], owns, table, lo) for k in range(2)
-                 for span in self.source.product_spans(k)]
+        before = np.r_[0, np.cumsum(owns)]  # owners among the flat corners before each: a span's count in O(1)
+        tasks = []
+        for k, (spans, flat) in enumerate(self._span_corners()):
+            for j in np.flatnonzero(before[flat[:, 1]] > before[flat[:, 0]]):  # the spans owning a corner of this pass
+                tasks.append(partial(self._corner_span, k, spans[j], bases[k], owns, table, lo))
         if all(self.source.blas_held(k) for k in range(2)):
             run_tasks(tasks, uses_blas=True)
         else:  # a block computed with BLAS on its own threads: one after another, as the in-memory blocks ran
             for task in tasks:
                 task()
         return table
+
+    def _span_corners(self) -> list:
+        """[(spans, flat (s, 2) int)] per kind: the product spans (``product_spans``) and the flat corners
+        (patch * 4 + slot, global patch ids) each covers, [first, end); made once."""
+        if self._spans is None:
+            self._spans = []
+            for k in range(2):
+                spans = self.source.product_spans(k)
+                bounds = np.array([span[2:] for span in spans], dtype=np.int64).reshape(-1, 2)
+                self._spans.append((spans, 4 * (int(self.starts[k]) + bounds)))
+        return self._spans
 
     def _corner_span(self, k: int, span, bases, owns: np.ndarray, table: np.ndarray, lo: int) -> None:
         """The rows of ``table`` (corner ids from ``lo``) of the corners whose owners are the patches of one
