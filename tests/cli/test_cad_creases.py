@@ -90,9 +90,10 @@ def test_check_of_a_cad_file_measures_the_edges_bending_more_than_the_crease_ang
     pytest.importorskip("OCP")
     d, (sizes, corners, points), *_ = converted
     path = d / f"part{suffix}"
-    plain = run("check", path)
-    assert plain.exit_code == 1 and "G1: NO" in plain.output
-    assert "lists no crease sides" in plain.stderr and "--crease-angle" in plain.stderr
+    if suffix == ".igs":  # check's note, whichever CAD reader gave it the patches (the STEP file is 25 MB: 12 s a read)
+        plain = run("check", path)
+        assert plain.exit_code == 1 and "G1: NO" in plain.output
+        assert "lists no crease sides" in plain.stderr and "--crease-angle" in plain.stderr
     check = run("check", path, "--crease-angle", 20, "--blend", 0.3)
     assert check.exit_code == 0, check.output
     found = re.search(r"crease edges: +(\d+) bending more than 20 degrees, max gap \S+ \((\S+) of the bounding box\)",
