@@ -10,6 +10,8 @@ import subprocess
 import sys
 from pathlib import Path
 
+import numpy as np
+
 ROOT = Path(__file__).resolve().parents[1]
 
 
@@ -107,3 +109,39 @@ def test_bench_fit_curvature_on_a_sphere():
     assert abs(area.sum() - 4 * np.pi * 4.0) < 1e-2 * 4 * np.pi * 4.0
     assert np.allclose(np.abs(H), 0.5, rtol=2e-2)
     assert ripple(np.asarray(sphere.vertices), H, area, 0.3) < 1e-2
+
+
+def _bench_fit():
+    spec = importlib.util.spec_from_file_location("bench_fit", ROOT / "bench" / "fit.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_cage_layout_counts_the_irregular_vertices_of_known_meshes():
+    """Issue 43's layout column: a cube's 8 corners are all irregular (valence 3); a 3 x 3 sheet of quads has its
+    4 rim corners irregular (valence 2), its 8 other rim vertices (3) and 4 interior ones (4) regular; a hexagon
+    beside quads is one non-quad face."""
+    layout = _bench_fit().cage_layout
+    cube = np.array([[0, 3, 2, 1], [4, 5, 6, 7], [0, 1, 5, 4], [1, 2, 6, 5], [2, 3, 7, 6], [3, 0, 4, 7]])
+    assert layout(np.full(6, 4), cube.ravel(), 8) == {"vertices": 8, "irregular": 8, "non_quads": 0}
+    i, j = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
+    v = (i * 4 + j).ravel()
+    sheet = np.stack([v, v + 4, v + 5, v + 1], axis=1)
+    assert layout(np.full(9, 4), sheet.ravel(), 16) == {"vertices": 16, "irregular": 4, "non_quads": 0}
+    sizes = np.r_[np.full(9, 4), 6]
+    assert layout(sizes, np.r_[sheet.ravel(), np.arange(16, 22)], 22)["non_quads"] == 1
+
+
+def test_gaussian_ripple_is_zero_on_a_sphere_and_grows_with_a_bump():
+    """The shape estimator of issue 43: H constant on a sphere leaves nothing after the Gaussian average; a ripple of
+    amplitude a over the sphere's radius gives a rho that grows with a."""
+    rng = np.random.default_rng(0)
+    x = rng.normal(size=(40000, 3))
+    x /= np.linalg.norm(x, axis=1)[:, None]
+    weights = np.full(len(x), 4 * np.pi / len(x))
+    ripple = _bench_fit().gaussian_ripple
+    centres = np.arange(0, len(x), 10)
+    assert ripple(x, np.ones(len(x)), weights, 0.1, centres) < 1e-12
+    values = [ripple(x, 1 + a * np.sin(20 * x[:, 0]), weights, 0.1, centres) for a in (0.1, 0.2)]
+    assert 0 < values[0] < values[1] and abs(values[1] / values[0] - 2) < 0.05
