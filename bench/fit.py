@@ -49,6 +49,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -346,8 +347,8 @@ def cage_baselines(cage: str, npz: str | None) -> dict:
     sigma = 0.5 * median_edge(sizes, corners, points)
     shape = {"sigma": sigma, "fit": gaussian_ripple(fit_points, fit_H, fit_w, sigma, middle)}
     try:
-        cc_points, cc_triangles = catmull_clark(type("Cage", (), {"face_sizes": sizes, "face_vertices": corners,
-                                                                 "points": points})(), CC_LEVELS)
+        cc_points, cc_triangles = catmull_clark(SimpleNamespace(face_sizes=sizes, face_vertices=corners, points=points),
+                                                CC_LEVELS)
     except ImportError:
         return {**out, "shape": shape}
     H, area = cotangent_mean_curvature(cc_points, cc_triangles)
