@@ -92,12 +92,14 @@ def plan_options(command):
                      help="Most rounds of footpoints and least squares (they stop earlier when the deviation stops "
                           "improving)."),
         click.option("--remesher", type=click.Choice(REMESHERS), default="auto", show_default=True,
-                     help="The control mesh: 'instant' Instant Meshes' field-aligned quads (few CAD faces; thin parts "
-                          "and handles can go), 'decimate' the scan decimated with its topology kept, paired and split "
-                          "into quads (finer where it bends, more CAD faces), 'auto' Instant Meshes where it keeps the "
-                           "scan's components, Euler characteristic and rims and covers the scan (every scan vertex "
-                           "within about a control edge, every rim matched), else 'decimate'; 'simplify' (opt-in) the "
-                           "scan turned into quads and simplified by local operations (docs/layout.md)."),
+                     help="The control mesh: 'quadriflow' QuadriFlow's coarse quads split in four (fewest irregular "
+                          "vertices, so fewest CAD faces; thin parts can go), 'instant' Instant Meshes' field-aligned "
+                          "quads (few CAD faces; thin parts and handles can go), 'decimate' the scan decimated with its "
+                          "topology kept, paired and split into quads (finer where it bends, more CAD faces), 'auto' "
+                          "the first of QuadriFlow (without --crease-angle), Instant Meshes and 'decimate' that keeps "
+                          "the scan's components, Euler characteristic and rims and covers the scan (every scan vertex "
+                          "within about a control edge, every rim matched); 'simplify' (opt-in) the scan turned into "
+                          "quads and simplified by local operations (docs/layout.md)."),
     ], lambda faces, tolerance, face_cap, fairness, iterations, remesher: ScanFitOptions(
         faces, tolerance, face_cap, None, FitOptions(fairness=fairness, max_iterations=iterations),
         remesher).check())

@@ -16,11 +16,19 @@ irregular vertices apart; the cleanup's doublet collapse keeps them so (``cleanu
 cleaned mesh still needs two (holes the remesher left at thin parts), the remesh is tried again
 with the target 4 % up, then 4 % down (``RETRY_SCALES``), and the mesh needing fewest steps is kept.
 
+QuadriFlow (Huang et al. 2018, ``quadriflow``): the same kind of fields, its singularities then repaired by a
+minimum-cost flow, so its quads have far fewer irregular vertices (each of valence n costs n CAD faces). It is asked
+for a quarter of the faces and every quad split in four (``_quadriflow_layout``), as Instant Meshes' pure-quad mode
+splits its quad-dominant mesh: the irregular vertices lie apart, one Doo-Sabin step. It resolves no part thinner
+than its edge, so it is asked again at 1.25 and 1.5 times the faces while its layout leaves part of the scan
+uncovered (``FLOW_SCALES``).
+
 The choice (``--remesher auto``, ``_chosen_layout``): counts can agree by accident (a dropped horn and a closed
 hole), so a candidate is held against the scan on the counts (components, Euler characteristic, rims, and the
 cleanup's repairs of stray pieces, holes and pinches) and on the geometry (``coverage``: every scan vertex within
-about a local control edge, every rim matched by one of about its length and position). Instant Meshes' remesh is
-kept only when it passes both; else the decimated scan (``decimated_quads``), which passes both on all 22 scans of
+about a local control edge, every rim matched by one of about its length and position). QuadriFlow's layout is kept
+when it passes both (without ``crease_angle``: it aligns to no given line); else Instant Meshes' remesh when it
+passes both; else the decimated scan (``decimated_quads``), which passes both on all 22 scans of
 ``../shared/scans``; when neither does, the one that leaves less of the scan's area uncovered, and the note names
 what differs and where. The scan is made a manifold first (``manifold_scan``: pinched vertices split into fans, edges
 in three or more triangles cut into sheets, as ``convert`` prepares a mesh), so the control mesh is one too.
@@ -51,7 +59,8 @@ from ...mesh.valence_two import dissolve_valence_two
 from ...mesh.feature_edges import feature_edges
 from ...mesh.weld import weld_vertices
 from .cleanup import clean_control_mesh, cleanup_notes, edge_keys
-from .decimated_quads import decimated_quad_mesh, mesh_topology, split_faces
+from .decimated_quads import decimated_quad_mesh, mesh_topology, projected_new_points, split_faces
+from .quadriflow import available as quadriflow_available
 
 __all__ = ["ControlMesh", "control_mesh_from_scan", "quad_remesh", "tag_feature_edges", "scan_feature_edges"]
 
@@ -60,8 +69,9 @@ FACE_SLACK = 0.15  # a second remesh when the count lands further than this from
 NEAR_LINE = 0.25  # of the median control edge: how near a feature line a tagged edge's points lie
 ALONG_DEGREES = 25.0  # largest angle between a tagged edge and the feature line it follows
 EXTEND_ROUNDS = 8  # rounds of extending tagged lines from their loose ends
+FLOW_SCALES = (1.0, 1.25, 1.5)  # QuadriFlow's face targets tried in turn until its layout covers the scan
 RETRY_SCALES = (1.0, 1.04, 0.96)  # remesh targets tried in turn until one Doo-Sabin step suffices
-REMESHERS = ("auto", "instant", "decimate", "simplify")
+REMESHERS = ("auto", "quadriflow", "instant", "decimate", "simplify")
 # the cleanup's repairs that say Instant Meshes broke the scan's topology at a thin part
 TOPOLOGY_REPAIRS = {"stray_components": "stray pieces dropped", "closed_holes": "holes closed",
                     "split_vertices": "pinched vertices split", "non_manifold_faces": "faces on non-manifold edges dropped"}
@@ -293,6 +303,31 @@ def _instant_layout(scan, faces: int, crease_angle, check_topology: bool = False
     return best[:-1] + (info,)
 
 
+def _quadriflow_layout(scan, faces: int):
+    """QuadriFlow's remesh at a quarter of ``faces`` (asked once more, scaled, when it lands further than
+    ``FACE_SLACK`` off), every quad split in four at its centre and edge midpoints (``split_faces``; the new points
+    on the scan where that is safe, ``projected_new_points``), cleaned: its few irregular vertices lie apart, so one
+    Doo-Sabin step suffices on a closed mesh; the tuple of ``_instant_layout``."""
+    from .quadriflow import quadriflow_remesh
+
+    want = max(8, faces // 4)
+    asked, seconds, remeshes = want, 0.0, 0
+    for _ in range(2):
+        coarse_points, coarse, took = quadriflow_remesh(*scan, asked)
+        seconds, remeshes = seconds + took, remeshes + 1
+        if coarse.shape[0] and abs(coarse.shape[0] - want) <= FACE_SLACK * want:
+            break
+        asked = max(8, int(round(asked * want / max(coarse.shape[0], 1))))
+    quads, quad_points = split_faces(np.full(coarse.shape[0], 4), coarse.ravel(), coarse_points)
+    n = coarse_points.shape[0]
+    quad_points[n:] = projected_new_points(quad_points[n:], coarse_points, *scan)
+    sizes, vertices, control_points, cleanup = clean_control_mesh(
+        np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=scan)
+    steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
+    info = {"remesher": "quadriflow", "target_vertices": 0, "remeshes": remeshes, "seconds": seconds}
+    return steps, quads.shape[0], sizes, vertices, control_points, cleanup, info
+
+
 def _decimated_layout(scan, faces: int):
     """The scan decimated, paired and split (``decimated_quads``), cleaned; the tuple of ``_instant_layout``."""
     quad_points, quads, info = decimated_quad_mesh(*scan, faces)
@@ -362,9 +397,12 @@ def _loss(coverage, change: str) -> tuple:
 
 def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_faces: int):
     """(layout, notes, coverage): the remesher's layout (``_instant_layout``'s tuple) and its ``Coverage``; with
-    ``auto``, Instant Meshes' remesh only where it keeps the scan's counts and covers it (``_faults``), else the
-    decimated scan where that keeps and covers everything, else the one that loses least (``_loss``), a note saying
-    which, what differs and where (the issue's rule: when no candidate keeps the topology, the one that loses least).
+    ``auto`` (and no ``crease_angle``: QuadriFlow aligns to no given line), QuadriFlow's coarse layout split once
+    (``_quadriflow_layout``: fewest irregular vertices, so fewest CAD faces) where it keeps the scan's counts and covers
+    it (``_faults``); else Instant Meshes' remesh where it does; else the decimated scan where that keeps and covers
+    everything; else the one of the last two that loses least (``_loss``), a note saying which, what differs and where
+    (the issue's rule: when no candidate keeps the topology, the one that loses least). Why QuadriFlow's was not
+    taken is the report's ``quadriflow_refused``.
     """
     if remesher == "decimate":
         layout = _decimated_layout(scan, decimated_faces)
@@ -374,6 +412,28 @@ def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_face
         layout = _simplified_layout(scan, faces)
         change, coverage = _faults(layout, scan)
         return layout, [], coverage
+    if remesher == "quadriflow" or remesher == "auto" and crease_angle is None and quadriflow_available():
+        took = 0.0
+        for scale in FLOW_SCALES:  # finer while it leaves part of the scan uncovered (a horn thinner than its edge)
+            flow = _quadriflow_layout(scan, int(round(faces * scale)))
+            why, coverage = _faults(flow, scan)
+            took += flow[-1]["seconds"]
+            if not why:
+                flow[-1]["seconds"] = took
+                return flow, [], coverage
+        if remesher == "quadriflow":
+            return flow, [], coverage
+        refused = f"QuadriFlow's remesh {why}"  # in the report
+    else:
+        refused, took = "", 0.0
+    layout, notes, coverage = _instant_or_decimated(scan, faces, crease_angle, remesher, decimated_faces)
+    layout[-1]["quadriflow_refused"] = refused
+    layout[-1]["seconds"] += took
+    return layout, notes, coverage
+
+
+def _instant_or_decimated(scan, faces: int, crease_angle, remesher: str, decimated_faces: int):
+    """``_chosen_layout`` for Instant Meshes' remesh and the decimated scan (its docstring)."""
     layout = _instant_layout(scan, faces, crease_angle, check_topology=remesher == "auto")
     why, coverage = _faults(layout, scan)
     if not why or remesher == "instant":  # a remesher asked for by name: its coverage is in the report
@@ -452,6 +512,8 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
               "remesher": info["remesher"], "remesh_seconds": seconds, "remeshes": remeshes,
               "target_vertices": info["target_vertices"],
               "doo_sabin_steps": int(steps), **cleanup}
+    if info.get("quadriflow_refused"):
+        report["quadriflow_refused"] = info["quadriflow_refused"]
     sizes, vertices, control_points, creases = _tagged_creases(scan, (sizes, vertices, control_points), crease_angle,
                                                                 notes, report)
     report["crease_edges"] = int(creases.shape[0])

@@ -30,7 +30,7 @@ scan's topology (``control_mesh``, ``--remesher auto``), or always with ``--reme
    irregular vertices lie apart and one Doo-Sabin step suffices on a closed mesh (four patches a quad). The new
    points are projected onto the scan, except a midpoint over a hole or across a thin part (moved more than half its
    distance to the nearest decimated vertex) or one landing on another point: the cleanup would weld those into a
-   pinch (``_projected``).
+   pinch (``projected_new_points``).
 
 Measured (welded scans of ``../shared/scans``, 3,000 faces asked: 2,924-2,976 quads): components, Euler
 characteristic and rims of all fifteen kept (boot: genus 12, Euler -22; plane_holes: 27 rims, Euler -25);
@@ -335,7 +335,7 @@ def split_faces(face_sizes: np.ndarray, face_vertices: np.ndarray, points: np.nd
     return quads, new_points
 
 
-def _projected(new_points: np.ndarray, old_points: np.ndarray, scan_points, scan_triangles) -> np.ndarray:
+def projected_new_points(new_points: np.ndarray, old_points: np.ndarray, scan_points, scan_triangles) -> np.ndarray:
     """``new_points`` (edge midpoints and face centroids of the decimated mesh) moved onto the scan, except where
     that moves one more than half its distance to the nearest decimated vertex (a midpoint over a hole or across a
     thin part, whose projection lands on the far rim or the far side) or onto the place of another point (the
@@ -357,12 +357,12 @@ def _projected(new_points: np.ndarray, old_points: np.ndarray, scan_points, scan
 
 def _quads(points, triangles, scan):
     """(quad points, quads, paired, lone): the decimated triangles paired and split (steps 2 and 3), the new points
-    on the scan (``_projected``)."""
+    on the scan (``projected_new_points``)."""
     quads, lone = pair_triangles(triangles, points)
     sizes = np.r_[np.full(quads.shape[0], 4), np.full(lone.shape[0], 3)]
     split, split_points = split_faces(sizes, np.r_[quads.ravel(), lone.ravel()], points)
     n = points.shape[0]
-    split_points[n:] = _projected(split_points[n:], points, *scan)
+    split_points[n:] = projected_new_points(split_points[n:], points, *scan)
     return split_points, split, quads.shape[0], lone.shape[0]
 
 

@@ -1,0 +1,70 @@
+"""QuadriFlow's layout (issue 43): `auto`'s first candidate, split once, taken only where it keeps and covers the scan.
+
+Irregular vertices are counted here on the control mesh's own edges (interior valence other than 4), independently
+of ``bench/fit.py``'s column.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+import trimesh
+
+from c1surf.fitting.control import control_mesh as control_module
+from c1surf.fitting.control.control_mesh import control_mesh_from_scan
+from c1surf.fitting.control.quadriflow import available, quadriflow_remesh
+
+pytestmark = pytest.mark.skipif(not available(), reason="QuadriFlow's library does not load on this platform")
+
+
+def ellipsoid():
+    mesh = trimesh.creation.icosphere(4)
+    mesh.apply_scale([1.5, 1.0, 0.7])
+    return np.asarray(mesh.vertices), np.asarray(mesh.faces)
+
+
+def irregular_vertices(face_sizes, face_vertices, n_points) -> int:
+    """Vertices of a closed polygon mesh with other than four edges."""
+    offsets = np.r_[0, np.cumsum(face_sizes)]
+    following = np.arange(face_vertices.size) + 1
+    following[offsets[1:] - 1] = offsets[:-1]
+    edges = np.unique(np.sort(np.stack([face_vertices, face_vertices[following]], axis=1), axis=1), axis=0)
+    valence = np.bincount(edges.ravel(), minlength=n_points)
+    return int(np.count_nonzero(valence[np.unique(face_vertices)] != 4))
+
+
+def test_the_remesh_is_a_closed_quad_mesh_on_the_surface():
+    points, triangles = ellipsoid()
+    quad_points, quads, seconds = quadriflow_remesh(points, triangles, 200)
+    assert quads.shape[1] == 4 and 0.6 * 200 <= quads.shape[0] <= 1.2 * 200 and seconds > 0
+    edges = np.sort(quads[:, [0, 1, 1, 2, 2, 3, 3, 0]].reshape(-1, 2), axis=1)
+    unique, count = np.unique(edges, axis=0, return_counts=True)
+    assert np.all(count == 2)  # closed, no edge in three quads
+    assert np.unique(quads).size - unique.shape[0] + quads.shape[0] == 2  # a sphere's Euler characteristic
+    radius = np.linalg.norm(quad_points / [1.5, 1.0, 0.7], axis=1)  # 1 on the ellipsoid
+    assert np.abs(radius - 1).max() < 0.02
+
+
+def test_auto_takes_its_layout_with_fewer_irregular_vertices_than_instant_meshes():
+    points, triangles = ellipsoid()
+    flow = control_mesh_from_scan(points, triangles, 400)
+    instant = control_mesh_from_scan(points, triangles, 400, remesher="instant")
+    assert flow.report["remesher"] == "quadriflow" and "quadriflow_refused" not in flow.report
+    assert flow.report["topology"] == flow.report["scan_topology"] and flow.report["doo_sabin_steps"] == 1
+    assert np.all(flow.face_sizes == 4) and 0.8 * 400 <= flow.n_faces <= 1.6 * 400
+    ours = irregular_vertices(flow.face_sizes, flow.face_vertices, flow.points.shape[0])
+    theirs = irregular_vertices(instant.face_sizes, instant.face_vertices, instant.points.shape[0])
+    assert ours <= 0.6 * theirs  # measured: 8 against 18
+
+
+def test_without_the_library_auto_goes_on_with_instant_meshes(monkeypatch):
+    monkeypatch.setattr(control_module, "quadriflow_available", lambda: False)
+    points, triangles = ellipsoid()
+    mesh = control_mesh_from_scan(points, triangles, 400)
+    assert mesh.report["remesher"] == "instant" and "quadriflow_refused" not in mesh.report
+
+
+def test_with_a_crease_angle_auto_keeps_instant_meshes_alignment():
+    """QuadriFlow takes no feature lines: with --crease-angle, Instant Meshes' remesh aligned to them."""
+    box = trimesh.creation.box(extents=[2.0, 1.0, 1.0]).subdivide_to_size(0.08)
+    mesh = control_mesh_from_scan(np.asarray(box.vertices), np.asarray(box.faces), 300, crease_angle=45.0)
+    assert mesh.report["remesher"] in ("instant", "decimate") and mesh.report["crease_edges"] > 0
