@@ -111,8 +111,50 @@ def _linked(cells, other, a, b, direction) -> bool:
     return int(other[p, (direction - g) % 4]) == q
 
 
-def _rectangles(cells, other):
-    """Greedy cover of a chart by rectangles of truly adjacent cells: list of (i0, j0, m, n)."""
+def _glued_properly(cells, at, other, rot, rectangle) -> bool:
+    """No side of ``rectangle`` (i0, j0, m, n) meets the rectangle itself, except as a seam.
+
+    Two cells of a rectangle may be mesh neighbours without being grid
+    neighbours: the chart's grid wraps around a tube (a seam, which the B-rep
+    writes as an edge used twice by a face closed on it) or, on a field that
+    turns, a strip winds round and its end lands on its own side (hand_closed's
+    QuadriFlow layout: a 1 x 36 strip whose end side is its own 10th side; a
+    face whose loop runs through one edge twice at unrelated places, which
+    Open CASCADE's BRepCheck rightly calls invalid). Only a whole seam is kept:
+    every row (or column) of the rectangle glued end to end, the same way round.
+    ``at`` maps a patch to its cell.
+    """
+    i0, j0, m, n = rectangle
+    rows, columns = set(), set()
+    for a in range(i0, i0 + m):
+        for b in range(j0, j0 + n):
+            p, g = cells[(a, b)]
+            for k in range(4):
+                q = int(other[p, k])
+                c = at.get(q)
+                if c is None or not (i0 <= c[0] < i0 + m and j0 <= c[1] < j0 + n):
+                    continue
+                d = (k + g) % 4
+                if c == (a + STEP[d][0], b + STEP[d][1]):
+                    continue  # the grid neighbour
+                if (k + rot[p, k] - 2 + cells[c][1]) % 4 != (d + 2) % 4:
+                    return False  # glued turned: not a seam
+                if (d, b, c) in ((1, j0 + n - 1, (a, j0)), (3, j0, (a, j0 + n - 1))):
+                    rows.add(a)
+                elif (d, a, c) in ((0, i0 + m - 1, (i0, b)), (2, i0, (i0 + m - 1, b))):
+                    columns.add(b)
+                else:
+                    return False
+    return len(rows) in (0, m) and len(columns) in (0, n)
+
+
+def _rectangles(cells, other, rot):
+    """Greedy cover of a chart by rectangles of truly adjacent cells: list of (i0, j0, m, n).
+
+    A rectangle that meets itself other than along a whole seam
+    (:func:`_glued_properly`) loses rows, then columns, until it does not.
+    """
+    at = {p: c for c, (p, _) in cells.items()}
     used = set()
     out = []
     for start in sorted(cells):
@@ -132,6 +174,8 @@ def _rectangles(cells, other):
             if not all(_linked(cells, other, row[c], row[c + 1], 1) for c in range(n - 1)):
                 break
             m += 1
+        while (m > 1 or n > 1) and not _glued_properly(cells, at, other, rot, (i0, j0, m, n)):
+            m, n = (m - 1, n) if m > 1 else (m, n - 1)
         for a in range(m):
             for b in range(n):
                 used.add((i0 + a, j0 + b))
@@ -172,7 +216,7 @@ def merge_biquadratic(surface, min_patches: int = 2) -> list[MergedPiece]:
         coefficients = homogeneous(coefficients, weights)
     pieces = []
     for cells in _charts(other, rot):
-        for i0, j0, m, n in _rectangles(cells, other):
+        for i0, j0, m, n in _rectangles(cells, other, rot):
             if m * n < min_patches:
                 continue
             patches = np.array([[cells[(i0 + a, j0 + b)][0] for b in range(n)] for a in range(m)])

@@ -15,6 +15,7 @@ from scipy.interpolate import BSpline
 from c1surf.construction.surface import Surface, SurfaceOptions
 from c1surf.evaluation.adjacency import patch_adjacency
 from c1surf.evaluation.bezier import evaluate_patches
+from c1surf.evaluation import merge as merge_module
 from c1surf.evaluation.merge import merge_biquadratic
 from c1surf.evaluation.smoothness import measure_smoothness
 from c1surf.io.meshes.obj import read_obj
@@ -80,3 +81,32 @@ def test_cad_faces_of_the_pieces_stay_g1(name):
     report = measure_smoothness([np.concatenate([cut.reshape(-1, 3, 3, 3), surface.biquadratic[left]]), surface.bicubic])
     assert report.overshared_edges == 0 and report.boundary_edges == 0
     assert report.relative_gap < 1e-12 and report.max_normal_jump < 1e-9
+
+
+def one_row(length: int, end_meets: int, side: int):
+    """A chart of one row of ``length`` cells (patch j at cell (0, j), unturned) whose last cell's +j side is glued
+    to patch ``end_meets``'s local side ``side``: side 3 (its -j side) is a seam when ``end_meets`` is 0; side 2
+    (its -i side) is a strip winding round onto its own side, as on hand_closed's QuadriFlow layout."""
+    other = np.full((length, 4), -1)
+    rot = np.zeros((length, 4), dtype=np.int64)
+    other[:-1, 1], other[1:, 3] = np.arange(1, length), np.arange(length - 1)
+    other[-1, 1], rot[-1, 1] = end_meets, (side + 1) % 4  # rot = (their side + 2 - our side) % 4
+    other[end_meets, side], rot[end_meets, side] = length - 1, (3 - side) % 4
+    return {(0, j): (j, 0) for j in range(length)}, other, rot
+
+
+def test_a_whole_seam_stays_one_piece():
+    cells, other, rot = one_row(12, 0, 3)
+    assert merge_module._rectangles(cells, other, rot) == [(0, 0, 1, 12)]
+
+
+@pytest.mark.parametrize("meets", [0, 4, 9])
+def test_a_strip_winding_onto_its_own_side_is_cut(meets):
+    """A face whose loop uses one edge at two unrelated places is invalid B-rep (BRepCheck: its wire is not closed
+    in the face's domain): the strip is cut so that no piece meets itself there."""
+    cells, other, rot = one_row(12, meets, 2)
+    rectangles = merge_module._rectangles(cells, other, rot)
+    covered = [j for _, j0, m, n in rectangles for j in range(j0, j0 + n)]
+    assert sorted(covered) == list(range(12))  # every cell once
+    assert all(not (j0 <= meets < j0 + n and j0 <= 11 < j0 + n) for _, j0, _, n in rectangles)
+    assert rectangles[0] == (0, 0, 1, 11)  # only the last cell is cut off
