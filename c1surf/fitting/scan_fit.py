@@ -29,7 +29,7 @@ import numpy as np
 from ..construction.surface import Surface, SurfaceOptions
 from ..mesh.halfedges import component_roots
 from ..mesh.topology_counts import compare_topology, counts_as_read, topology_counts
-from .control.control_mesh import REMESHERS, ControlMesh, control_mesh_from_scan, manifold_scan
+from .control.control_mesh import FACE_SLACK, REMESHERS, ControlMesh, control_mesh_from_scan, manifold_scan
 from .deviation import bounding_diagonal, distance_stats, two_sided_deviation
 from .iterate import fit_surface_points, project_scan
 from .control.local_refine import next_face_count
@@ -281,8 +281,11 @@ def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagona
                              f"{_reached(result.history[-1])}: decimated again to about {grown} faces")
                 remesher, faces, share = "decimate", grown, 1.0
                 continue
-            if miss > 1 and not regrown and mesh.report.get("remesher") == "quadriflow":
-                grown = min(int(FLOW_MOST * faces), int(np.ceil(mesh.n_faces * max(DECIMATED_GROWTH, miss))))
+            grown = min(int(FLOW_MOST * faces), int(np.ceil(mesh.n_faces * max(DECIMATED_GROWTH, miss))))
+            # not when the layout already had the faces (taken at a larger scale, FLOW_SCALES): within the remesh's
+            # slack of it, a second remesh is the same size
+            if (miss > 1 and not regrown and mesh.report.get("remesher") == "quadriflow"
+                    and grown > (1 + FACE_SLACK) * mesh.n_faces):
                 notes.append(f"QuadriFlow's control mesh of {mesh.n_faces} faces fits the scan to "
                              f"{_reached(result.history[-1])}: remeshed again at about {grown} faces")
                 faces, regrown = grown, True
