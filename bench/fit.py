@@ -409,7 +409,7 @@ def run_baselines(job: dict, work: Path, timeout: float) -> dict:
 # ---------------------------------------------------------------------------------------------------------
 # the picture and the table
 
-def picture(row: dict, scan: Path, control_faces: int, out: Path, work: Path) -> None:
+def picture(row: dict, scan: Path, out: Path, work: Path) -> None:
     """One row: the scan, its control mesh (flat shaded, matplotlib), the fitted surface's reflection lines
     (``c1surf render --zebra``), the deviation map (``c1surf fit --deviation``); a small PNG."""
     import matplotlib
@@ -420,13 +420,13 @@ def picture(row: dict, scan: Path, control_faces: int, out: Path, work: Path) ->
     from PIL import Image
 
     from c1surf.api import read_scan
-    from c1surf.fitting.control.control_mesh import control_mesh_from_scan
+    from c1surf.io.meshes.obj import read_obj
 
     zebra = work / f"{row['label']}_zebra.png"
     run_process(c1surf_argv("render", row["files"]["npz"], "--zebra", zebra, "--size", "480x360"), 600,
                 cwd=SETTINGS["root"])
     points, triangles, _ = read_scan(str(scan))
-    control = control_mesh_from_scan(points, triangles, control_faces, None)
+    control = read_obj(row["files"]["cage"])  # the fit's own control mesh (its second remesh, where it had one)
     offsets = np.r_[0, np.cumsum(control.face_sizes)]
     polygons = [control.points[control.face_vertices[a:b]] for a, b in zip(offsets[:-1], offsets[1:])]
     panels = []
@@ -615,7 +615,7 @@ def run(args) -> dict:
                 row["baselines"] = run_baselines(job, work, args.timeout)
             if row["ok"] and args.pictures and item["label"] in args.pictures.split(","):
                 target = Path(args.images) / f"fit_{item['label']}.png"
-                picture(row, item["scan"], row["requested_faces"], target, work)
+                picture(row, item["scan"], target, work)
                 row["picture"] = str(target)
             row.pop("files", None)
             results["rows"].append(row)

@@ -145,3 +145,23 @@ def test_gaussian_ripple_is_zero_on_a_sphere_and_grows_with_a_bump():
     assert ripple(x, np.ones(len(x)), weights, 0.1, centres) < 1e-12
     values = [ripple(x, 1 + a * np.sin(20 * x[:, 0]), weights, 0.1, centres) for a in (0.1, 0.2)]
     assert 0 < values[0] < values[1] and abs(values[1] / values[0] - 2) < 0.05
+
+
+def test_layout_pictures_draws_a_cage_with_its_irregular_vertices(tmp_path):
+    """bench/layout_pictures.py's cage panel (issue 43's before/after picture): a cube's cage is drawn and its 8
+    corners are the irregular vertices it marks (the same count as ``cage_layout``); a 3 x 3 sheet marks its 4 rim
+    corners."""
+    sys.path.insert(0, str(ROOT / "bench"))
+    spec = importlib.util.spec_from_file_location("layout_pictures", ROOT / "bench" / "layout_pictures.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    cube = tmp_path / "cube.obj"
+    cube.write_text("".join(f"v {x} {y} {z}\n" for x in (0, 1) for y in (0, 1) for z in (0, 1))
+                    + "f 1 2 4 3\nf 5 7 8 6\nf 1 5 6 2\nf 3 4 8 7\nf 1 3 7 5\nf 2 6 8 4\n")
+    count, centre = module.cage_panel(cube, (25.0, 40.0), tmp_path / "cube.png")
+    assert count == 8 and np.allclose([float(c) for c in centre], 0.5)
+    assert (tmp_path / "cube.png").stat().st_size > 1000
+    i, j = np.meshgrid(np.arange(3), np.arange(3), indexing="ij")
+    v = (i * 4 + j).ravel()
+    sheet = np.stack([v, v + 4, v + 5, v + 1], axis=1)
+    assert module.irregular_mask(np.full(9, 4), sheet.ravel(), 16).nonzero()[0].tolist() == [0, 3, 12, 15]

@@ -236,6 +236,27 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
     return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings, topology)
 
 
+def _default_again(mesh: ControlMesh, reached: dict, miss: float, state: tuple):
+    """The default's one more round after a fit that missed ``DEFAULT_AIM`` (``miss`` > 1): (remesher, faces,
+    share, regrown, note), or None when there is none. ``state``: this round's (remesher, faces, share, regrown).
+
+    A decimated control mesh made at ``DECIMATED_START`` of the faces is decimated again, up to all of them; a
+    QuadriFlow layout is remeshed once more at up to ``FLOW_MOST`` times the faces, unless it already had them (taken
+    at a larger scale, ``FLOW_SCALES``: within the remesh's slack, a second remesh is the same size).
+    """
+    remesher, faces, share, regrown = state
+    layout = mesh.report.get("remesher")
+    if share < 1 and layout == "decimate":
+        grown = min(faces, int(np.ceil(mesh.n_faces * max(DECIMATED_GROWTH, miss))))
+        return "decimate", grown, 1.0, regrown, (f"the decimated control mesh of {mesh.n_faces} faces fits the scan "
+                                                 f"to {_reached(reached)}: decimated again to about {grown} faces")
+    grown = min(int(FLOW_MOST * faces), int(np.ceil(mesh.n_faces * max(DECIMATED_GROWTH, miss))))
+    if not regrown and layout == "quadriflow" and grown > (1 + FACE_SLACK) * mesh.n_faces:
+        return remesher, grown, share, True, (f"QuadriFlow's control mesh of {mesh.n_faces} faces fits the scan to "
+                                              f"{_reached(reached)}: remeshed again at about {grown} faces")
+    return None
+
+
 def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagonal: float, record: tuple):
     """The rounds of ``fit_scan``: a control mesh, its components covered, a fit; again with more faces while a
     tolerance is missed, or once more decimated when a default fit misses ``DEFAULT_AIM`` (the better round kept).
@@ -275,20 +296,10 @@ def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagona
             eligible = not regrown or mesh.report.get("remesher") == "quadriflow"
             if eligible and (best is None or miss < best[0]):
                 best = (miss, mesh, result, left_out)
-            if miss > 1 and share < 1 and mesh.report.get("remesher") == "decimate":
-                grown = min(faces, int(np.ceil(mesh.n_faces * max(DECIMATED_GROWTH, miss))))
-                notes.append(f"the decimated control mesh of {mesh.n_faces} faces fits the scan to "
-                             f"{_reached(result.history[-1])}: decimated again to about {grown} faces")
-                remesher, faces, share = "decimate", grown, 1.0
-                continue
-            grown = min(int(FLOW_MOST * faces), int(np.ceil(mesh.n_faces * max(DECIMATED_GROWTH, miss))))
-            # not when the layout already had the faces (taken at a larger scale, FLOW_SCALES): within the remesh's
-            # slack of it, a second remesh is the same size
-            if (miss > 1 and not regrown and mesh.report.get("remesher") == "quadriflow"
-                    and grown > (1 + FACE_SLACK) * mesh.n_faces):
-                notes.append(f"QuadriFlow's control mesh of {mesh.n_faces} faces fits the scan to "
-                             f"{_reached(result.history[-1])}: remeshed again at about {grown} faces")
-                faces, regrown = grown, True
+            again = _default_again(mesh, result.history[-1], miss, (remesher, faces, share, regrown)) if miss > 1 else None
+            if again is not None:
+                remesher, faces, share, regrown, note = again
+                notes.append(note)
                 continue
             _, mesh, result, left_out = best  # the better round, and what its control mesh leaves out
             notes += _aim_note(result.history[-1], mesh.n_faces)
