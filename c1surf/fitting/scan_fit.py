@@ -296,8 +296,8 @@ def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagona
             eligible = not regrown or mesh.report.get("remesher") == "quadriflow"
             if eligible and (best is None or miss < best[0]):
                 best = (miss, mesh, result, left_out)
-            again = _default_again(mesh, result.history[-1], miss, (remesher, faces, share, regrown)) if miss > 1 else None
-            if again is not None:
+            again = miss > 1 and _default_again(mesh, result.history[-1], miss, (remesher, faces, share, regrown))
+            if again:
                 remesher, faces, share, regrown, note = again
                 notes.append(note)
                 continue

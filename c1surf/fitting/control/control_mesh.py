@@ -415,7 +415,7 @@ def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_face
         return layout, [], coverage
     if remesher == "quadriflow" or remesher == "auto" and crease_angle is None and quadriflow_available():
         took = 0.0
-        for scale in FLOW_SCALES:  # finer while it leaves part of the scan uncovered (a horn thinner than its edge)
+        for scale in FLOW_SCALES:  # finer while it changes the counts or leaves part of the scan (a horn, a handle)
             flow = _quadriflow_layout(scan, int(round(faces * scale)))
             why, coverage = _faults(flow, scan)
             took += flow[-1]["seconds"]
