@@ -28,8 +28,8 @@ The choice (``--remesher auto``, ``_chosen_layout``): counts can agree by accide
 hole), so a candidate is held against the scan on the counts (components, Euler characteristic, rims, and the
 cleanup's repairs of stray pieces, holes and pinches) and on the geometry (``coverage``: every scan vertex within
 about a local control edge, every rim matched by one of about its length and position). QuadriFlow's layout is kept
-when it passes both (without ``crease_angle``: it aligns to no given line); else Instant Meshes' remesh when it
-passes both; else the decimated scan (``decimated_quads``), which passes both on all 22 scans of
+when it passes both (with ``crease_angle``, aligned by its sharp flag, and only where that flag sees every line
+asked for: ``_flow_sees``); else Instant Meshes' remesh when it passes both; else the decimated scan (``decimated_quads``), which passes both on all 22 scans of
 ``../shared/scans``; when neither does, the one that leaves less of the scan's area uncovered, and the note names
 what differs and where. The scan is made a manifold first (``manifold_scan``: pinched vertices split into fans, edges
 in three or more triangles cut into sheets, as ``convert`` prepares a mesh), so the control mesh is one too.
@@ -70,6 +70,7 @@ FACE_SLACK = 0.15  # a second remesh when the count lands further than this from
 NEAR_LINE = 0.25  # of the median control edge: how near a feature line a tagged edge's points lie
 ALONG_DEGREES = 25.0  # largest angle between a tagged edge and the feature line it follows
 EXTEND_ROUNDS = 8  # rounds of extending tagged lines from their loose ends
+QUADRIFLOW_SHARP = 60.0  # degrees between face normals: the edges QuadriFlow aligns to with its sharp flag (fixed)
 FLOW_SCALES = (1.0, 1.25, 1.5, 2.0)  # QuadriFlow's face targets tried in turn until its layout keeps and covers the scan
 RETRY_SCALES = (1.0, 1.04, 0.96)  # remesh targets tried in turn until one Doo-Sabin step suffices
 REMESHERS = ("auto", "quadriflow", "instant", "decimate", "simplify")
@@ -304,7 +305,7 @@ def _instant_layout(scan, faces: int, crease_angle, check_topology: bool = False
     return best[:-1] + (info,)
 
 
-def _quadriflow_layout(scan, faces: int):
+def _quadriflow_layout(scan, faces: int, sharp: bool = False):
     """QuadriFlow's remesh at a quarter of ``faces`` (asked once more, scaled, when it lands further than
     ``FACE_SLACK`` off), every quad split in four at its centre and edge midpoints (``split_faces``; the new points
     on the scan where that is safe, ``projected_new_points``), cleaned: its few irregular vertices lie apart, so one
@@ -314,7 +315,7 @@ def _quadriflow_layout(scan, faces: int):
     want = max(8, faces // 4)
     asked, seconds, remeshes = want, 0.0, 0
     for _ in range(2):
-        coarse_points, coarse, took = quadriflow_remesh(*scan, asked)
+        coarse_points, coarse, took = quadriflow_remesh(*scan, asked, sharp)
         seconds, remeshes = seconds + took, remeshes + 1
         if coarse.shape[0] and abs(coarse.shape[0] - want) <= FACE_SLACK * want:
             break
@@ -398,9 +399,9 @@ def _loss(coverage, change: str) -> tuple:
 
 def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_faces: int):
     """(layout, notes, coverage): the remesher's layout (``_instant_layout``'s tuple) and its ``Coverage``; with
-    ``auto`` (and no ``crease_angle``: QuadriFlow aligns to no given line), QuadriFlow's coarse layout split once
-    (``_quadriflow_layout``: fewest irregular vertices, so fewest CAD faces) where it keeps the scan's counts and covers
-    it (``_faults``); else Instant Meshes' remesh where it does; else the decimated scan where that keeps and covers
+    ``auto`` (with ``crease_angle``, only where QuadriFlow's sharp flag sees every line: ``_flow_sees``), QuadriFlow's
+    coarse layout split once (``_quadriflow_layout``: fewest irregular vertices, so fewest CAD faces) where it keeps
+    the scan's counts and covers it (``_faults``); else Instant Meshes' remesh where it does; else the decimated scan where that keeps and covers
     everything; else the one of the last two that loses least (``_loss``), a note saying which, what differs and where
     (the issue's rule: when no candidate keeps the topology, the one that loses least). Why QuadriFlow's was not
     taken is the report's ``quadriflow_refused``.
@@ -413,10 +414,10 @@ def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_face
         layout = _simplified_layout(scan, faces)
         change, coverage = _faults(layout, scan)
         return layout, [], coverage
-    if remesher == "quadriflow" or remesher == "auto" and crease_angle is None and quadriflow_available():
+    if remesher == "quadriflow" or remesher == "auto" and quadriflow_available() and _flow_sees(scan, crease_angle):
         took = 0.0
         for scale in FLOW_SCALES:  # finer while it changes the counts or leaves part of the scan (a horn, a handle)
-            flow = _quadriflow_layout(scan, int(round(faces * scale)))
+            flow = _quadriflow_layout(scan, int(round(faces * scale)), crease_angle is not None)
             why, coverage = _faults(flow, scan)
             took += flow[-1]["seconds"]
             if not why:
@@ -431,6 +432,19 @@ def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_face
     layout[-1]["quadriflow_refused"] = refused
     layout[-1]["seconds"] += took
     return layout, notes, coverage
+
+
+def _flow_sees(scan, crease_angle) -> bool:
+    """Whether QuadriFlow's layout aligns to every feature line ``crease_angle`` asks for (always without one).
+
+    QuadriFlow's sharp-feature flag aligns its quads to the edges whose faces' normals differ by more than a fixed
+    ``QUADRIFLOW_SHARP`` degrees (its ``ComputeSharpEdges``), the measure ``scan_feature_edges`` takes. Below that
+    angle, a line between the two would be crossed by its quads and lost as a crease, so Instant Meshes (which takes
+    the angle) remeshes instead, unless the scan has no edge between the two angles.
+    """
+    if crease_angle is None or crease_angle >= QUADRIFLOW_SHARP:
+        return True
+    return scan_feature_edges(*scan, crease_angle).shape[0] == scan_feature_edges(*scan, QUADRIFLOW_SHARP).shape[0]
 
 
 def _instant_or_decimated(scan, faces: int, crease_angle, remesher: str, decimated_faces: int):
