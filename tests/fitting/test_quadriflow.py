@@ -92,3 +92,27 @@ def test_a_line_quadriflow_does_not_see_keeps_instant_meshes_alignment():
     # at 70 degrees the ridge is not asked for, and every line that is (the eaves at 65 are not either) it sees
     mesh = control_mesh_from_scan(np.asarray(house.vertices), np.asarray(house.faces), 300, crease_angle=70.0)
     assert mesh.report["remesher"] == "quadriflow" and mesh.report["crease_edges"] > 0
+
+
+def test_its_larger_scales_stop_at_the_most_faces(monkeypatch):
+    """While its layout is refused, QuadriFlow is asked at 1, 1.25, 1.5 and 2 times the faces, never above
+    ``most_faces`` (the default fit's cap: a second remesh is not taken at twice its own size)."""
+    asked, real_layout, real_faults = [], control_module._quadriflow_layout, control_module._faults
+
+    def layout(scan, faces, sharp=False):
+        asked.append(faces)
+        return real_layout(scan, faces, sharp)
+
+    def faults(candidate, scan):  # every QuadriFlow layout refused, as on a scan with parts thinner than its edge
+        why, coverage = real_faults(candidate, scan)
+        return ("left a horn" if candidate[-1]["remesher"] == "quadriflow" else why), coverage
+
+    monkeypatch.setattr(control_module, "_quadriflow_layout", layout)
+    monkeypatch.setattr(control_module, "_faults", faults)
+    points, triangles = ellipsoid()
+    mesh = control_mesh_from_scan(points, triangles, 400, most_faces=500)
+    assert asked == [400, 500] and mesh.report["remesher"] == "instant"
+    assert mesh.report["quadriflow_refused"] == "QuadriFlow's remesh left a horn"
+    asked.clear()
+    control_mesh_from_scan(points, triangles, 400)
+    assert asked == [400, 500, 600, 800]
