@@ -96,10 +96,11 @@ def plan_options(command):
                           "vertices, so fewest CAD faces; thin parts can go), 'instant' Instant Meshes' field-aligned "
                           "quads (few CAD faces; thin parts and handles can go), 'decimate' the scan decimated with its "
                           "topology kept, paired and split into quads (finer where it bends, more CAD faces), 'auto' "
-                          "the first of QuadriFlow (without --crease-angle), Instant Meshes and 'decimate' that keeps "
-                          "the scan's components, Euler characteristic and rims and covers the scan (every scan vertex "
-                          "within about a control edge, every rim matched); 'simplify' (opt-in) the scan turned into "
-                          "quads and simplified by local operations (docs/layout.md)."),
+                          "the first of QuadriFlow (with --crease-angle: only where every line asked for is sharper "
+                          "than its fixed 60 degrees), Instant Meshes and 'decimate' that keeps the scan's components, "
+                          "Euler characteristic and rims and covers the scan (every scan vertex within about a control "
+                          "edge, every rim matched); 'simplify' (opt-in) the scan turned into quads and simplified by "
+                          "local operations (docs/layout.md)."),
     ], lambda faces, tolerance, face_cap, fairness, iterations, remesher: ScanFitOptions(
         faces, tolerance, face_cap, None, FitOptions(fairness=fairness, max_iterations=iterations),
         remesher).check())

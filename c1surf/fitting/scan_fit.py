@@ -68,7 +68,9 @@ DECIMATED_START = 0.4
 DECIMATED_GROWTH = 1.5
 # QuadriFlow's layout (about 0.2 CAD faces a control face on the shared scans) is remeshed once more when a default fit
 # over it misses DEFAULT_AIM, at least 1.5 times and at most FLOW_MOST times the default faces: its uniform density
-# spends fewer faces where the scan has detail (koala at 2,700 faces: max 6.3e-3) and more faces cost few CAD faces
+# spends fewer faces where the scan has detail (koala at 2,700 faces: max 6.3e-3) and more faces cost few CAD faces.
+# No default layout of QuadriFlow's has more (its larger scales included: springer's second remesh, asked at 4,452
+# faces, was taken at twice that, 10,124 faces, 86 s, shape ratio 1.60); a second remesh it refuses is not fitted
 FLOW_MOST = 2.0
 
 
@@ -236,6 +238,13 @@ def fit_scan(points, triangles, options: ScanFitOptions, surface_options: Surfac
     return ScanFit(surface, mesh.with_points(result.points), result, deviation, rounds, notes, timings, topology)
 
 
+def _best_round(best: tuple, notes: list):
+    """(ControlMesh, FitResult, left out) of the default's better round (``best``: its miss first), its aim noted."""
+    _, mesh, result, left_out = best
+    notes += _aim_note(result.history[-1], mesh.n_faces)
+    return mesh, result, left_out
+
+
 def _default_again(mesh: ControlMesh, reached: dict, miss: float, state: tuple):
     """The default's one more round after a fit that missed ``DEFAULT_AIM`` (``miss`` > 1): (remesher, faces,
     share, regrown, note), or None when there is none. ``state``: this round's (remesher, faces, share, regrown).
@@ -270,11 +279,15 @@ def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagona
     faces = options.faces or default_face_count(triangles.shape[0])
     defaults = options.faces is None and options.tolerance is None and control is None
     remesher, share, best, regrown = options.remesher, DECIMATED_START if defaults else 1.0, None, False
+    most = int(FLOW_MOST * faces) if defaults else None  # QuadriFlow's layout at most (its scales and second round)
     while True:
         start = time.perf_counter()
         if control is None or rounds:
             tell(f"remeshing the scan to about {int(faces * share) if remesher == 'decimate' else faces} quads", 0, 1)
-            mesh = control_mesh_from_scan(points, triangles, faces, options.crease_angle, remesher, share)
+            mesh = control_mesh_from_scan(points, triangles, faces, options.crease_angle, remesher, share, most)
+            if regrown and mesh.report.get("remesher") != "quadriflow":  # its second remesh refused: no second fit
+                notes.append(f"not taken: {mesh.report.get('quadriflow_refused', '')}; the first control mesh stays")
+                return _best_round(best, notes)
             notes += [n for n in mesh.notes if n not in notes]
         else:
             mesh = control
@@ -301,9 +314,7 @@ def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagona
                 remesher, faces, share, regrown, note = again
                 notes.append(note)
                 continue
-            _, mesh, result, left_out = best  # the better round, and what its control mesh leaves out
-            notes += _aim_note(result.history[-1], mesh.n_faces)
-            return mesh, result, left_out
+            return _best_round(best, notes)
         stop = _tolerance_stop(options, worst, faces, control is not None)
         if stop is not None:
             notes += [stop] if stop else []

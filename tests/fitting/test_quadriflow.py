@@ -63,8 +63,56 @@ def test_without_the_library_auto_goes_on_with_instant_meshes(monkeypatch):
     assert mesh.report["remesher"] == "instant" and "quadriflow_refused" not in mesh.report
 
 
-def test_with_a_crease_angle_auto_keeps_instant_meshes_alignment():
-    """QuadriFlow takes no feature lines: with --crease-angle, Instant Meshes' remesh aligned to them."""
+def test_with_a_crease_angle_its_quads_follow_the_lines_it_sees():
+    """A box's edges (90 degrees) are sharper than QuadriFlow's own 60: with --crease-angle 45 its layout is taken,
+    aligned by its sharp flag, and the control edges along all twelve edges are tagged (each box edge about as many
+    control edges as its length over the median control edge)."""
     box = trimesh.creation.box(extents=[2.0, 1.0, 1.0]).subdivide_to_size(0.08)
     mesh = control_mesh_from_scan(np.asarray(box.vertices), np.asarray(box.faces), 300, crease_angle=45.0)
+    assert mesh.report["remesher"] == "quadriflow" and mesh.report["topology"] == mesh.report["scan_topology"]
+    ends = mesh.points[mesh.crease_edges]  # (k, 2, 3)
+    tagged = np.linalg.norm(ends[:, 1] - ends[:, 0], axis=1).sum()
+    assert tagged == pytest.approx(4 * (2.0 + 1.0 + 1.0), rel=0.05)  # every box edge, and nothing else
+
+
+def test_a_line_quadriflow_does_not_see_keeps_instant_meshes_alignment():
+    """A house-shaped prism: its ridge bends by 50 degrees, under QuadriFlow's fixed 60, so with --crease-angle 45
+    its quads would cross the ridge: Instant Meshes, which takes the angle, remeshes instead; at 70 degrees
+    QuadriFlow sees every line asked for (the prism's 90-degree edges)."""
+    outline = np.array([[0, 0], [2, 0], [2, 1], [1, 1 + np.tan(np.radians(25))], [0, 1]])  # convex, counter-clockwise
+    n = outline.shape[0]
+    points = np.r_[np.c_[outline, np.zeros(n)], np.c_[outline, np.full(n, 3.0)]]
+    k = np.arange(n)
+    sides = np.r_[np.c_[k, (k + 1) % n, n + (k + 1) % n], np.c_[k, n + (k + 1) % n, n + k]]
+    caps = np.r_[np.c_[np.zeros(n - 2), k[2:], k[1:-1]], np.c_[np.full(n - 2, n), n + k[1:-1], n + k[2:]]]
+    house = trimesh.Trimesh(points, np.r_[sides, caps].astype(np.int64)).subdivide_to_size(0.08)
+    assert house.is_watertight and house.volume > 0
+    mesh = control_mesh_from_scan(np.asarray(house.vertices), np.asarray(house.faces), 300, crease_angle=45.0)
     assert mesh.report["remesher"] in ("instant", "decimate") and mesh.report["crease_edges"] > 0
+    # at 70 degrees the ridge is not asked for, and every line that is (the eaves at 65 are not either) it sees
+    mesh = control_mesh_from_scan(np.asarray(house.vertices), np.asarray(house.faces), 300, crease_angle=70.0)
+    assert mesh.report["remesher"] == "quadriflow" and mesh.report["crease_edges"] > 0
+
+
+def test_its_larger_scales_stop_at_the_most_faces(monkeypatch):
+    """While its layout is refused, QuadriFlow is asked at 1, 1.25, 1.5 and 2 times the faces, never above
+    ``most_faces`` (the default fit's cap: a second remesh is not taken at twice its own size)."""
+    asked, real_layout, real_faults = [], control_module._quadriflow_layout, control_module._faults
+
+    def layout(scan, faces, sharp=False):
+        asked.append(faces)
+        return real_layout(scan, faces, sharp)
+
+    def faults(candidate, scan):  # every QuadriFlow layout refused, as on a scan with parts thinner than its edge
+        why, coverage = real_faults(candidate, scan)
+        return ("left a horn" if candidate[-1]["remesher"] == "quadriflow" else why), coverage
+
+    monkeypatch.setattr(control_module, "_quadriflow_layout", layout)
+    monkeypatch.setattr(control_module, "_faults", faults)
+    points, triangles = ellipsoid()
+    mesh = control_mesh_from_scan(points, triangles, 400, most_faces=500)
+    assert asked == [400, 500] and mesh.report["remesher"] == "instant"
+    assert mesh.report["quadriflow_refused"] == "QuadriFlow's remesh left a horn"
+    asked.clear()
+    control_mesh_from_scan(points, triangles, 400)
+    assert asked == [400, 500, 600, 800]

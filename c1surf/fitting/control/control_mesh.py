@@ -28,9 +28,9 @@ The choice (``--remesher auto``, ``_chosen_layout``): counts can agree by accide
 hole), so a candidate is held against the scan on the counts (components, Euler characteristic, rims, and the
 cleanup's repairs of stray pieces, holes and pinches) and on the geometry (``coverage``: every scan vertex within
 about a local control edge, every rim matched by one of about its length and position). QuadriFlow's layout is kept
-when it passes both (without ``crease_angle``: it aligns to no given line); else Instant Meshes' remesh when it
-passes both; else the decimated scan (``decimated_quads``), which passes both on all 22 scans of
-``../shared/scans``; when neither does, the one that leaves less of the scan's area uncovered, and the note names
+when it passes both (with ``crease_angle``, aligned by its sharp flag, and only where that flag sees every line
+asked for: ``_flow_sees``); else Instant Meshes' remesh when it passes both; else the decimated scan
+(``decimated_quads``), which passes both on all 22 scans of ``../shared/scans``; when neither does, the one that leaves less of the scan's area uncovered, and the note names
 what differs and where. The scan is made a manifold first (``manifold_scan``: pinched vertices split into fans, edges
 in three or more triangles cut into sheets, as ``convert`` prepares a mesh), so the control mesh is one too.
 
@@ -70,7 +70,8 @@ FACE_SLACK = 0.15  # a second remesh when the count lands further than this from
 NEAR_LINE = 0.25  # of the median control edge: how near a feature line a tagged edge's points lie
 ALONG_DEGREES = 25.0  # largest angle between a tagged edge and the feature line it follows
 EXTEND_ROUNDS = 8  # rounds of extending tagged lines from their loose ends
-FLOW_SCALES = (1.0, 1.25, 1.5, 2.0)  # QuadriFlow's face targets tried in turn until its layout keeps and covers the scan
+QUADRIFLOW_SHARP = 60.0  # degrees between face normals: the edges QuadriFlow aligns to with its sharp flag (fixed)
+FLOW_SCALES = (1.0, 1.25, 1.5, 2.0)  # QuadriFlow's face targets, in turn until its layout keeps and covers the scan
 RETRY_SCALES = (1.0, 1.04, 0.96)  # remesh targets tried in turn until one Doo-Sabin step suffices
 REMESHERS = ("auto", "quadriflow", "instant", "decimate", "simplify")
 # the cleanup's repairs that say Instant Meshes broke the scan's topology at a thin part
@@ -304,7 +305,7 @@ def _instant_layout(scan, faces: int, crease_angle, check_topology: bool = False
     return best[:-1] + (info,)
 
 
-def _quadriflow_layout(scan, faces: int):
+def _quadriflow_layout(scan, faces: int, sharp: bool = False):
     """QuadriFlow's remesh at a quarter of ``faces`` (asked once more, scaled, when it lands further than
     ``FACE_SLACK`` off), every quad split in four at its centre and edge midpoints (``split_faces``; the new points
     on the scan where that is safe, ``projected_new_points``), cleaned: its few irregular vertices lie apart, so one
@@ -314,7 +315,7 @@ def _quadriflow_layout(scan, faces: int):
     want = max(8, faces // 4)
     asked, seconds, remeshes = want, 0.0, 0
     for _ in range(2):
-        coarse_points, coarse, took = quadriflow_remesh(*scan, asked)
+        coarse_points, coarse, took = quadriflow_remesh(*scan, asked, sharp)
         seconds, remeshes = seconds + took, remeshes + 1
         if coarse.shape[0] and abs(coarse.shape[0] - want) <= FACE_SLACK * want:
             break
@@ -396,15 +397,17 @@ def _loss(coverage, change: str) -> tuple:
     return (1, np.inf) if coverage is None else (int("topology (" in change), coverage.uncovered_area)
 
 
-def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_faces: int):
-    """(layout, notes, coverage): the remesher's layout (``_instant_layout``'s tuple) and its ``Coverage``; with
-    ``auto`` (and no ``crease_angle``: QuadriFlow aligns to no given line), QuadriFlow's coarse layout split once
-    (``_quadriflow_layout``: fewest irregular vertices, so fewest CAD faces) where it keeps the scan's counts and covers
-    it (``_faults``); else Instant Meshes' remesh where it does; else the decimated scan where that keeps and covers
-    everything; else the one of the last two that loses least (``_loss``), a note saying which, what differs and where
-    (the issue's rule: when no candidate keeps the topology, the one that loses least). Why QuadriFlow's was not
-    taken is the report's ``quadriflow_refused``.
+def _chosen_layout(scan, faces: tuple, crease_angle, remesher: str, decimated_faces: int):
+    """(layout, notes, coverage): the remesher's layout (``_instant_layout``'s tuple) and its ``Coverage``
+    (``faces``: the faces wanted, and the most QuadriFlow is asked for or None); with ``auto`` (with ``crease_angle``,
+    only where QuadriFlow's sharp flag sees every line: ``_flow_sees``), QuadriFlow's coarse layout split once
+    (``_quadriflow_layout``: fewest irregular vertices, so fewest CAD faces) where it keeps the scan's counts and
+    covers it (``_faults``); else Instant Meshes' remesh where it does; else the decimated scan where that keeps and
+    covers everything; else the one of the last two that loses least (``_loss``), a note saying which, what differs
+    and where (the issue's rule: when no candidate keeps the topology, the one that loses least). Why QuadriFlow's
+    was not taken is the report's ``quadriflow_refused``.
     """
+    faces, most = faces
     if remesher == "decimate":
         layout = _decimated_layout(scan, decimated_faces)
         change, coverage = _faults(layout, scan)
@@ -413,10 +416,11 @@ def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_face
         layout = _simplified_layout(scan, faces)
         change, coverage = _faults(layout, scan)
         return layout, [], coverage
-    if remesher == "quadriflow" or remesher == "auto" and crease_angle is None and quadriflow_available():
+    if remesher == "quadriflow" or remesher == "auto" and quadriflow_available() and _flow_sees(scan, crease_angle):
         took = 0.0
-        for scale in FLOW_SCALES:  # finer while it changes the counts or leaves part of the scan (a horn, a handle)
-            flow = _quadriflow_layout(scan, int(round(faces * scale)))
+        # finer while it changes the counts or leaves part of the scan (a horn, a handle), up to ``most``
+        for scale in [s for s in FLOW_SCALES if most is None or faces * s <= most] or FLOW_SCALES[:1]:
+            flow = _quadriflow_layout(scan, int(round(faces * scale)), crease_angle is not None)
             why, coverage = _faults(flow, scan)
             took += flow[-1]["seconds"]
             if not why:
@@ -431,6 +435,19 @@ def _chosen_layout(scan, faces: int, crease_angle, remesher: str, decimated_face
     layout[-1]["quadriflow_refused"] = refused
     layout[-1]["seconds"] += took
     return layout, notes, coverage
+
+
+def _flow_sees(scan, crease_angle) -> bool:
+    """Whether QuadriFlow's layout aligns to every feature line ``crease_angle`` asks for (always without one).
+
+    QuadriFlow's sharp-feature flag aligns its quads to the edges whose faces' normals differ by more than a fixed
+    ``QUADRIFLOW_SHARP`` degrees (its ``ComputeSharpEdges``), the measure ``scan_feature_edges`` takes. Below that
+    angle, a line between the two would be crossed by its quads and lost as a crease, so Instant Meshes (which takes
+    the angle) remeshes instead, unless the scan has no edge between the two angles.
+    """
+    if crease_angle is None or crease_angle >= QUADRIFLOW_SHARP:
+        return True
+    return scan_feature_edges(*scan, crease_angle).shape[0] == scan_feature_edges(*scan, QUADRIFLOW_SHARP).shape[0]
 
 
 def _instant_or_decimated(scan, faces: int, crease_angle, remesher: str, decimated_faces: int):
@@ -472,7 +489,8 @@ def _tagged_creases(scan, mesh: tuple, crease_angle, notes: list, report: dict):
 
 
 def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | None = None,
-                           remesher: str = "auto", decimated_share: float = 1.0) -> ControlMesh:
+                           remesher: str = "auto", decimated_share: float = 1.0,
+                           most_faces: int | None = None) -> ControlMesh:
     """A quad control mesh of about ``faces`` faces for a dense triangle scan (module docstring).
 
     Parameters
@@ -484,6 +502,7 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     remesher : "auto", "instant" or "decimate" (module docstring)
     decimated_share : float in (0, 1], a decimated control mesh gets this share of ``faces`` (its irregular layout
         costs more CAD faces a control face: ``scan_fit.DECIMATED_START``)
+    most_faces : int or None, QuadriFlow is asked for no more (its larger scales, ``FLOW_SCALES``, stop there)
 
     Raises ValueError for a scan without area and when the remesher makes no face.
 
@@ -501,7 +520,7 @@ def control_mesh_from_scan(points, triangles, faces: int, crease_angle: float | 
     _check_area(scan_points, scan_triangles)
     scan_points, scan_triangles, faults = manifold_scan(scan_points, scan_triangles)
     scan = (scan_points, scan_triangles)
-    layout, notes, coverage = _chosen_layout(scan, faces, crease_angle, remesher,
+    layout, notes, coverage = _chosen_layout(scan, (faces, most_faces), crease_angle, remesher,
                                              max(8, int(round(faces * decimated_share))))
     steps, remeshed, sizes, vertices, control_points, cleanup, info = layout
     seconds, remeshes = info["seconds"], info["remeshes"]

@@ -57,7 +57,7 @@ def available() -> bool:
     return _library() is not None
 
 
-def quadriflow_remesh(points: np.ndarray, triangles: np.ndarray, faces: int):
+def quadriflow_remesh(points: np.ndarray, triangles: np.ndarray, faces: int, sharp: bool = False):
     """QuadriFlow's pure-quad remesh of a triangle mesh, about ``faces`` quads, rims kept as rims.
 
     Parameters
@@ -82,7 +82,7 @@ def quadriflow_remesh(points: np.ndarray, triangles: np.ndarray, faces: int):
             int(faces), SEED, vertices.shape[0], corners.shape[0],
             vertices.ctypes.data_as(ctypes.POINTER(ctypes.c_float * 3)),
             corners.ctypes.data_as(ctypes.POINTER(ctypes.c_int * 3)),
-            False, True, False, False, False)  # sharp features, boundaries, adaptive scale, aggressive SAT, min-cost flow
+            bool(sharp), True, False, False, False)  # sharp features, boundaries, adaptive scale, aggressive SAT, min-cost flow
     data = result.contents
     try:
         if data.has_error:
