@@ -268,7 +268,8 @@ def _default_again(mesh: ControlMesh, reached: dict, miss: float, state: tuple):
 
 def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagonal: float, record: tuple):
     """The rounds of ``fit_scan``: a control mesh, its components covered, a fit; again with more faces while a
-    tolerance is missed, or once more decimated when a default fit misses ``DEFAULT_AIM`` (the better round kept).
+    tolerance is missed, or once more (``_default_again``) when a default fit misses ``DEFAULT_AIM`` (the better round
+    kept; a second QuadriFlow remesh that is refused is not fitted).
 
     plan : (SurfaceOptions, the user's ControlMesh or None, its SharpFeatures or None)
     record : (notes, rounds, timings, tell): the lists and dict the rounds append to, the progress callback
@@ -305,9 +306,7 @@ def _fit_rounds(points, triangles, options: ScanFitOptions, plan: tuple, diagona
                        "iterations": result.iterations, "stopped": result.stopped})
         if defaults:
             miss = _aim_miss(result.history[-1])
-            # QuadriFlow's second round counts only with its own layout (Instant Meshes' at that size: more CAD faces)
-            eligible = not regrown or mesh.report.get("remesher") == "quadriflow"
-            if eligible and (best is None or miss < best[0]):
+            if best is None or miss < best[0]:
                 best = (miss, mesh, result, left_out)
             again = miss > 1 and _default_again(mesh, result.history[-1], miss, (remesher, faces, share, regrown))
             if again:
