@@ -284,9 +284,16 @@ def work_baselines(job: dict) -> dict:
 
 
 def cage_layout(face_sizes: np.ndarray, corners: np.ndarray, n_points: int) -> dict:
-    """The layout of a control mesh (issue 43's columns): ``irregular`` vertices (interior of valence other than
-    4, rim vertices of valence other than 3; the valence counted in edges), ``non_quads`` (faces of other than 4
-    sides, each an n-sided hole of bicubic patches), ``vertices`` (used ones)."""
+    """The layout of a control mesh (issue 43's columns): ``irregular`` vertices (``irregular_mask``), ``non_quads``
+    (faces of other than 4 sides, each an n-sided hole of bicubic patches), ``vertices`` (used ones)."""
+    used = np.bincount(corners, minlength=n_points) > 0
+    return {"vertices": int(used.sum()), "irregular": int(irregular_mask(face_sizes, corners, n_points).sum()),
+            "non_quads": int((face_sizes != 4).sum())}
+
+
+def irregular_mask(face_sizes: np.ndarray, corners: np.ndarray, n_points: int) -> np.ndarray:
+    """(n_points,) bool: the used vertices of a control mesh that are irregular, interior ones of valence other
+    than 4 and rim ones of valence other than 3 (the valence counted in edges)."""
     offsets = np.r_[0, np.cumsum(face_sizes)]
     following = np.arange(corners.size) + 1
     following[offsets[1:] - 1] = offsets[:-1]
@@ -297,8 +304,7 @@ def cage_layout(face_sizes: np.ndarray, corners: np.ndarray, n_points: int) -> d
     rim = np.zeros(n_points, dtype=bool)
     rim[np.r_[keys[faces_at == 1] // n_points, keys[faces_at == 1] % n_points]] = True
     used = np.bincount(corners, minlength=n_points) > 0
-    irregular = used & np.where(rim, valence != 3, valence != 4)
-    return {"vertices": int(used.sum()), "irregular": int(irregular.sum()), "non_quads": int((face_sizes != 4).sum())}
+    return used & np.where(rim, valence != 3, valence != 4)
 
 
 def gaussian_ripple(points: np.ndarray, H: np.ndarray, weights: np.ndarray, sigma: float, centres: np.ndarray,

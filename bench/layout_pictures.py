@@ -7,8 +7,8 @@
 For each scan, ``c1surf fit SCAN --remesher BEFORE`` (the layout the default chose before QuadriFlow's was tried
 first: ``decimate`` or ``instant``, docs/layout.md) and ``c1surf fit SCAN`` (the default), each with ``--cage``,
 ``--patches x.npz`` and ``--report``; one picture, a row per fit: the fitted cage flat shaded with its irregular
-vertices in red (interior valence other than 4, rim valence other than 3: ``fit.cage_layout``'s count) and the fit's
-reflection lines (``c1surf render --zebra``, the same camera for both rows), labelled with the remesher, control
+vertices in red (interior valence other than 4, rim valence other than 3: ``fit.irregular_mask``, the bench's
+count) and the fit's reflection lines (``c1surf render --zebra``, the same camera for both rows), labelled with the remesher, control
 faces, irregular vertices, STEP faces (the report's ``cad_faces``) and scan-to-surface max.
 """
 from __future__ import annotations
@@ -23,26 +23,10 @@ import numpy as np
 
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE))
-from fit import SCANS, cage_layout  # noqa: E402
+from fit import SCANS, irregular_mask  # noqa: E402
 from harness.processes import SETTINGS, c1surf_argv, run_process  # noqa: E402
 
 PANEL = (420, 330)  # pixels of each panel
-
-
-def irregular_mask(face_sizes: np.ndarray, corners: np.ndarray, n_points: int) -> np.ndarray:
-    """(n_points,) bool: the vertices ``cage_layout`` counts as irregular (recounted here per vertex)."""
-    offsets = np.r_[0, np.cumsum(face_sizes)]
-    following = np.arange(corners.size) + 1
-    following[offsets[1:] - 1] = offsets[:-1]
-    a, b = corners, corners[following]
-    keys, faces_at = np.unique(np.minimum(a, b) * n_points + np.maximum(a, b), return_counts=True)
-    valence = np.bincount(np.r_[keys // n_points, keys % n_points], minlength=n_points)
-    rim = np.zeros(n_points, dtype=bool)
-    rim[np.r_[keys[faces_at == 1] // n_points, keys[faces_at == 1] % n_points]] = True
-    used = np.bincount(corners, minlength=n_points) > 0
-    mask = used & np.where(rim, valence != 3, valence != 4)
-    assert int(mask.sum()) == cage_layout(face_sizes, corners, n_points)["irregular"]
-    return mask
 
 
 def cage_panel(cage: Path, view: tuple, path: Path):

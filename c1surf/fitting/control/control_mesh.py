@@ -30,8 +30,8 @@ cleanup's repairs of stray pieces, holes and pinches) and on the geometry (``cov
 about a local control edge, every rim matched by one of about its length and position). QuadriFlow's layout is kept
 when it passes both (with ``crease_angle``, aligned by its sharp flag, and only where that flag sees every line
 asked for: ``_flow_sees``); else Instant Meshes' remesh when it passes both; else the decimated scan
-(``decimated_quads``), which passes both on all 22 scans of ``../shared/scans``; when neither does, the one that leaves less of the scan's area uncovered, and the note names
-what differs and where. The scan is made a manifold first (``manifold_scan``: pinched vertices split into fans, edges
+(``decimated_quads``), which passes both on all 22 scans of ``../shared/scans``; when neither does, the one that
+leaves less of the scan's area uncovered, and the note names what differs and where. The scan is made a manifold first (``manifold_scan``: pinched vertices split into fans, edges
 in three or more triangles cut into sheets, as ``convert`` prepares a mesh), so the control mesh is one too.
 
 Sharp features (``crease_angle``): the scan's edges whose faces meet at more than the angle
@@ -291,10 +291,8 @@ def _instant_layout(scan, faces: int, crease_angle, check_topology: bool = False
     for scale in RETRY_SCALES:
         quad_points, quads, info = quad_remesh(*scan, int(round(faces * scale)), crease_angle)
         seconds, remeshes = seconds + info["seconds"], remeshes + info["remeshes"]
-        sizes, vertices, control_points, cleanup = clean_control_mesh(
-            np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=scan)
-        steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
-        layout = (steps, quads.shape[0], sizes, vertices, control_points, cleanup, info)
+        layout = _cleaned_quads(quads, quad_points, scan, info)
+        steps = layout[0]
         change = _topology_change(layout, scan) if check_topology else ""
         if best is None or steps < best[0]:
             best = layout
@@ -323,22 +321,25 @@ def _quadriflow_layout(scan, faces: int, sharp: bool = False):
     quads, quad_points = split_faces(np.full(coarse.shape[0], 4), coarse.ravel(), coarse_points)
     n = coarse_points.shape[0]
     quad_points[n:] = projected_new_points(quad_points[n:], coarse_points, *scan)
+    return _cleaned_quads(quads, quad_points, scan,
+                          {"remesher": "quadriflow", "target_vertices": 0, "remeshes": remeshes, "seconds": seconds})
+
+
+def _cleaned_quads(quads: np.ndarray, quad_points: np.ndarray, scan, info: dict):
+    """A remesher's quads (F, 4) over ``quad_points`` cleaned against the scan (``clean_control_mesh``), with the
+    Doo-Sabin steps they need: the tuple of ``_instant_layout`` (``info`` its last item)."""
     sizes, vertices, control_points, cleanup = clean_control_mesh(
         np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=scan)
     steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
-    info = {"remesher": "quadriflow", "target_vertices": 0, "remeshes": remeshes, "seconds": seconds}
     return steps, quads.shape[0], sizes, vertices, control_points, cleanup, info
 
 
 def _decimated_layout(scan, faces: int):
     """The scan decimated, paired and split (``decimated_quads``), cleaned; the tuple of ``_instant_layout``."""
     quad_points, quads, info = decimated_quad_mesh(*scan, faces)
-    sizes, vertices, control_points, cleanup = clean_control_mesh(
-        np.full(quads.shape[0], 4), quads.ravel(), quad_points, scan=scan)
-    steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
-    info = {"remesher": "decimate", "target_vertices": 0, "remeshes": 1, "seconds": info["seconds"],
-            "decimated_triangles": info["decimated_triangles"], "redone": info["redone"]}
-    return steps, quads.shape[0], sizes, vertices, control_points, cleanup, info
+    return _cleaned_quads(quads, quad_points, scan, {
+        "remesher": "decimate", "target_vertices": 0, "remeshes": 1, "seconds": info["seconds"],
+        "decimated_triangles": info["decimated_triangles"], "redone": info["redone"]})
 
 
 def _simplified_layout(scan, faces: int):
@@ -352,11 +353,8 @@ def _simplified_layout(scan, faces: int):
     quads, split_points = split_faces(np.full(quads.shape[0], 4), quads.ravel(), quad_points)
     new = np.arange(quad_points.shape[0], split_points.shape[0])
     split_points[new] = closest_on_triangles(split_points[new], *scan)[1]
-    sizes, vertices, control_points, cleanup = clean_control_mesh(
-        np.full(quads.shape[0], 4), quads.ravel(), split_points, scan=scan)
-    steps = _doo_sabin_steps(sizes, vertices, control_points.shape[0])
-    info = {"remesher": "simplify", "target_vertices": 0, "remeshes": 1, "seconds": info["seconds"]}
-    return steps, quads.shape[0], sizes, vertices, control_points, cleanup, info
+    return _cleaned_quads(quads, split_points, scan,
+                          {"remesher": "simplify", "target_vertices": 0, "remeshes": 1, "seconds": info["seconds"]})
 
 
 def _topology_change(layout, scan) -> str:
